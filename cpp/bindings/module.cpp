@@ -1,0 +1,16 @@
+// slslam._core: the compiled half of slslam. One bind_<module>.cpp per C++ module.
+#include <pybind11/pybind11.h>
+
+namespace py = pybind11;
+
+namespace slslam::bindings {
+void BindCore(py::module_& m);
+void BindFeatures(py::module_& m);
+}  // namespace slslam::bindings
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "slslam C++ core (camera geometry, rectification, features)";
+  m.attr("__version__") = SLSLAM_VERSION;
+  slslam::bindings::BindCore(m);
+  slslam::bindings::BindFeatures(m);
+}

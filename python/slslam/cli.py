@@ -1,0 +1,183 @@
+"""The ``slslam`` command. Each subcommand builds one object of the library and runs it.
+
+Run ``slslam --help`` or ``slslam COMMAND --help`` for the options.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from slslam._version import __version__
+from slslam.errors import SlslamError
+
+app = typer.Typer(
+    name="slslam",
+    help="Stereo point-line SLAM and LiDAR registration for dark, low-texture underground mines.\n\n"
+    "Results are written as files you can open: TUM trajectories, metrics JSON, PNG plots.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+log = logging.getLogger("slslam")
+
+
+def _stats_table(title: str, stats: dict[str, float]) -> Table:
+    table = Table(title=title, show_header=True)
+    for key in ("rmse", "mean", "median", "std", "min", "max"):
+        table.add_column(key, justify="right")
+    table.add_row(*(f"{stats[k]:.6f}" for k in ("rmse", "mean", "median", "std", "min", "max")))
+    return table
+
+
+@app.command("eval")
+def eval_command(
+    estimate: Annotated[Path, typer.Argument(help="Estimated trajectory (TUM, KITTI or EuRoC csv).")],
+    groundtruth: Annotated[Path, typer.Argument(
+        help="Ground truth: a trajectory file, or a EuRoC ASL folder (its body ground truth is "
+        "converted to the left camera frame with cam0's T_BS).")],
+    align: Annotated[str, typer.Option(help="Umeyama alignment before APE: se3, sim3 or none.")]
+    = "se3",
+    max_diff: Annotated[float, typer.Option(
+        help="Largest timestamp difference [s] for two poses to be associated.")] = 0.01,
+    rpe_delta: Annotated[float, typer.Option(help="RPE pair distance (see --rpe-unit).")] = 1.0,
+    rpe_unit: Annotated[str, typer.Option(help="Unit of --rpe-delta: m, frames, deg or rad.")]
+    = "m",
+    no_rpe: Annotated[bool, typer.Option("--no-rpe", help="Skip RPE.")] = False,
+    est_format: Annotated[str, typer.Option(help="auto, tum, kitti or euroc.")] = "auto",
+    gt_format: Annotated[str, typer.Option(help="auto, tum, kitti or euroc.")] = "auto",
+    gt_body_to_cam: Annotated[Path | None, typer.Option(
+        help="cam0 sensor.yaml: convert a EuRoC *body* ground-truth file to the left camera "
+        "frame (T_world_cam0 = T_world_body * T_BS).")] = None,
+    out: Annotated[Path | None, typer.Option(
+        help="Folder for metrics.json and ape.png (nothing is written without it).")] = None,
+    plot: Annotated[bool, typer.Option(help="Write ape.png into --out.")] = True,
+) -> None:
+    """Score a trajectory against ground truth: APE (translation, metres) and RPE, via evo."""
+    from slslam.eval import evaluate
+
+    result = evaluate(estimate, groundtruth, out_dir=out, align=align,  # type: ignore[arg-type]
+                      max_diff_s=max_diff, rpe_delta=None if no_rpe else rpe_delta,
+                      rpe_unit=rpe_unit, est_format=est_format,  # type: ignore[arg-type]
+                      gt_format=gt_format, gt_body_to_cam=gt_body_to_cam, plot=plot)
+    out_console = Console()
+    out_console.print(_stats_table(
+        f"APE translation (m), {align} alignment, {result.ape.options['num_poses']} poses",
+        result.ape.stats))
+    if result.rpe is not None:
+        out_console.print(_stats_table(f"RPE translation (m), delta {rpe_delta} {rpe_unit}",
+                                       result.rpe.stats))
+    for path in (result.metrics_path, result.plot_path):
+        if path is not None:
+            out_console.print(f"wrote {path}")
+
+
+@app.command("info")
+def info_command(
+    dataset: Annotated[Path, typer.Argument(help="EuRoC ASL folder (holding mav0/, or mav0).")],
+) -> None:
+    """Describe a dataset: frames, rate, rectified camera, baseline, ground truth."""
+    from slslam.datasets import EurocSequence
+
+    seq = EurocSequence(dataset)
+    cam = seq.camera
+    duration = (seq.timestamps_ns[-1] - seq.timestamps_ns[0]) * 1e-9
+    out = Console()
+    out.print(f"EuRoC ASL sequence at {seq.root}")
+    out.print(f"  stereo pairs     {len(seq)} over {duration:.2f} s")
+    out.print(f"  image size       {cam.width} x {cam.height}")
+    out.print(f"  rectified camera fx={cam.fx:.3f} fy={cam.fy:.3f} cx={cam.cx:.3f} "
+              f"cy={cam.cy:.3f}")
+    out.print(f"  baseline         {cam.baseline_m:.5f} m")
+    out.print(f"  ground truth     {seq.groundtruth_path or 'none'}")
+
+
+@app.command("rectify")
+def rectify_command(
+    dataset: Annotated[Path, typer.Argument(help="EuRoC ASL folder (holding mav0/, or mav0).")],
+    out: Annotated[Path, typer.Option(help="Folder for left/ and right/ PNGs.")],
+    frames: Annotated[int, typer.Option(help="Number of pairs to write (0 = all).")] = 0,
+) -> None:
+    """Write rectified stereo pairs as PNG, to check a calibration by eye."""
+    from tqdm import tqdm
+
+    from slslam import _core
+    from slslam.datasets import EurocSequence
+
+    seq = EurocSequence(dataset)
+    count = len(seq) if frames <= 0 else min(frames, len(seq))
+    for side in ("left", "right"):
+        (out / side).mkdir(parents=True, exist_ok=True)
+    for i in tqdm(range(count), desc="rectify", unit="pair"):
+        frame = seq[i]
+        _core.write_image(str(out / "left" / f"{frame.t_ns}.png"), frame.left)
+        _core.write_image(str(out / "right" / f"{frame.t_ns}.png"), frame.right)
+    Console().print(f"wrote {count} rectified pairs to {out}")
+
+
+@app.command("demo")
+def demo_command(
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("slslam_demo"),
+) -> None:
+    """Generate a mine-loop ground truth and a synthetic drifting estimate, then evaluate it.
+
+    A stand-in for the main job until the tracker exists: it exercises trajectory files,
+    evo alignment, APE/RPE, metrics JSON and plots end to end on data made on the spot.
+    """
+    from slslam.demo import run_demo
+
+    result = run_demo(out)
+    Console().print(_stats_table("demo APE translation (m) (synthetic estimate)",
+                                 result.ape.stats))
+    Console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
+
+
+@app.command("version")
+def version_command() -> None:
+    """Print the slslam version and the C++ core it loads."""
+    from slslam import _core
+
+    Console().print(f"slslam {__version__} (C++ core {_core.__version__})")
+
+
+@app.callback()
+def _main(
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Debug logging.")] = False,
+) -> None:
+    logging.basicConfig(level=logging.DEBUG if verbose else logging.INFO,
+                        format="%(levelname)s %(name)s: %(message)s")
+    # evo logs every statistic at INFO; slslam prints its own table instead.
+    logging.getLogger("evo").setLevel(logging.DEBUG if verbose else logging.WARNING)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: bad input ends with one ``error:`` line and exit code 2, never a traceback."""
+    try:
+        app(args=argv, standalone_mode=False)
+    except (SlslamError, ValueError, FileNotFoundError) as exc:
+        console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        return 2
+    except typer.Exit as exc:
+        return exc.exit_code
+    except typer.Abort:
+        console.print("aborted")
+        return 130
+    except Exception as exc:  # click's usage errors
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            return exc.exit_code
+        raise
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,135 @@
+"""Trajectory files: TUM, KITTI and EuRoC/ASL csv, read and written through evo.
+
+Formats
+    ``tum``    ``timestamp tx ty tz qx qy qz qw`` per line, seconds, whitespace separated.
+    ``kitti``  12 numbers per line (row-major 3x4 ``T_world_cam``), no timestamps; a separate
+               times file (one timestamp per line, seconds) may give them.
+    ``euroc``  csv ``timestamp_ns, px, py, pz, qw, qx, qy, qz[, ...]`` (ASL ground truth layout).
+
+Every reader checks what evo does not: the file exists and is not empty, every pose is finite with
+a non-zero quaternion, and timestamps increase strictly. Problems raise
+:class:`~slslam.errors.TrajectoryFileError` naming the file and the first offending row.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from evo.core.trajectory import PosePath3D, PoseTrajectory3D
+from evo.tools import file_interface
+
+from slslam.errors import TrajectoryFileError
+
+TrajectoryFormat = Literal["auto", "tum", "kitti", "euroc"]
+FORMATS = ("tum", "kitti", "euroc")
+
+
+def _first_data_line(path: Path) -> str:
+    with path.open(encoding="utf-8", errors="replace") as handle:
+        for line in handle:
+            stripped = line.strip()
+            if stripped and not stripped.startswith("#"):
+                return stripped
+    raise TrajectoryFileError(path, "the trajectory file is empty (no pose rows)")
+
+
+def detect_format(path: str | Path) -> str:
+    """Guess the format from the first data row: commas -> euroc, 8 columns -> tum, 12 -> kitti."""
+    path = Path(path)
+    if not path.is_file():
+        raise TrajectoryFileError(path, "trajectory file not found")
+    line = _first_data_line(path)
+    if "," in line:
+        return "euroc"
+    columns = len(line.split())
+    if columns == 8:
+        return "tum"
+    if columns == 12:
+        return "kitti"
+    raise TrajectoryFileError(
+        path, f"cannot tell the format: first row has {columns} columns "
+        "(TUM has 8, KITTI 12, EuRoC csv uses commas)")
+
+
+def _validate(path: Path, traj: PosePath3D) -> None:
+    if traj.num_poses == 0:
+        raise TrajectoryFileError(path, "the trajectory file is empty (no pose rows)")
+    bad = ~np.all(np.isfinite(traj.positions_xyz), axis=1)
+    bad |= ~np.all(np.isfinite(traj.orientations_quat_wxyz), axis=1)
+    if np.any(bad):
+        raise TrajectoryFileError(path, f"pose {int(np.argmax(bad))} contains NaN or Inf")
+    norms = np.linalg.norm(traj.orientations_quat_wxyz, axis=1)
+    if np.any(norms < 1e-9):
+        raise TrajectoryFileError(path, f"pose {int(np.argmax(norms < 1e-9))} has a zero quaternion")
+    if isinstance(traj, PoseTrajectory3D):
+        steps = np.diff(traj.timestamps)
+        if np.any(steps <= 0):
+            i = int(np.argmax(steps <= 0)) + 1
+            raise TrajectoryFileError(
+                path, f"timestamps are not strictly increasing at pose {i} "
+                f"({traj.timestamps[i - 1]:.9f} -> {traj.timestamps[i]:.9f})")
+
+
+def read_trajectory(
+    path: str | Path,
+    fmt: TrajectoryFormat = "auto",
+    kitti_times: str | Path | None = None,
+) -> PosePath3D:
+    """Read a trajectory file.
+
+    Args:
+        path: the file.
+        fmt: ``auto`` (detect), ``tum``, ``kitti`` or ``euroc``.
+        kitti_times: for KITTI files, an optional times file that turns the path into a
+            timestamped :class:`PoseTrajectory3D`.
+
+    Returns:
+        a :class:`PoseTrajectory3D` (TUM, EuRoC, KITTI with times) or :class:`PosePath3D` (KITTI).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise TrajectoryFileError(path, "trajectory file not found")
+    fmt = detect_format(path) if fmt == "auto" else fmt
+    if fmt not in FORMATS:
+        raise TrajectoryFileError(path, f"unknown trajectory format '{fmt}' (use {FORMATS})")
+    _first_data_line(path)  # empty files get our message rather than evo's
+    try:
+        if fmt == "tum":
+            traj: PosePath3D = file_interface.read_tum_trajectory_file(path)
+        elif fmt == "euroc":
+            traj = file_interface.read_euroc_csv_trajectory(path)
+        else:
+            traj = file_interface.read_kitti_poses_file(path)
+    except (file_interface.FileInterfaceException, ValueError, IndexError) as exc:
+        raise TrajectoryFileError(path, f"not a valid {fmt.upper()} trajectory ({exc})") from None
+    if fmt == "kitti" and kitti_times is not None:
+        times = np.loadtxt(kitti_times, ndmin=1, dtype=float)
+        if times.shape[0] != traj.num_poses:
+            raise TrajectoryFileError(
+                kitti_times, f"has {times.shape[0]} timestamps for {traj.num_poses} poses")
+        traj = PoseTrajectory3D(poses_se3=traj.poses_se3, timestamps=times)
+    _validate(path, traj)
+    return traj
+
+
+def write_trajectory(path: str | Path, traj: PosePath3D, fmt: str = "tum") -> Path:
+    """Write ``traj`` as ``tum`` (needs timestamps) or ``kitti``; returns the path written.
+
+    The file is written to a temporary name and renamed, so an interrupted write never leaves a
+    half-written trajectory where a complete one was.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".partial")
+    if fmt == "tum":
+        if not isinstance(traj, PoseTrajectory3D):
+            raise TrajectoryFileError(path, "TUM output needs timestamps (a PoseTrajectory3D)")
+        file_interface.write_tum_trajectory_file(tmp, traj)
+    elif fmt == "kitti":
+        file_interface.write_kitti_poses_file(tmp, traj)
+    else:
+        raise TrajectoryFileError(path, f"cannot write format '{fmt}' (use tum or kitti)")
+    tmp.replace(path)
+    return path

@@ -1,0 +1,71 @@
+#include "slslam/features/descriptor_matcher.h"
+
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "slslam/features/orb_extractor.h"
+
+namespace slslam {
+namespace {
+
+TEST(DescriptorMatcher, FindsTheHandBuiltPairsOnly) {
+  // Rows 0..2 of train are copies of query rows 2, 0, 1; row 3 is far from everything.
+  cv::Mat query = (cv::Mat_<float>(3, 2) << 0, 0, 10, 0, 0, 10);
+  cv::Mat train = (cv::Mat_<float>(4, 2) << 0, 10.1, 0.1, 0, 10, 0.2, 50, 50);
+  MatchOptions options;
+  options.max_distance = 1.0f;
+  const auto pairs = MatchDescriptors(query, train, options);
+  ASSERT_EQ(pairs.rows(), 3);
+  EXPECT_EQ(pairs(0, 0), 0);
+  EXPECT_EQ(pairs(0, 1), 1);
+  EXPECT_EQ(pairs(1, 1), 2);
+  EXPECT_EQ(pairs(2, 1), 0);
+}
+
+TEST(DescriptorMatcher, RatioTestDropsAmbiguousMatches) {
+  cv::Mat query = (cv::Mat_<float>(1, 2) << 0, 0);
+  cv::Mat train = (cv::Mat_<float>(2, 2) << 1, 0, -1.05f, 0);
+  MatchOptions options;
+  options.max_distance = 5.0f;
+  options.ratio = 0.8f;
+  EXPECT_EQ(MatchDescriptors(query, train, options).rows(), 0);
+  options.ratio = 1.0f;
+  EXPECT_EQ(MatchDescriptors(query, train, options).rows(), 1);
+}
+
+TEST(DescriptorMatcher, RejectsMismatchedDescriptors) {
+  EXPECT_THROW(MatchDescriptors(cv::Mat(2, 32, CV_8U), cv::Mat(2, 2, CV_32F)),
+               std::invalid_argument);
+  EXPECT_THROW(MatchDescriptors(cv::Mat::zeros(2, 3, CV_32F), cv::Mat::zeros(2, 4, CV_32F)),
+               std::invalid_argument);
+}
+
+TEST(OrbExtractor, ShiftedImageMatchesWithTheSameShift) {
+  cv::Mat image(240, 320, CV_8UC1);
+  cv::RNG rng(7);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 1.5);
+  const cv::Mat shifted = image(cv::Rect(6, 0, 300, 240)).clone();
+  const Keypoints a = ExtractOrb(image), b = ExtractOrb(shifted);
+  ASSERT_GT(a.size(), 100);
+  const auto pairs = MatchDescriptors(a.descriptors, b.descriptors);
+  ASSERT_GT(pairs.rows(), 50);
+  int consistent = 0;
+  for (int i = 0; i < pairs.rows(); ++i) {
+    const float du = a.uv(pairs(i, 0), 0) - b.uv(pairs(i, 1), 0);
+    const float dv = a.uv(pairs(i, 0), 1) - b.uv(pairs(i, 1), 1);
+    if (std::abs(du - 6.0f) < 1.5f && std::abs(dv) < 1.5f) ++consistent;
+  }
+  EXPECT_GT(consistent, 0.9 * pairs.rows());
+}
+
+TEST(OrbExtractor, BlackImageGivesNoKeypoints) {
+  const Keypoints kp = ExtractOrb(cv::Mat::zeros(100, 100, CV_8UC1));
+  EXPECT_EQ(kp.size(), 0);
+  EXPECT_EQ(kp.descriptors.rows, 0);
+}
+
+}  // namespace
+}  // namespace slslam
