@@ -56,7 +56,8 @@ void BindFeatures(py::module_& m) {
         return py::make_tuple(kp.uv, kp.score, ToNumpy(kp.descriptors));
       },
       py::arg("image"), py::arg("options") = OrbOptions{},
-      "ORB keypoints of a uint8 image: (uv float32 N x 2, score float32 N, descriptors uint8 N x 32).");
+      "ORB keypoints of a uint8 image: (uv float32 N x 2, score float32 N, descriptors uint8 N x "
+      "32).");
 
   m.def(
       "match_descriptors",

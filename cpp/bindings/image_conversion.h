@@ -4,9 +4,9 @@
 #include <cstring>
 #include <string>
 
-#include <opencv2/core.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <opencv2/core.hpp>
 
 namespace slslam::bindings {
 

@@ -12,6 +12,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from slslam._version import __version__
@@ -19,7 +20,8 @@ from slslam.errors import SlslamError
 
 app = typer.Typer(
     name="slslam",
-    help="Stereo point-line SLAM and LiDAR registration for dark, low-texture underground mines.\n\n"
+    help="Stereo point-line SLAM and LiDAR registration for dark, low-texture underground "
+    "mines.\n\n"
     "Results are written as files you can open: TUM trajectories, metrics JSON, PNG plots.",
     no_args_is_help=True,
     add_completion=False,
@@ -39,41 +41,69 @@ def _stats_table(title: str, stats: dict[str, float]) -> Table:
 
 @app.command("eval")
 def eval_command(
-    estimate: Annotated[Path, typer.Argument(help="Estimated trajectory (TUM, KITTI or EuRoC csv).")],
-    groundtruth: Annotated[Path, typer.Argument(
-        help="Ground truth: a trajectory file, or a EuRoC ASL folder (its body ground truth is "
-        "converted to the left camera frame with cam0's T_BS).")],
-    align: Annotated[str, typer.Option(help="Umeyama alignment before APE: se3, sim3 or none.")]
-    = "se3",
-    max_diff: Annotated[float, typer.Option(
-        help="Largest timestamp difference [s] for two poses to be associated.")] = 0.01,
+    estimate: Annotated[
+        Path, typer.Argument(help="Estimated trajectory (TUM, KITTI or EuRoC csv).")
+    ],
+    groundtruth: Annotated[
+        Path,
+        typer.Argument(
+            help="Ground truth: a trajectory file, or a EuRoC ASL folder (its body ground truth is "
+            "converted to the left camera frame with cam0's T_BS)."
+        ),
+    ],
+    align: Annotated[
+        str, typer.Option(help="Umeyama alignment before APE: se3, sim3 or none.")
+    ] = "se3",
+    max_diff: Annotated[
+        float, typer.Option(help="Largest timestamp difference [s] for two poses to be associated.")
+    ] = 0.01,
     rpe_delta: Annotated[float, typer.Option(help="RPE pair distance (see --rpe-unit).")] = 1.0,
-    rpe_unit: Annotated[str, typer.Option(help="Unit of --rpe-delta: m, frames, deg or rad.")]
-    = "m",
+    rpe_unit: Annotated[
+        str, typer.Option(help="Unit of --rpe-delta: m, frames, deg or rad.")
+    ] = "m",
     no_rpe: Annotated[bool, typer.Option("--no-rpe", help="Skip RPE.")] = False,
     est_format: Annotated[str, typer.Option(help="auto, tum, kitti or euroc.")] = "auto",
     gt_format: Annotated[str, typer.Option(help="auto, tum, kitti or euroc.")] = "auto",
-    gt_body_to_cam: Annotated[Path | None, typer.Option(
-        help="cam0 sensor.yaml: convert a EuRoC *body* ground-truth file to the left camera "
-        "frame (T_world_cam0 = T_world_body * T_BS).")] = None,
-    out: Annotated[Path | None, typer.Option(
-        help="Folder for metrics.json and ape.png (nothing is written without it).")] = None,
+    gt_body_to_cam: Annotated[
+        Path | None,
+        typer.Option(
+            help="cam0 sensor.yaml: convert a EuRoC *body* ground-truth file to the left camera "
+            "frame (T_world_cam0 = T_world_body * T_BS)."
+        ),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(help="Folder for metrics.json and ape.png (nothing is written without it)."),
+    ] = None,
     plot: Annotated[bool, typer.Option(help="Write ape.png into --out.")] = True,
 ) -> None:
     """Score a trajectory against ground truth: APE (translation, metres) and RPE, via evo."""
     from slslam.eval import evaluate
 
-    result = evaluate(estimate, groundtruth, out_dir=out, align=align,  # type: ignore[arg-type]
-                      max_diff_s=max_diff, rpe_delta=None if no_rpe else rpe_delta,
-                      rpe_unit=rpe_unit, est_format=est_format,  # type: ignore[arg-type]
-                      gt_format=gt_format, gt_body_to_cam=gt_body_to_cam, plot=plot)
+    result = evaluate(
+        estimate,
+        groundtruth,
+        out_dir=out,
+        align=align,  # type: ignore[arg-type]
+        max_diff_s=max_diff,
+        rpe_delta=None if no_rpe else rpe_delta,
+        rpe_unit=rpe_unit,
+        est_format=est_format,  # type: ignore[arg-type]
+        gt_format=gt_format,
+        gt_body_to_cam=gt_body_to_cam,
+        plot=plot,
+    )
     out_console = Console()
-    out_console.print(_stats_table(
-        f"APE translation (m), {align} alignment, {result.ape.options['num_poses']} poses",
-        result.ape.stats))
+    out_console.print(
+        _stats_table(
+            f"APE translation (m), {align} alignment, {result.ape.options['num_poses']} poses",
+            result.ape.stats,
+        )
+    )
     if result.rpe is not None:
-        out_console.print(_stats_table(f"RPE translation (m), delta {rpe_delta} {rpe_unit}",
-                                       result.rpe.stats))
+        out_console.print(
+            _stats_table(f"RPE translation (m), delta {rpe_delta} {rpe_unit}", result.rpe.stats)
+        )
     for path in (result.metrics_path, result.plot_path):
         if path is not None:
             out_console.print(f"wrote {path}")
@@ -93,8 +123,7 @@ def info_command(
     out.print(f"EuRoC ASL sequence at {seq.root}")
     out.print(f"  stereo pairs     {len(seq)} over {duration:.2f} s")
     out.print(f"  image size       {cam.width} x {cam.height}")
-    out.print(f"  rectified camera fx={cam.fx:.3f} fy={cam.fy:.3f} cx={cam.cx:.3f} "
-              f"cy={cam.cy:.3f}")
+    out.print(f"  rectified camera fx={cam.fx:.3f} fy={cam.fy:.3f} cx={cam.cx:.3f} cy={cam.cy:.3f}")
     out.print(f"  baseline         {cam.baseline_m:.5f} m")
     out.print(f"  ground truth     {seq.groundtruth_path or 'none'}")
 
@@ -134,8 +163,7 @@ def demo_command(
     from slslam.demo import run_demo
 
     result = run_demo(out)
-    Console().print(_stats_table("demo APE translation (m) (synthetic estimate)",
-                                 result.ape.stats))
+    Console().print(_stats_table("demo APE translation (m) (synthetic estimate)", result.ape.stats))
     Console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
 
 
@@ -151,31 +179,27 @@ def version_command() -> None:
 def _main(
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Debug logging.")] = False,
 ) -> None:
-    logging.basicConfig(level=logging.DEBUG if verbose else logging.INFO,
-                        format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=logging.DEBUG if verbose else logging.INFO,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
     # evo logs every statistic at INFO; slslam prints its own table instead.
     logging.getLogger("evo").setLevel(logging.DEBUG if verbose else logging.WARNING)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: bad input ends with one ``error:`` line and exit code 2, never a traceback."""
-    try:
-        app(args=argv, standalone_mode=False)
-    except (SlslamError, ValueError, FileNotFoundError) as exc:
-        console.print(f"[bold red]error:[/] {exc}", highlight=False)
-        return 2
-    except typer.Exit as exc:
-        return exc.exit_code
-    except typer.Abort:
-        console.print("aborted")
-        return 130
-    except Exception as exc:  # click's usage errors
-        import click
+    """Entry point: bad input ends with one ``error:`` line and exit code 2, never a traceback.
 
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            return exc.exit_code
-        raise
+    Usage errors (unknown option, missing argument) are reported by typer itself, also with
+    exit code 2.
+    """
+    try:
+        app(args=argv, prog_name="slslam")
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except (SlslamError, ValueError, FileNotFoundError) as exc:
+        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False)
+        return 2
     return 0
 
 

@@ -44,13 +44,25 @@ def loop_groundtruth(options: DemoOptions = DemoOptions()) -> PoseTrajectory3D:
     x, y, yaw = np.empty(n), np.empty(n), np.empty(n)
     for lo, hi, fn in (
         (0, L, lambda u: (u, 0.0 * u, 0.0 * u)),
-        (L, L + np.pi * r, lambda u: (L + r * np.sin((u - L) / r), r - r * np.cos((u - L) / r),
-                                       (u - L) / r)),
-        (L + np.pi * r, 2 * L + np.pi * r, lambda u: (L - (u - L - np.pi * r), 2 * r + 0.0 * u,
-                                                       np.pi + 0.0 * u)),
-        (2 * L + np.pi * r, perimeter, lambda u: (-r * np.sin((u - 2 * L - np.pi * r) / r),
-                                                  r + r * np.cos((u - 2 * L - np.pi * r) / r),
-                                                  np.pi + (u - 2 * L - np.pi * r) / r)),
+        (
+            L,
+            L + np.pi * r,
+            lambda u: (L + r * np.sin((u - L) / r), r - r * np.cos((u - L) / r), (u - L) / r),
+        ),
+        (
+            L + np.pi * r,
+            2 * L + np.pi * r,
+            lambda u: (L - (u - L - np.pi * r), 2 * r + 0.0 * u, np.pi + 0.0 * u),
+        ),
+        (
+            2 * L + np.pi * r,
+            perimeter,
+            lambda u: (
+                -r * np.sin((u - 2 * L - np.pi * r) / r),
+                r + r * np.cos((u - 2 * L - np.pi * r) / r),
+                np.pi + (u - 2 * L - np.pi * r) / r,
+            ),
+        ),
     ):
         sel = (s >= lo) & (s < hi)
         x[sel], y[sel], yaw[sel] = fn(s[sel])
@@ -64,8 +76,9 @@ def loop_groundtruth(options: DemoOptions = DemoOptions()) -> PoseTrajectory3D:
     return PoseTrajectory3D(np.column_stack([x, y, z]), quat_wxyz, 1.4e9 + t)
 
 
-def synthetic_estimate(gt: PoseTrajectory3D, options: DemoOptions = DemoOptions()
-                       ) -> PoseTrajectory3D:
+def synthetic_estimate(
+    gt: PoseTrajectory3D, options: DemoOptions = DemoOptions()
+) -> PoseTrajectory3D:
     """A drifting, noisy copy of ``gt`` expressed in another (rotated, shifted) world frame."""
     rng = np.random.default_rng(options.seed)
     xyz = gt.positions_xyz
@@ -76,12 +89,13 @@ def synthetic_estimate(gt: PoseTrajectory3D, options: DemoOptions = DemoOptions(
     R_frame = Rotation.from_euler("zyx", [40.0, 3.0, -2.0], degrees=True)
     t_frame = np.array([5.0, -3.0, 0.5])
     rot = R_frame * drift * Rotation.from_quat(np.roll(gt.orientations_quat_wxyz, -1, axis=1))
-    return PoseTrajectory3D(R_frame.apply(drifted) + t_frame,
-                            np.roll(rot.as_quat(), 1, axis=1), gt.timestamps.copy())
+    return PoseTrajectory3D(
+        R_frame.apply(drifted) + t_frame, np.roll(rot.as_quat(), 1, axis=1), gt.timestamps.copy()
+    )
 
 
 def run_demo(out_dir: str | Path, options: DemoOptions = DemoOptions()) -> Evaluation:
-    """Write ``groundtruth.tum``, ``estimate.tum``, ``metrics.json`` and ``ape.png`` to ``out_dir``."""
+    """Write ``groundtruth.tum``, ``estimate.tum``, ``metrics.json``, ``ape.png`` to ``out_dir``."""
     out_dir = Path(out_dir)
     gt = loop_groundtruth(options)
     est = synthetic_estimate(gt, options)

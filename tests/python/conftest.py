@@ -46,9 +46,15 @@ def camera_yaml(x_offset_m: float, width: int = 64, height: int = 48, k1: float 
     """A camera sensor.yaml of our own: identity rotation, shifted along body x."""
     T = np.eye(4)
     T[0, 3] = x_offset_m
-    return CAMERA_YAML.format(T=", ".join(f"{v:.6f}" for v in T.ravel()), width=width,
-                              height=height, fx=50.0, cx=width / 2 - 0.5, cy=height / 2 - 0.5,
-                              k1=k1)
+    return CAMERA_YAML.format(
+        T=", ".join(f"{v:.6f}" for v in T.ravel()),
+        width=width,
+        height=height,
+        fx=50.0,
+        cx=width / 2 - 0.5,
+        cy=height / 2 - 0.5,
+        k1=k1,
+    )
 
 
 MakeEuroc = Callable[..., Path]
@@ -63,14 +69,17 @@ def make_euroc(tmp_path: Path) -> MakeEuroc:
     """
     from slslam import _core
 
-    def make(n: int = 5, right_stamps: list[int] | None = None,
-             size: tuple[int, int] = (64, 48)) -> Path:
+    def make(
+        n: int = 5, right_stamps: list[int] | None = None, size: tuple[int, int] = (64, 48)
+    ) -> Path:
         root = tmp_path / "seq"
         mav0 = root / "mav0"
         rng = np.random.default_rng(0)
         left_stamps = [1_000_000_000 + 50_000_000 * i for i in range(n)]
-        for cam, stamps, x in (("cam0", left_stamps, 0.0),
-                               ("cam1", right_stamps or left_stamps, 0.11)):
+        for cam, stamps, x in (
+            ("cam0", left_stamps, 0.0),
+            ("cam1", right_stamps or left_stamps, 0.11),
+        ):
             (mav0 / cam / "data").mkdir(parents=True, exist_ok=True)
             (mav0 / cam / "sensor.yaml").write_text(camera_yaml(x))
             lines = ["#timestamp [ns],filename"]

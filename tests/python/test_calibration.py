@@ -25,11 +25,11 @@ def _write(tmp_path: Path, text: str) -> Path:
     return path
 
 
-@pytest.mark.parametrize("key", ["T_BS", "resolution", "intrinsics", "distortion_model",
-                                 "distortion_coefficients"])
+@pytest.mark.parametrize(
+    "key", ["T_BS", "resolution", "intrinsics", "distortion_model", "distortion_coefficients"]
+)
 def test_missing_key_names_file_and_key(tmp_path, key):
-    lines = [line for line in camera_yaml(0.0).splitlines()
-             if not line.startswith(key)]
+    lines = [line for line in camera_yaml(0.0).splitlines() if not line.startswith(key)]
     if key == "T_BS":  # drop its nested block too
         lines = [line for line in lines if not line.startswith(("  cols", "  rows", "  data"))]
     path = _write(tmp_path, "\n".join(lines))
@@ -45,14 +45,19 @@ def test_non_rigid_transform_is_rejected(tmp_path):
 
 def test_wrong_counts_and_values_are_rejected(tmp_path):
     with pytest.raises(CalibrationError, match="'intrinsics' must have 4 numbers, got 3"):
-        CameraCalibration.from_yaml(_write(tmp_path, camera_yaml(0.0).replace(
-            "intrinsics: [50.0, 50.0,", "intrinsics: [50.0,")))
+        CameraCalibration.from_yaml(
+            _write(
+                tmp_path, camera_yaml(0.0).replace("intrinsics: [50.0, 50.0,", "intrinsics: [50.0,")
+            )
+        )
     with pytest.raises(CalibrationError, match="NaN"):
-        CameraCalibration.from_yaml(_write(tmp_path, camera_yaml(0.0).replace(
-            "intrinsics: [50.0", "intrinsics: [.nan")))
+        CameraCalibration.from_yaml(
+            _write(tmp_path, camera_yaml(0.0).replace("intrinsics: [50.0", "intrinsics: [.nan"))
+        )
     with pytest.raises(CalibrationError, match="not supported"):
-        CameraCalibration.from_yaml(_write(tmp_path, camera_yaml(0.0).replace(
-            "radial-tangential", "equidistant")))
+        CameraCalibration.from_yaml(
+            _write(tmp_path, camera_yaml(0.0).replace("radial-tangential", "equidistant"))
+        )
 
 
 def test_missing_and_invalid_yaml_files(tmp_path):

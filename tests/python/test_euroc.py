@@ -46,8 +46,11 @@ def test_mismatched_stereo_timestamps(make_euroc):
     right = list(left)
     right[2] += 7_000_000  # 7 ms off: not the same exposure
     root = make_euroc(n=5, right_stamps=right)
-    with pytest.raises(DatasetError, match=r"cam1/data.csv: stereo timestamps do not pair up.*"
-                       r"1 left images with no right image within 0 ns.*t = 1100000000 ns"):
+    with pytest.raises(
+        DatasetError,
+        match=r"cam1/data.csv: stereo timestamps do not pair up.*"
+        r"1 left images with no right image within 0 ns.*t = 1100000000 ns",
+    ):
         EurocSequence(root)
     # A tolerance that covers the offset accepts the pair.
     assert len(EurocSequence(root, stereo_tolerance_ns=10_000_000)) == 5
@@ -139,8 +142,10 @@ def test_body_groundtruth_converted_to_left_camera():
     gt_cam = load_groundtruth(body_csv, gt_body_to_cam=cam0_yaml)
     gt_body = load_groundtruth(body_csv)
     index = np.searchsorted(gt_cam.timestamps, leftcam.timestamps)
-    ok = (index < gt_cam.num_poses) & (np.abs(gt_cam.timestamps[np.minimum(
-        index, gt_cam.num_poses - 1)] - leftcam.timestamps) < 1e-4)
+    ok = (index < gt_cam.num_poses) & (
+        np.abs(gt_cam.timestamps[np.minimum(index, gt_cam.num_poses - 1)] - leftcam.timestamps)
+        < 1e-4
+    )
     assert ok.sum() > 1000
     err_cam = np.linalg.norm(gt_cam.positions_xyz[index[ok]] - leftcam.positions_xyz[ok], axis=1)
     err_body = np.linalg.norm(gt_body.positions_xyz[index[ok]] - leftcam.positions_xyz[ok], axis=1)

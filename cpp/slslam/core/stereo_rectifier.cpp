@@ -20,9 +20,10 @@ void CheckRigid(const Eigen::Matrix4d& T) {
   Require(T.allFinite(), "stereo extrinsics T_left_right contain NaN or Inf");
   const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
   const double orthonormality_error = (R * R.transpose() - Eigen::Matrix3d::Identity()).norm();
-  Require(orthonormality_error < kRotationTolerance && R.determinant() > 0.0,
-          Message("stereo extrinsics T_left_right: rotation block is not a rotation (|R R^T - I| = ",
-                  orthonormality_error, ")"));
+  Require(
+      orthonormality_error < kRotationTolerance && R.determinant() > 0.0,
+      Message("stereo extrinsics T_left_right: rotation block is not a rotation (|R R^T - I| = ",
+              orthonormality_error, ")"));
   Require(T.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)),
           "stereo extrinsics T_left_right: last row must be [0 0 0 1]");
 }
@@ -80,8 +81,7 @@ StereoRectifier::StereoRectifier(const RadTanCamera& left, const RadTanCamera& r
 
   // Fixed-point maps (CV_16SC2) make remap about twice as fast as float maps.
   cv::initUndistortRectifyMap(K_left, D_left, R1, P1, size, CV_16SC2, left_map1_, left_map2_);
-  cv::initUndistortRectifyMap(K_right, D_right, R2, P2, size, CV_16SC2, right_map1_,
-                              right_map2_);
+  cv::initUndistortRectifyMap(K_right, D_right, R2, P2, size, CV_16SC2, right_map1_, right_map2_);
 }
 
 cv::Mat StereoRectifier::RectifyOne(const cv::Mat& image, bool is_left) const {
@@ -100,7 +100,7 @@ cv::Mat StereoRectifier::RectifyOne(const cv::Mat& image, bool is_left) const {
 }
 
 std::pair<cv::Mat, cv::Mat> StereoRectifier::Rectify(const cv::Mat& left,
-                                                      const cv::Mat& right) const {
+                                                     const cv::Mat& right) const {
   return {RectifyOne(left, true), RectifyOne(right, false)};
 }
 

@@ -16,9 +16,10 @@ namespace slslam {
 
 class StereoRectifier {
  public:
-  // `T_left_right`: pose of the right camera in the left camera frame (4x4 rigid transform, metres).
-  // Throws std::invalid_argument on bad intrinsics, a non-rigid transform, differing image sizes or
-  // a right camera that is not to the right of the left one (the tracker assumes horizontal stereo).
+  // `T_left_right`: pose of the right camera in the left camera frame (4x4 rigid transform,
+  // metres). Throws std::invalid_argument on bad intrinsics, a non-rigid transform, differing image
+  // sizes or a right camera that is not to the right of the left one (the tracker assumes
+  // horizontal stereo).
   StereoRectifier(const RadTanCamera& left, const RadTanCamera& right,
                   const Eigen::Matrix4d& T_left_right);
 

@@ -99,23 +99,35 @@ class CameraCalibration:
         T = _transform(data, path)
         width, height = _numbers(_require(data, "resolution", path), 2, "resolution", path)
         if width <= 0 or height <= 0 or width != int(width) or height != int(height):
-            raise CalibrationError(path, f"'resolution' must be two positive integers, got "
-                                   f"{width} x {height}")
+            raise CalibrationError(
+                path, f"'resolution' must be two positive integers, got {width} x {height}"
+            )
         fx, fy, cx, cy = _numbers(_require(data, "intrinsics", path), 4, "intrinsics", path)
         if fx <= 0 or fy <= 0:
             raise CalibrationError(path, f"'intrinsics' focal lengths must be > 0, got {fx}, {fy}")
         model = _require(data, "distortion_model", path)
         if model not in SUPPORTED_DISTORTION_MODELS:
             raise CalibrationError(
-                path, f"distortion_model '{model}' is not supported "
-                f"(supported: {', '.join(SUPPORTED_DISTORTION_MODELS)})")
-        dist = _numbers(_require(data, "distortion_coefficients", path), 4,
-                        "distortion_coefficients", path)
+                path,
+                f"distortion_model '{model}' is not supported "
+                f"(supported: {', '.join(SUPPORTED_DISTORTION_MODELS)})",
+            )
+        dist = _numbers(
+            _require(data, "distortion_coefficients", path), 4, "distortion_coefficients", path
+        )
         rate = data.get("rate_hz")
-        return cls(path=path, T_body_cam=T, width=int(width), height=int(height), fx=float(fx),
-                   fy=float(fy), cx=float(cx), cy=float(cy),
-                   distortion=tuple(float(d) for d in dist),  # type: ignore[arg-type]
-                   rate_hz=None if rate is None else float(rate))
+        return cls(
+            path=path,
+            T_body_cam=T,
+            width=int(width),
+            height=int(height),
+            fx=float(fx),
+            fy=float(fy),
+            cx=float(cx),
+            cy=float(cy),
+            distortion=tuple(float(d) for d in dist),  # type: ignore[arg-type]
+            rate_hz=None if rate is None else float(rate),
+        )
 
 
 @dataclass(frozen=True)
@@ -136,8 +148,13 @@ class ImuCalibration:
         path = Path(path)
         data = load_yaml(path)
         values = {}
-        for key in ("rate_hz", "gyroscope_noise_density", "gyroscope_random_walk",
-                    "accelerometer_noise_density", "accelerometer_random_walk"):
+        for key in (
+            "rate_hz",
+            "gyroscope_noise_density",
+            "gyroscope_random_walk",
+            "accelerometer_noise_density",
+            "accelerometer_random_walk",
+        ):
             (value,) = _numbers(_require(data, key, path), 1, key, path)
             if value < 0 or (key == "rate_hz" and value == 0):
                 raise CalibrationError(path, f"'{key}' must be positive, got {value}")

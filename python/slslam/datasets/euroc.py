@@ -68,7 +68,7 @@ class RectifiedStereoCamera:
 
 
 def find_mav0(path: str | Path) -> Path:
-    """Return the ``mav0`` folder of an ASL sequence given the sequence folder or ``mav0`` itself."""
+    """The ``mav0`` folder of an ASL sequence, given the sequence folder or ``mav0`` itself."""
     path = Path(path)
     if not path.exists():
         raise DatasetError(path, "dataset folder not found")
@@ -76,8 +76,10 @@ def find_mav0(path: str | Path) -> Path:
         if (candidate / "cam0" / "data.csv").is_file():
             return candidate
     raise DatasetError(
-        path, "not a EuRoC ASL folder: expected mav0/cam0/data.csv (give the folder that "
-        "holds mav0/, or mav0 itself)")
+        path,
+        "not a EuRoC ASL folder: expected mav0/cam0/data.csv (give the folder that "
+        "holds mav0/, or mav0 itself)",
+    )
 
 
 def is_euroc(path: str | Path) -> bool:
@@ -106,7 +108,8 @@ def _read_image_index(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
                 stamps.append(int(row[0].strip()))
             except ValueError:
                 raise DatasetError(
-                    csv_path, f"row {row_number}: timestamp '{row[0]}' is not an integer") from None
+                    csv_path, f"row {row_number}: timestamp '{row[0]}' is not an integer"
+                ) from None
             files.append(camera_dir / "data" / row[1].strip())
     if not stamps:
         raise DatasetError(csv_path, "no images listed")
@@ -114,13 +117,15 @@ def _read_image_index(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
     steps = np.diff(t)
     if np.any(steps <= 0):
         i = int(np.argmax(steps <= 0)) + 1
-        raise DatasetError(csv_path, f"timestamps not strictly increasing at image {i} "
-                           f"({t[i - 1]} -> {t[i]})")
+        raise DatasetError(
+            csv_path, f"timestamps not strictly increasing at image {i} ({t[i - 1]} -> {t[i]})"
+        )
     return t, files
 
 
-def _pair_by_timestamp(t_left: np.ndarray, t_right: np.ndarray, tolerance_ns: int,
-                       left_csv: Path, right_csv: Path) -> tuple[np.ndarray, np.ndarray]:
+def _pair_by_timestamp(
+    t_left: np.ndarray, t_right: np.ndarray, tolerance_ns: int, left_csv: Path, right_csv: Path
+) -> tuple[np.ndarray, np.ndarray]:
     """Indices (left, right) of the stereo pairs.
 
     Images before the later first frame or after the earlier last frame of the two cameras are
@@ -131,35 +136,52 @@ def _pair_by_timestamp(t_left: np.ndarray, t_right: np.ndarray, tolerance_ns: in
     end = min(t_left[-1], t_right[-1]) + tolerance_ns
     keep_left = np.flatnonzero((t_left >= start) & (t_left <= end))
     keep_right = np.flatnonzero((t_right >= start) & (t_right <= end))
-    for kept, total, where in ((keep_left, len(t_left), left_csv),
-                               (keep_right, len(t_right), right_csv)):
+    for kept, total, where in (
+        (keep_left, len(t_left), left_csv),
+        (keep_right, len(t_right), right_csv),
+    ):
         if len(kept) < total:
-            log.warning("%s: %d of %d images lie outside the other camera's time span and are "
-                        "ignored", where, total - len(kept), total)
+            log.warning(
+                "%s: %d of %d images lie outside the other camera's time span and are ignored",
+                where,
+                total - len(kept),
+                total,
+            )
     if len(keep_left) == 0 or len(keep_right) == 0:
         raise DatasetError(right_csv, "the two cameras' timestamps do not overlap at all")
     tl, tr = t_left[keep_left], t_right[keep_right]
     # Nearest right timestamp for every left one.
     j = np.clip(np.searchsorted(tr, tl), 1, max(len(tr) - 1, 1))
-    j = np.where(np.abs(tr[j - 1] - tl) <= np.abs(tr[np.minimum(j, len(tr) - 1)] - tl), j - 1,
-                 np.minimum(j, len(tr) - 1))
+    j = np.where(
+        np.abs(tr[j - 1] - tl) <= np.abs(tr[np.minimum(j, len(tr) - 1)] - tl),
+        j - 1,
+        np.minimum(j, len(tr) - 1),
+    )
     unmatched = np.abs(tr[j] - tl) > tolerance_ns
     if np.any(unmatched) or len(tl) != len(tr):
         n_bad = int(np.count_nonzero(unmatched))
-        first = (f"; first left image without a partner: t = {tl[np.argmax(unmatched)]} ns"
-                 if n_bad else "")
+        first = (
+            f"; first left image without a partner: t = {tl[np.argmax(unmatched)]} ns"
+            if n_bad
+            else ""
+        )
         raise DatasetError(
-            right_csv, f"stereo timestamps do not pair up with {left_csv.parent.name}: "
+            right_csv,
+            f"stereo timestamps do not pair up with {left_csv.parent.name}: "
             f"{len(tl)} left and {len(tr)} right images in the common time span, {n_bad} left "
-            f"images with no right image within {tolerance_ns} ns{first}")
+            f"images with no right image within {tolerance_ns} ns{first}",
+        )
     return keep_left, keep_right[j]
 
 
 def _check_files_exist(files: list[Path], csv_path: Path) -> None:
     missing = [f for f in files if not f.is_file()]
     if missing:
-        raise DatasetError(missing[0], f"image file not found ({len(missing)} of {len(files)} "
-                           f"images listed in {csv_path} are missing)")
+        raise DatasetError(
+            missing[0],
+            f"image file not found ({len(missing)} of {len(files)} "
+            f"images listed in {csv_path} are missing)",
+        )
 
 
 class EurocSequence:
@@ -184,26 +206,34 @@ class EurocSequence:
         self.right_calibration = CameraCalibration.from_yaml(self.root / "cam1" / "sensor.yaml")
         t_left, self._left_files = _read_image_index(self.root / "cam0")
         t_right, self._right_files = _read_image_index(self.root / "cam1")
-        left_idx, right_idx = _pair_by_timestamp(t_left, t_right, stereo_tolerance_ns,
-                                                 self.root / "cam0" / "data.csv",
-                                                 self.root / "cam1" / "data.csv")
+        left_idx, right_idx = _pair_by_timestamp(
+            t_left,
+            t_right,
+            stereo_tolerance_ns,
+            self.root / "cam0" / "data.csv",
+            self.root / "cam1" / "data.csv",
+        )
         self._pairs = list(zip(left_idx.tolist(), right_idx.tolist(), strict=True))
         _check_files_exist([self._left_files[i] for i in left_idx], self.root / "cam0" / "data.csv")
-        _check_files_exist([self._right_files[j] for j in right_idx],
-                           self.root / "cam1" / "data.csv")
+        _check_files_exist(
+            [self._right_files[j] for j in right_idx], self.root / "cam1" / "data.csv"
+        )
         self.timestamps_ns = t_left[left_idx]
         self._rectifier = self._build_rectifier()
 
     def _build_rectifier(self) -> _core.StereoRectifier:
         def radtan(c: CameraCalibration) -> _core.RadTanCamera:
-            return _core.RadTanCamera(_core.PinholeCamera(c.fx, c.fy, c.cx, c.cy, c.width,
-                                                          c.height), list(c.distortion))
+            return _core.RadTanCamera(
+                _core.PinholeCamera(c.fx, c.fy, c.cx, c.cy, c.width, c.height), list(c.distortion)
+            )
 
-        T_left_right = invert_transform(self.left_calibration.T_body_cam) @ \
-            self.right_calibration.T_body_cam
+        T_left_right = (
+            invert_transform(self.left_calibration.T_body_cam) @ self.right_calibration.T_body_cam
+        )
         try:
-            return _core.StereoRectifier(radtan(self.left_calibration),
-                                         radtan(self.right_calibration), T_left_right)
+            return _core.StereoRectifier(
+                radtan(self.left_calibration), radtan(self.right_calibration), T_left_right
+            )
         except ValueError as exc:
             raise DatasetError(self.root, f"cannot rectify the stereo pair: {exc}") from None
 
@@ -215,9 +245,15 @@ class EurocSequence:
         T_cam0_rect = np.eye(4)
         T_cam0_rect[:3, :3] = np.asarray(r.R_rect_left).T
         return RectifiedStereoCamera(
-            fx=pinhole.fx, fy=pinhole.fy, cx=pinhole.cx, cy=pinhole.cy, width=pinhole.width,
-            height=pinhole.height, baseline_m=r.baseline_m,
-            T_body_cam=self.left_calibration.T_body_cam @ T_cam0_rect)
+            fx=pinhole.fx,
+            fy=pinhole.fy,
+            cx=pinhole.cx,
+            cy=pinhole.cy,
+            width=pinhole.width,
+            height=pinhole.height,
+            baseline_m=r.baseline_m,
+            T_body_cam=self.left_calibration.T_body_cam @ T_cam0_rect,
+        )
 
     @property
     def rectifier(self) -> _core.StereoRectifier:
@@ -231,12 +267,16 @@ class EurocSequence:
         try:
             image = _core.read_gray_image(str(path))
         except ValueError as exc:
-            raise DatasetError(path, str(exc).replace(f"{path}", "").strip(": ") or
-                               "unreadable image") from None
+            raise DatasetError(
+                path, str(exc).replace(f"{path}", "").strip(": ") or "unreadable image"
+            ) from None
         expected = (self.left_calibration.height, self.left_calibration.width)
         if image.shape != expected:
-            raise DatasetError(path, f"image is {image.shape[1]}x{image.shape[0]} but the "
-                               f"calibration is for {expected[1]}x{expected[0]}")
+            raise DatasetError(
+                path,
+                f"image is {image.shape[1]}x{image.shape[0]} but the "
+                f"calibration is for {expected[1]}x{expected[0]}",
+            )
         return image
 
     def __getitem__(self, index: int) -> StereoFrame:
@@ -272,8 +312,9 @@ class EurocSequence:
         traj = read_trajectory(path, "euroc")
         if frame == "body":
             return traj
-        T_body_frame = (self.left_calibration.T_body_cam if frame == "cam0"
-                        else self.camera.T_body_cam)
+        T_body_frame = (
+            self.left_calibration.T_body_cam if frame == "cam0" else self.camera.T_body_cam
+        )
         traj.transform(T_body_frame, right_mul=True)
         return traj
 
@@ -284,8 +325,9 @@ class EurocSequence:
             raise DatasetError(path, "no IMU data in this sequence")
         try:
             table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, dtype=np.float64)
-            stamps = np.loadtxt(path, delimiter=",", comments="#", usecols=0, dtype=np.int64,
-                                ndmin=1)
+            stamps = np.loadtxt(
+                path, delimiter=",", comments="#", usecols=0, dtype=np.int64, ndmin=1
+            )
         except ValueError as exc:
             raise DatasetError(path, f"malformed IMU csv ({exc})") from None
         if table.shape[1] < 7:

@@ -49,8 +49,10 @@ def detect_format(path: str | Path) -> str:
     if columns == 12:
         return "kitti"
     raise TrajectoryFileError(
-        path, f"cannot tell the format: first row has {columns} columns "
-        "(TUM has 8, KITTI 12, EuRoC csv uses commas)")
+        path,
+        f"cannot tell the format: first row has {columns} columns "
+        "(TUM has 8, KITTI 12, EuRoC csv uses commas)",
+    )
 
 
 def _validate(path: Path, traj: PosePath3D) -> None:
@@ -62,14 +64,18 @@ def _validate(path: Path, traj: PosePath3D) -> None:
         raise TrajectoryFileError(path, f"pose {int(np.argmax(bad))} contains NaN or Inf")
     norms = np.linalg.norm(traj.orientations_quat_wxyz, axis=1)
     if np.any(norms < 1e-9):
-        raise TrajectoryFileError(path, f"pose {int(np.argmax(norms < 1e-9))} has a zero quaternion")
+        raise TrajectoryFileError(
+            path, f"pose {int(np.argmax(norms < 1e-9))} has a zero quaternion"
+        )
     if isinstance(traj, PoseTrajectory3D):
         steps = np.diff(traj.timestamps)
         if np.any(steps <= 0):
             i = int(np.argmax(steps <= 0)) + 1
             raise TrajectoryFileError(
-                path, f"timestamps are not strictly increasing at pose {i} "
-                f"({traj.timestamps[i - 1]:.9f} -> {traj.timestamps[i]:.9f})")
+                path,
+                f"timestamps are not strictly increasing at pose {i} "
+                f"({traj.timestamps[i - 1]:.9f} -> {traj.timestamps[i]:.9f})",
+            )
 
 
 def read_trajectory(
@@ -108,7 +114,8 @@ def read_trajectory(
         times = np.loadtxt(kitti_times, ndmin=1, dtype=float)
         if times.shape[0] != traj.num_poses:
             raise TrajectoryFileError(
-                kitti_times, f"has {times.shape[0]} timestamps for {traj.num_poses} poses")
+                kitti_times, f"has {times.shape[0]} timestamps for {traj.num_poses} poses"
+            )
         traj = PoseTrajectory3D(poses_se3=traj.poses_se3, timestamps=times)
     _validate(path, traj)
     return traj

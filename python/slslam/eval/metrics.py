@@ -23,8 +23,7 @@ from slslam.errors import InputError
 Alignment = Literal["se3", "sim3", "none"]
 ALIGNMENTS = ("se3", "sim3", "none")
 DeltaUnit = Literal["m", "frames", "deg", "rad"]
-_DELTA_UNITS = {"m": Unit.meters, "frames": Unit.frames, "deg": Unit.degrees,
-                "rad": Unit.radians}
+_DELTA_UNITS = {"m": Unit.meters, "frames": Unit.frames, "deg": Unit.degrees, "rad": Unit.radians}
 STAT_KEYS = ("rmse", "mean", "median", "std", "min", "max", "sse")
 
 
@@ -51,21 +50,35 @@ class ErrorResult:
     options: dict[str, object] = field(default_factory=dict)
 
 
-def associate(reference: PosePath3D, estimate: PosePath3D,
-              max_diff_s: float = 0.01) -> tuple[PosePath3D, PosePath3D]:
+def associate(
+    reference: PosePath3D, estimate: PosePath3D, max_diff_s: float = 0.01
+) -> tuple[PosePath3D, PosePath3D]:
     """Pair poses by nearest timestamp within ``max_diff_s`` (by index for untimed paths)."""
     if isinstance(reference, PoseTrajectory3D) and isinstance(estimate, PoseTrajectory3D):
-        ref, est = sync.associate_trajectories(reference, estimate, max_diff=max_diff_s)
+        try:
+            ref, est = sync.associate_trajectories(reference, estimate, max_diff=max_diff_s)
+        except sync.SyncException as exc:
+            raise InputError(
+                None,
+                f"the trajectories cannot be associated in time: {exc} "
+                "(check that both files use the same time base, in seconds)",
+            ) from None
     else:
         if reference.num_poses != estimate.num_poses:
-            raise InputError(None, f"untimed trajectories must have equal length to be compared "
-                             f"by index ({reference.num_poses} vs {estimate.num_poses} poses)")
+            raise InputError(
+                None,
+                f"untimed trajectories must have equal length to be compared "
+                f"by index ({reference.num_poses} vs {estimate.num_poses} poses)",
+            )
         ref, est = copy.deepcopy(reference), copy.deepcopy(estimate)
     # evo stores trajectories in its Result under their names; fix them so _collect finds them.
     ref.name, est.name = "ref", "est"
     if ref.num_poses < 3:
-        raise InputError(None, f"only {ref.num_poses} poses associate within {max_diff_s} s: "
-                         "check that both files use the same time base (seconds)")
+        raise InputError(
+            None,
+            f"only {ref.num_poses} poses associate within {max_diff_s} s: "
+            "check that both files use the same time base (seconds)",
+        )
     return ref, est
 
 
@@ -88,21 +101,40 @@ def _collect(name: str, result, ref: PosePath3D, options: dict[str, object]) -> 
     )
 
 
-def compute_ape(reference: PosePath3D, estimate: PosePath3D, align: Alignment = "se3",
-                max_diff_s: float = 0.01) -> ErrorResult:
+def compute_ape(
+    reference: PosePath3D, estimate: PosePath3D, align: Alignment = "se3", max_diff_s: float = 0.01
+) -> ErrorResult:
     """Absolute position error (translation part) after the chosen alignment."""
     _check_alignment(align)
     ref, est = associate(reference, estimate, max_diff_s)
-    result = main_ape.ape(ref, est, PoseRelation.translation_part,
-                          align=align != "none", correct_scale=align == "sim3")
-    return _collect("ape", result, ref, {"align": align, "max_diff_s": max_diff_s,
-                                         "pose_relation": "translation_part",
-                                         "num_poses": ref.num_poses})
+    result = main_ape.ape(
+        ref,
+        est,
+        PoseRelation.translation_part,
+        align=align != "none",
+        correct_scale=align == "sim3",
+    )
+    return _collect(
+        "ape",
+        result,
+        ref,
+        {
+            "align": align,
+            "max_diff_s": max_diff_s,
+            "pose_relation": "translation_part",
+            "num_poses": ref.num_poses,
+        },
+    )
 
 
-def compute_rpe(reference: PosePath3D, estimate: PosePath3D, delta: float = 1.0,
-                delta_unit: DeltaUnit = "m", align: Alignment = "se3",
-                max_diff_s: float = 0.01) -> ErrorResult:
+def compute_rpe(
+    reference: PosePath3D,
+    estimate: PosePath3D,
+    delta: float = 1.0,
+    delta_unit: DeltaUnit = "m",
+    align: Alignment = "se3",
+    max_diff_s: float = 0.01,
+) -> ErrorResult:
     """Relative translation error over pose pairs ``delta`` apart (metres travelled by default)."""
     _check_alignment(align)
     if delta_unit not in _DELTA_UNITS:
@@ -114,12 +146,26 @@ def compute_rpe(reference: PosePath3D, estimate: PosePath3D, delta: float = 1.0,
     if unit == Unit.frames and delta != int(delta):
         raise InputError(None, f"an RPE delta in frames must be an integer, got {delta}")
     try:
-        result = main_rpe.rpe(ref, est, PoseRelation.translation_part,
-                              delta=int(delta) if unit == Unit.frames else delta,
-                              delta_unit=unit, align=align != "none",
-                              correct_scale=align == "sim3")
+        result = main_rpe.rpe(
+            ref,
+            est,
+            PoseRelation.translation_part,
+            delta=int(delta) if unit == Unit.frames else delta,
+            delta_unit=unit,
+            align=align != "none",
+            correct_scale=align == "sim3",
+        )
     except Exception as exc:  # evo raises its own types when no pose pair spans delta
         raise InputError(None, f"RPE failed for delta {delta} {delta_unit}: {exc}") from None
-    return _collect("rpe", result, ref, {"align": align, "max_diff_s": max_diff_s,
-                                         "delta": delta, "delta_unit": delta_unit,
-                                         "pose_relation": "translation_part"})
+    return _collect(
+        "rpe",
+        result,
+        ref,
+        {
+            "align": align,
+            "max_diff_s": max_diff_s,
+            "delta": delta,
+            "delta_unit": delta_unit,
+            "pose_relation": "translation_part",
+        },
+    )

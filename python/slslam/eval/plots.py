@@ -7,11 +7,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")  # files only; never open a window from a library
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection
 
-from slslam.eval.metrics import ErrorResult  # noqa: E402
+from slslam.eval.metrics import ErrorResult
 
 
 def plot_ape(ape: ErrorResult, path: str | Path, title: str = "") -> Path:
@@ -25,8 +25,9 @@ def plot_ape(ape: ErrorResult, path: str | Path, title: str = "") -> Path:
     est_xyz = ape.estimate_aligned.positions_xyz
     errors = ape.errors
 
-    fig, (ax_top, ax_err) = plt.subplots(1, 2, figsize=(13, 5.5),
-                                         gridspec_kw={"width_ratios": [1.1, 1]})
+    fig, (ax_top, ax_err) = plt.subplots(
+        1, 2, figsize=(13, 5.5), gridspec_kw={"width_ratios": [1.1, 1]}
+    )
     ax_top.plot(ref_xyz[:, 0], ref_xyz[:, 1], "--", color="0.45", lw=1.2, label="ground truth")
     segments = np.stack([est_xyz[:-1, :2], est_xyz[1:, :2]], axis=1)
     lines = LineCollection(segments, cmap="viridis", linewidths=2.0)
@@ -47,9 +48,16 @@ def plot_ape(ape: ErrorResult, path: str | Path, title: str = "") -> Path:
         x = np.arange(len(errors))
         ax_err.set_xlabel("pose index")
     ax_err.plot(x, errors, color="tab:blue", lw=1.0, label="APE")
-    ax_err.axhline(ape.stats["rmse"], color="tab:red", lw=1.0, label=f"RMSE {ape.stats['rmse']:.4f} m")
-    ax_err.axhline(ape.stats["median"], color="tab:green", lw=1.0, ls=":",
-                   label=f"median {ape.stats['median']:.4f} m")
+    ax_err.axhline(
+        ape.stats["rmse"], color="tab:red", lw=1.0, label=f"RMSE {ape.stats['rmse']:.4f} m"
+    )
+    ax_err.axhline(
+        ape.stats["median"],
+        color="tab:green",
+        lw=1.0,
+        ls=":",
+        label=f"median {ape.stats['median']:.4f} m",
+    )
     ax_err.set_ylabel("APE [m]")
     ax_err.set_title(f"APE over time (alignment: {ape.options.get('align')})")
     ax_err.grid(alpha=0.3)

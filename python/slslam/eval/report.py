@@ -35,15 +35,18 @@ class Evaluation:
 
     def summary(self) -> dict:
         """JSON-ready dictionary of every statistic and option."""
-        out = {"slslam_version": __version__, "ape": {"unit": "m", **self.ape.stats,
-                                                       "options": self.ape.options}}
+        out = {
+            "slslam_version": __version__,
+            "ape": {"unit": "m", **self.ape.stats, "options": self.ape.options},
+        }
         if self.rpe is not None:
             out["rpe"] = {"unit": "m", **self.rpe.stats, "options": self.rpe.options}
         return out
 
 
-def load_groundtruth(path: str | Path, fmt: TrajectoryFormat = "auto",
-                     gt_body_to_cam: str | Path | None = None) -> PosePath3D:
+def load_groundtruth(
+    path: str | Path, fmt: TrajectoryFormat = "auto", gt_body_to_cam: str | Path | None = None
+) -> PosePath3D:
     """Ground truth from a file or a EuRoC folder, in the left camera frame where known."""
     path = Path(path)
     if path.is_dir() and is_euroc(path):
@@ -58,6 +61,7 @@ def load_groundtruth(path: str | Path, fmt: TrajectoryFormat = "auto",
 
 def write_json(path: Path, data: dict) -> Path:
     """Write JSON atomically (temporary file + rename); NaN becomes null."""
+
     def clean(value):
         if isinstance(value, float) and not math.isfinite(value):
             return None
@@ -89,12 +93,19 @@ def evaluate(
 ) -> Evaluation:
     """Compute APE (and RPE unless ``rpe_delta`` is None); write files into ``out_dir`` if given."""
     est = estimate if isinstance(estimate, PosePath3D) else read_trajectory(estimate, est_format)
-    gt = groundtruth if isinstance(groundtruth, PosePath3D) else load_groundtruth(
-        groundtruth, gt_format, gt_body_to_cam)
+    gt = (
+        groundtruth
+        if isinstance(groundtruth, PosePath3D)
+        else load_groundtruth(groundtruth, gt_format, gt_body_to_cam)
+    )
     ape = compute_ape(gt, est, align=align, max_diff_s=max_diff_s)
-    rpe = None if rpe_delta is None else compute_rpe(gt, est, delta=rpe_delta,
-                                                      delta_unit=rpe_unit, align=align,
-                                                      max_diff_s=max_diff_s)
+    rpe = (
+        None
+        if rpe_delta is None
+        else compute_rpe(
+            gt, est, delta=rpe_delta, delta_unit=rpe_unit, align=align, max_diff_s=max_diff_s
+        )
+    )
     result = Evaluation(ape=ape, rpe=rpe, metrics_path=None, plot_path=None)
     if out_dir is not None:
         out_dir = Path(out_dir)

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
@@ -17,10 +17,9 @@ RadTanCamera MakeCamera(double fx, double cx, std::array<double, 4> distortion) 
 
 Eigen::Matrix4d SmallRotationBaseline(double baseline_m) {
   Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() =
-      (Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(-0.005, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  T.topLeftCorner<3, 3>() = (Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(-0.005, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
   T.topRightCorner<3, 1>() = Eigen::Vector3d(baseline_m, 0.002, -0.001);
   return T;
 }
