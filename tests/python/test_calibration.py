@@ -2,10 +2,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import camera_yaml, shared_path
 
 from slslam.datasets import CameraCalibration, ImuCalibration
 from slslam.errors import CalibrationError
+
+from conftest import camera_yaml, shared_path
 
 
 def test_reads_real_euroc_camera_and_imu_files():

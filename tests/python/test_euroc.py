@@ -1,11 +1,12 @@
 import numpy as np
 import pytest
-from conftest import shared_path
 
 from slslam import _core
 from slslam.datasets import EurocSequence, find_mav0, is_euroc, read_trajectory
 from slslam.errors import DatasetError
 from slslam.eval import load_groundtruth
+
+from conftest import shared_path
 
 
 def test_synthetic_sequence_reads_lazily_in_time_order(make_euroc):

@@ -3,7 +3,6 @@ import json
 
 import numpy as np
 import pytest
-from conftest import shared_path
 from evo.core import metrics, sync
 from evo.core.trajectory import PoseTrajectory3D
 from evo.tools import file_interface
@@ -13,6 +12,8 @@ from slslam.cli import main
 from slslam.datasets import read_trajectory, write_trajectory
 from slslam.errors import InputError
 from slslam.eval import compute_ape, compute_rpe, evaluate
+
+from conftest import shared_path
 
 NOISE_M = 0.01
 

@@ -1,10 +1,11 @@
 import numpy as np
 import pytest
-from conftest import shared_path
 from evo.core.trajectory import PosePath3D, PoseTrajectory3D
 
 from slslam.datasets import detect_format, read_trajectory, write_trajectory
 from slslam.errors import TrajectoryFileError
+
+from conftest import shared_path
 
 
 def _trajectory(n: int = 10) -> PoseTrajectory3D:

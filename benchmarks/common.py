@@ -1,0 +1,50 @@
+"""Helpers shared by the benchmark scripts: timing statistics and result files."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def time_calls(fn: Callable[[], object], repeats: int, warmup: int = 2) -> dict[str, float]:
+    """Median, mean and min wall time of ``fn`` in milliseconds."""
+    for _ in range(warmup):
+        fn()
+    samples = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        samples.append((time.perf_counter() - start) * 1e3)
+    values = np.asarray(samples)
+    return {
+        "median_ms": float(np.median(values)),
+        "mean_ms": float(values.mean()),
+        "min_ms": float(values.min()),
+        "repeats": repeats,
+    }
+
+
+def machine() -> dict[str, object]:
+    """What the numbers were measured on."""
+    return {
+        "platform": platform.platform(),
+        "processor": platform.processor(),
+        "cpu_count": os.cpu_count(),
+        "python": platform.python_version(),
+    }
+
+
+def write_results(name: str, results: dict, out: Path | None = None) -> Path:
+    path = out or RESULTS_DIR / f"{name}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"benchmark": name, "machine": machine(), **results}, indent=2))
+    return path
