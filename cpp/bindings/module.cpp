@@ -6,6 +6,7 @@ namespace py = pybind11;
 namespace slslam::bindings {
 void BindCore(py::module_& m);
 void BindFeatures(py::module_& m);
+void BindSim(py::module_& m);
 }  // namespace slslam::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -13,4 +14,5 @@ PYBIND11_MODULE(_core, m) {
   m.attr("__version__") = SLSLAM_VERSION;
   slslam::bindings::BindCore(m);
   slslam::bindings::BindFeatures(m);
+  slslam::bindings::BindSim(m);
 }

@@ -167,6 +167,66 @@ def demo_command(
     Console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
 
 
+@app.command("sim")
+def sim_command(
+    out: Annotated[Path, typer.Option(help="Output folder (EuRoC ASL layout).")],
+    preset: Annotated[
+        str,
+        typer.Option(help="Roadway: straight (long corridor), loop (shaft-bottom yard), junction."),
+    ] = "loop",
+    frames: Annotated[int, typer.Option(help="Stereo frames to render.")] = 400,
+    light: Annotated[
+        float,
+        typer.Option(
+            help="Global light level: 1.0 full onboard light, 0.5, 0.15 (OIVIO's levels)."
+        ),
+    ] = 1.0,
+    dust: Annotated[bool, typer.Option("--dust", help="Floating dust lit by the lamp.")] = False,
+    flicker: Annotated[bool, typer.Option("--flicker", help="Exposure flicker.")] = False,
+    blackout: Annotated[
+        bool, typer.Option("--blackout", help="The headlamp goes out for about 1 s mid-run.")
+    ] = False,
+    movers: Annotated[
+        bool, typer.Option("--movers", help="A walking worker and a moving cart cross the view.")
+    ] = False,
+    roof_lamps: Annotated[
+        bool, typer.Option("--roof-lamps", help="A roof lamp every 20 m.")
+    ] = False,
+    speed: Annotated[float, typer.Option(help="Robot cruise speed [m/s].")] = 0.8,
+    no_lidar: Annotated[bool, typer.Option("--no-lidar", help="Skip the LiDAR scans.")] = False,
+    no_noise: Annotated[
+        bool, typer.Option("--no-noise", help="Exact measurements (no image, IMU or range noise).")
+    ] = False,
+    seed: Annotated[int, typer.Option(help="Random seed; same seed, same bytes.")] = 0,
+) -> None:
+    """Simulate a coal-mine roadway sequence: stereo images, 16-beam LiDAR, IMU, ground truth.
+
+    Writes EuRoC's ASL layout (mav0/cam0, cam1, imu0, state_groundtruth_estimate0, lidar0),
+    ground truth as TUM files and a manifest.json; `slslam info OUT` reads it back.
+    """
+    from slslam.sim import SimOptions, Simulator
+
+    options = SimOptions(
+        preset=preset,
+        frames=frames,
+        light=light,
+        dust=dust,  # type: ignore[arg-type]
+        flicker=flicker,
+        blackout=blackout,
+        movers=movers,
+        roof_lamps=roof_lamps,
+        speed_mps=speed,
+        lidar=not no_lidar,
+        noise=not no_noise,
+        seed=seed,
+    )
+    manifest = Simulator(options).write(out)
+    Console().print(
+        f"wrote {manifest['frames_written']} frames to {out} "
+        f"({manifest['frames_per_second']:.2f} frames/s)"
+    )
+
+
 @app.command("version")
 def version_command() -> None:
     """Print the slslam version and the C++ core it loads."""

@@ -1,0 +1,222 @@
+"""Writes a simulated sequence in EuRoC's ASL layout, so every EuRoC tool reads it.
+
+::
+
+    <out>/mav0/cam0|cam1/{data/<t_ns>.png, data.csv, sensor.yaml}
+    <out>/mav0/imu0/{data.csv, sensor.yaml}
+    <out>/mav0/state_groundtruth_estimate0/data.csv      body poses (ASL ground-truth columns)
+    <out>/mav0/lidar0/{data/<t_ns>.bin, data.csv, sensor.yaml, poses_kitti.txt, times.txt}
+    <out>/groundtruth_cam0.tum, groundtruth_body.tum     the same ground truth in TUM format
+    <out>/manifest.json                                  preset, seed, parameters, status
+
+Index files are appended row by row and flushed, so a run that stops midway leaves a readable
+sequence of the frames written so far.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from slslam._version import __version__
+
+CAMERA_YAML = """%YAML:1.0
+# Simulated rectified camera written by slslam {version}.
+sensor_type: camera
+comment: {comment}
+T_BS:
+  cols: 4
+  rows: 4
+  data: [{T}]
+rate_hz: {rate}
+resolution: [{width}, {height}]
+camera_model: pinhole
+intrinsics: [{fx}, {fy}, {cx}, {cy}]
+distortion_model: radial-tangential
+distortion_coefficients: [0.0, 0.0, 0.0, 0.0]
+"""
+
+IMU_YAML = """%YAML:1.0
+# Simulated IMU written by slslam {version}.
+sensor_type: imu
+comment: {comment}
+T_BS:
+  cols: 4
+  rows: 4
+  data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+rate_hz: {rate}
+gyroscope_noise_density: {gnd}
+gyroscope_random_walk: {grw}
+accelerometer_noise_density: {and_}
+accelerometer_random_walk: {arw}
+"""
+
+LIDAR_YAML = """%YAML:1.0
+# Simulated 16-beam LiDAR written by slslam {version}. Scans: KITTI .bin (float32 x y z i).
+sensor_type: lidar
+T_BS:
+  cols: 4
+  rows: 4
+  data: [{T}]
+rate_hz: {rate}
+beams: {beams}
+"""
+
+
+def _flat(T: np.ndarray) -> str:
+    return ", ".join(f"{v:.9f}" for v in np.asarray(T).ravel())
+
+
+def quat_wxyz(R: np.ndarray) -> np.ndarray:
+    """Quaternions (w, x, y, z) of rotation matrices (N, 3, 3)."""
+    return np.roll(Rotation.from_matrix(R).as_quat(), 1, axis=-1)
+
+
+class AslWriter:
+    """Creates the folders and writes each record as it comes."""
+
+    def __init__(self, out: str | Path, lidar: bool):
+        self.out = Path(out)
+        self.mav0 = self.out / "mav0"
+        for sub in ("cam0/data", "cam1/data", "imu0", "state_groundtruth_estimate0"):
+            (self.mav0 / sub).mkdir(parents=True, exist_ok=True)
+        self._files = {
+            "cam0": self._open(self.mav0 / "cam0" / "data.csv", "#timestamp [ns],filename"),
+            "cam1": self._open(self.mav0 / "cam1" / "data.csv", "#timestamp [ns],filename"),
+        }
+        if lidar:
+            (self.mav0 / "lidar0" / "data").mkdir(parents=True, exist_ok=True)
+            self._files["lidar0"] = self._open(
+                self.mav0 / "lidar0" / "data.csv", "#timestamp [ns],filename"
+            )
+            self._files["lidar_poses"] = self._open(self.mav0 / "lidar0" / "poses_kitti.txt")
+            self._files["lidar_times"] = self._open(self.mav0 / "lidar0" / "times.txt")
+        self._files["gt_cam0"] = self._open(
+            self.out / "groundtruth_cam0.tum", "# timestamp tx ty tz qx qy qz qw (T_world_cam0)"
+        )
+
+    @staticmethod
+    def _open(path: Path, header: str | None = None):
+        handle = path.open("w", encoding="utf-8")
+        if header:
+            handle.write(header + "\n")
+        return handle
+
+    def _row(self, key: str, text: str) -> None:
+        self._files[key].write(text + "\n")
+        self._files[key].flush()
+
+    def write_manifest(self, manifest: dict) -> None:
+        path = self.out / "manifest.json"
+        tmp = path.with_name("manifest.json.partial")
+        tmp.write_text(json.dumps({"slslam_version": __version__, **manifest}, indent=2) + "\n")
+        tmp.replace(path)
+
+    def write_calibration(
+        self,
+        camera,
+        T_body_cam0,
+        T_body_cam1,
+        rate_hz: float,
+        imu_rate_hz: float,
+        imu_noise,
+        lidar=None,
+        lidar_rate_hz=10.0,
+    ) -> None:
+        for name, T in (("cam0", T_body_cam0), ("cam1", T_body_cam1)):
+            (self.mav0 / name / "sensor.yaml").write_text(
+                CAMERA_YAML.format(
+                    version=__version__,
+                    comment=f"slslam simulated {name}",
+                    T=_flat(T),
+                    rate=rate_hz,
+                    width=camera.width,
+                    height=camera.height,
+                    fx=camera.fx,
+                    fy=camera.fx,
+                    cx=camera.cx,
+                    cy=camera.cy,
+                )
+            )
+        (self.mav0 / "imu0" / "sensor.yaml").write_text(
+            IMU_YAML.format(
+                version=__version__,
+                comment="slslam simulated IMU",
+                rate=imu_rate_hz,
+                gnd=imu_noise.gyroscope_noise_density,
+                grw=imu_noise.gyroscope_random_walk,
+                and_=imu_noise.accelerometer_noise_density,
+                arw=imu_noise.accelerometer_random_walk,
+            )
+        )
+        if lidar is not None:
+            (self.mav0 / "lidar0" / "sensor.yaml").write_text(
+                LIDAR_YAML.format(
+                    version=__version__,
+                    T=_flat(lidar.T_body_lidar),
+                    rate=lidar_rate_hz,
+                    beams=lidar.beams,
+                )
+            )
+
+    def write_stereo(self, t_ns: int, left: np.ndarray, right: np.ndarray, write_image) -> None:
+        for key, image in (("cam0", left), ("cam1", right)):
+            write_image(str(self.mav0 / key / "data" / f"{t_ns}.png"), image)
+            self._row(key, f"{t_ns},{t_ns}.png")
+
+    def write_camera_pose(self, t_ns: int, T_world_cam0: np.ndarray) -> None:
+        q = quat_wxyz(T_world_cam0[:3, :3][None])[0]
+        p = T_world_cam0[:3, 3]
+        self._row(
+            "gt_cam0",
+            f"{t_ns * 1e-9:.9f} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} "
+            f"{q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}",
+        )
+
+    def write_lidar(self, t_ns: int, points: np.ndarray, T_world_lidar: np.ndarray) -> None:
+        points.astype(np.float32).tofile(self.mav0 / "lidar0" / "data" / f"{t_ns}.bin")
+        self._row("lidar0", f"{t_ns},{t_ns}.bin")
+        self._row("lidar_poses", " ".join(f"{v:.9e}" for v in T_world_lidar[:3].ravel()))
+        self._row("lidar_times", f"{t_ns * 1e-9:.9f}")
+
+    def write_imu(self, imu: dict[str, np.ndarray]) -> None:
+        table = np.column_stack([imu["gyro"], imu["acc"]])
+        with (self.mav0 / "imu0" / "data.csv").open("w", encoding="utf-8") as f:
+            f.write(
+                "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"
+            )
+            for t, row in zip(imu["t_ns"], table, strict=True):
+                f.write(f"{t}," + ",".join(f"{v:.9f}" for v in row) + "\n")
+
+    def write_body_groundtruth(
+        self, t_ns: np.ndarray, T_world_body: np.ndarray, velocity: np.ndarray
+    ) -> None:
+        """ASL ground truth (pose, velocity, zero biases) and the same poses as TUM."""
+        q = quat_wxyz(T_world_body[:, :3, :3])
+        p = T_world_body[:, :3, 3]
+        zeros = np.zeros((len(t_ns), 6))
+        with (self.mav0 / "state_groundtruth_estimate0" / "data.csv").open("w") as f:
+            f.write(
+                "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
+                "q_RS_y [], q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], "
+                "v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+                "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], "
+                "b_a_RS_S_z [m s^-2]\n"
+            )
+            for t, row in zip(t_ns, np.column_stack([p, q, velocity, zeros]), strict=True):
+                f.write(f"{t}," + ",".join(f"{v:.9f}" for v in row) + "\n")
+        with (self.out / "groundtruth_body.tum").open("w") as f:
+            f.write("# timestamp tx ty tz qx qy qz qw (T_world_body)\n")
+            for t, pi, qi in zip(t_ns, p, q, strict=True):
+                f.write(
+                    f"{t * 1e-9:.9f} {pi[0]:.9f} {pi[1]:.9f} {pi[2]:.9f} "
+                    f"{qi[1]:.9f} {qi[2]:.9f} {qi[3]:.9f} {qi[0]:.9f}\n"
+                )
+
+    def close(self) -> None:
+        for handle in self._files.values():
+            handle.close()
