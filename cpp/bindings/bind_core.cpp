@@ -74,7 +74,9 @@ void BindCore(py::module_& m) {
   m.def(
       "write_image",
       [](const std::string& path, const py::array& image) {
-        WriteImage(path, WrapGray(image, "image"));
+        const cv::Mat mat = WrapGray(image, "image");
+        py::gil_scoped_release release;  // PNG encoding can overlap other work
+        WriteImage(path, mat);
       },
       py::arg("path"), py::arg("image"), "Write a uint8 gray image (format from the extension).");
 }

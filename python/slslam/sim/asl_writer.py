@@ -163,8 +163,10 @@ class AslWriter:
             )
 
     def write_stereo(self, t_ns: int, left: np.ndarray, right: np.ndarray, write_image) -> None:
+        """Write both images, then their index rows (an index row never names a missing file)."""
         for key, image in (("cam0", left), ("cam1", right)):
             write_image(str(self.mav0 / key / "data" / f"{t_ns}.png"), image)
+        for key in ("cam0", "cam1"):
             self._row(key, f"{t_ns},{t_ns}.png")
 
     def write_camera_pose(self, t_ns: int, T_world_cam0: np.ndarray) -> None:

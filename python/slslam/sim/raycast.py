@@ -60,7 +60,7 @@ class RaycastScene:
         t, normal, mat = self._cast(self._scene, self._lookup, tensor)
         if movers is not None and len(movers.triangles):
             t2, n2, m2 = self._cast(
-                _scene(movers), np.append(movers.material, Material.NONE), tensor
+                _scene(movers), np.append(movers.material, Material.NONE).astype(np.uint8), tensor
             )
             nearer = t2 < t
             t, mat = np.where(nearer, t2, t), np.where(nearer, m2, mat)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -228,6 +229,32 @@ class Simulator:
                 depth = (hits.t * self._directions[:, 2]).reshape(cam.height, cam.width)
         return images[0], images[1], depth
 
+    def _render_record(self, frame: int, rng: np.random.Generator) -> dict:
+        """Everything written for one frame: images, camera pose, LiDAR scan when due."""
+        opts = self.options
+        t = frame / opts.rate_hz
+        left, right, _ = self.render_stereo(frame)
+        T_world_body = self.trajectory.pose(np.array([t]))[0]
+        record = {
+            "t_ns": T0_NS + round(t * 1e9),
+            "left": left,
+            "right": right,
+            "T_world_cam0": T_world_body @ self.camera.T_body_cam0,
+        }
+        lidar_every = max(round(opts.rate_hz / opts.lidar_rate_hz), 1)
+        if opts.lidar and frame % lidar_every == 0:
+            T_world_lidar = T_world_body @ self.lidar.T_body_lidar
+            scan = self.lidar.scan(self.scene, T_world_lidar, rng, noise=opts.noise)
+            record["lidar"] = (scan, T_world_lidar)
+        return record
+
+    @staticmethod
+    def _write_record(writer: AslWriter, record: dict) -> None:
+        writer.write_stereo(record["t_ns"], record["left"], record["right"], _core.write_image)
+        writer.write_camera_pose(record["t_ns"], record["T_world_cam0"])
+        if "lidar" in record:
+            writer.write_lidar(record["t_ns"], *record["lidar"])
+
     def write(self, out: str | Path, progress: bool = True) -> dict:
         """Write the whole sequence (EuRoC ASL layout); returns the manifest."""
         opts = self.options
@@ -263,24 +290,24 @@ class Simulator:
             self.trajectory.pose(t_gt),
             self.trajectory.velocity(t_gt),
         )
-        lidar_every = max(round(opts.rate_hz / opts.lidar_rate_hz), 1)
         rng = np.random.default_rng([opts.seed, 7])
         start = time.perf_counter()
+        # Files of frame k are written on a second thread while frame k+1 renders (PNG encoding
+        # releases the GIL); one pending frame at most, so records stay in order.
+        pending: Future | None = None
         try:
-            for frame in tqdm(
-                range(opts.frames), desc="simulate", unit="frame", disable=not progress
-            ):
-                t = frame / opts.rate_hz
-                t_ns = T0_NS + round(t * 1e9)
-                left, right, _ = self.render_stereo(frame)
-                writer.write_stereo(t_ns, left, right, _core.write_image)
-                T_world_body = self.trajectory.pose(np.array([t]))[0]
-                writer.write_camera_pose(t_ns, T_world_body @ self.camera.T_body_cam0)
-                if opts.lidar and frame % lidar_every == 0:
-                    T_world_lidar = T_world_body @ self.lidar.T_body_lidar
-                    scan = self.lidar.scan(self.scene, T_world_lidar, rng, noise=opts.noise)
-                    writer.write_lidar(t_ns, scan, T_world_lidar)
-                manifest["frames_written"] = frame + 1
+            with ThreadPoolExecutor(max_workers=1) as pool:
+                for frame in tqdm(
+                    range(opts.frames), desc="simulate", unit="frame", disable=not progress
+                ):
+                    record = self._render_record(frame, rng)
+                    if pending is not None:
+                        pending.result()
+                        manifest["frames_written"] = frame
+                    pending = pool.submit(self._write_record, writer, record)
+                if pending is not None:
+                    pending.result()
+                    manifest["frames_written"] = opts.frames
             manifest["status"] = "complete"
         except BaseException:
             manifest["status"] = "interrupted"
