@@ -7,6 +7,7 @@ namespace slslam::bindings {
 void BindCore(py::module_& m);
 void BindFeatures(py::module_& m);
 void BindSim(py::module_& m);
+void BindRayCaster(py::module_& m);
 }  // namespace slslam::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -15,4 +16,5 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindCore(m);
   slslam::bindings::BindFeatures(m);
   slslam::bindings::BindSim(m);
+  slslam::bindings::BindRayCaster(m);
 }

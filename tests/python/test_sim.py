@@ -36,7 +36,7 @@ def test_stereo_geometry_right_rays_hit_the_left_points(noiseless_loop):
     )
     rng = np.random.default_rng(1)
     pixels = rng.integers(0, cam.width * cam.height, 400)
-    depth = left.t[pixels] * sim._directions[pixels, 2]
+    depth = left.depth[pixels]
     ok = np.isfinite(depth) & (depth < 15.0)
     u = pixels % cam.width
     v = pixels // cam.width
@@ -100,16 +100,48 @@ def test_stereo_images_have_disparity_fx_b_over_depth(noiseless_loop):
     assert np.median(errors) < 0.5, f"median disparity error {np.median(errors):.3f} px"
 
 
+def _open3d():
+    return pytest.importorskip("open3d", reason="open3d (test extra) cross-checks the ray caster")
+
+
+def _open3d_scene(sim: Simulator):
+    """An independent ray caster of the same mesh (Open3D's RaycastingScene)."""
+    o3d = _open3d()
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(
+        o3d.core.Tensor(sim.mesh.vertices.astype(np.float32)),
+        o3d.core.Tensor(sim.mesh.triangles.astype(np.uint32)),
+    )
+    return scene
+
+
+def test_camera_hits_agree_with_open3d(noiseless_loop):
+    sim = noiseless_loop
+    cam = sim.camera
+    T = sim.trajectory.pose(np.array([2.0]))[0] @ cam.T_body_cam0
+    o3d = _open3d()
+    ours = sim.cast_cameras([T], 2.0)[0]
+    directions = cam.pixel_directions() @ T[:3, :3].T
+    rays = np.hstack([np.broadcast_to(T[:3, 3], directions.shape), directions])
+    theirs = _open3d_scene(sim).cast_rays(o3d.core.Tensor(rays.astype(np.float32)))
+    t_o3d = theirs["t_hit"].numpy()
+    assert np.array_equal(np.isfinite(ours.t), np.isfinite(t_o3d))
+    hit = np.isfinite(t_o3d)
+    assert np.max(np.abs(ours.t[hit] - t_o3d[hit])) < 1e-3
+    ids = theirs["primitive_ids"].numpy()[hit]
+    assert np.mean(ours.material[hit] == sim.mesh.material[ids]) > 0.999
+
+
 def test_lidar_points_lie_on_the_roadway_surface():
     sim = Simulator(_small(preset="straight", noise=False))
     T_world_lidar = sim.trajectory.pose(np.array([0.1]))[0] @ sim.lidar.T_body_lidar
     scan = sim.lidar.scan(sim.scene, T_world_lidar, np.random.default_rng(0), noise=False)
     assert scan.shape[1] == 4 and len(scan) > 10_000
     world = scan[:, :3] @ T_world_lidar[:3, :3].T + T_world_lidar[:3, 3]
-    import open3d as o3d
-
-    distance = sim.scene._scene.compute_distance(o3d.core.Tensor(world.astype(np.float32))).numpy()
-    assert np.max(distance) < 2e-3
+    # Distance to the mesh, measured by another library: the points lie on the surface.
+    o3d = _open3d()
+    distance = _open3d_scene(sim).compute_distance(o3d.core.Tensor(world.astype(np.float32)))
+    assert np.max(distance.numpy()) < 2e-3
     # Floor returns sit on z = 0; the roadway is 4.4 m wide: nothing beyond its walls.
     floor = (world[:, 2] < 0.3) & (np.abs(world[:, 1]) < 2.0)  # away from walls and arches
     assert floor.sum() > 100 and np.max(np.abs(world[floor, 2])) < 2e-3

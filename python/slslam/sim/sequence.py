@@ -119,7 +119,6 @@ class Simulator:
         )
         self.camera = options.camera
         self.lidar = Lidar()
-        self._directions = self.camera.pixel_directions().astype(np.float32)
         self._roof_lamps = (
             self._place_roof_lamps(roadways) if options.roof_lamps else np.zeros((0, 3))
         )
@@ -167,21 +166,14 @@ class Simulator:
         return level
 
     def cast_cameras(self, poses_world_cam: list[np.ndarray], t: float) -> list[Hits]:
-        """Ray-cast every pixel of cameras at poses ``T_world_cam`` in one call (world hits)."""
-        n = len(self._directions)
-        rays = np.empty((n * len(poses_world_cam), 6), dtype=np.float32)
-        for k, T in enumerate(poses_world_cam):
-            rays[k * n : (k + 1) * n, :3] = T[:3, 3]
-            rays[k * n : (k + 1) * n, 3:] = self._directions @ T[:3, :3].T.astype(np.float32)
-        hits = self.scene.cast_rays(rays, self.movers_mesh(t))
+        """Ray-cast every pixel of cameras at poses ``T_world_cam`` (world hits, row-major)."""
+        cam = self.camera
+        movers = self.movers_mesh(t)
         return [
-            Hits(
-                hits.t[k * n : (k + 1) * n],
-                hits.normal[k * n : (k + 1) * n],
-                hits.material[k * n : (k + 1) * n],
-                hits.point[k * n : (k + 1) * n],
+            self.scene.cast_pinhole(
+                T, cam.fx, cam.fx, cam.cx, cam.cy, cam.width, cam.height, movers
             )
-            for k in range(len(poses_world_cam))
+            for T in poses_world_cam
         ]
 
     def _headlamp(self, T_world_body: np.ndarray, frame: int) -> _core.HeadLamp:
@@ -226,7 +218,7 @@ class Simulator:
                 self.dust.draw(image, T_world_cam, cam, lamp, level, t, seed_frame=frame)
             images.append(image)
             if k == 0:
-                depth = (hits.t * self._directions[:, 2]).reshape(cam.height, cam.width)
+                depth = hits.depth.reshape(cam.height, cam.width)
         return images[0], images[1], depth
 
     def _render_record(self, frame: int, rng: np.random.Generator) -> dict:
