@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slslam.sim.raycast import RaycastScene
+from slslam.sim.roadway import Mesh
 
 #: Rotation from a camera frame (z forward, x right, y down) to the body frame.
 R_BODY_CAM = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -99,13 +100,15 @@ class Lidar:
         T_world_lidar: np.ndarray,
         rng: np.random.Generator,
         noise: bool = True,
+        movers: Mesh | None = None,
     ) -> np.ndarray:
         """Points (N, 4): x, y, z in the LiDAR frame [m] and intensity in [0, 1].
 
-        The scan is taken at one instant (no motion distortion within the sweep).
+        The scan is taken at one instant (no motion distortion within the sweep); ``movers``
+        (moving objects at that instant) are seen like the walls.
         """
         R, origin = T_world_lidar[:3, :3], T_world_lidar[:3, 3]
-        hits = scene.cast(origin, self.directions @ R.T)
+        hits = scene.cast(origin, self.directions @ R.T, movers)
         r = hits.t.copy()
         if noise:
             r += rng.normal(0.0, self.range_noise_m, r.shape)

@@ -236,7 +236,9 @@ class Simulator:
         lidar_every = max(round(opts.rate_hz / opts.lidar_rate_hz), 1)
         if opts.lidar and frame % lidar_every == 0:
             T_world_lidar = T_world_body @ self.lidar.T_body_lidar
-            scan = self.lidar.scan(self.scene, T_world_lidar, rng, noise=opts.noise)
+            scan = self.lidar.scan(
+                self.scene, T_world_lidar, rng, noise=opts.noise, movers=self.movers_mesh(t)
+            )
             record["lidar"] = (scan, T_world_lidar)
         return record
 
