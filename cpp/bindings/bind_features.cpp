@@ -1,8 +1,11 @@
 #include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include "bindings/image_conversion.h"
 #include "slslam/features/descriptor_matcher.h"
+#include "slslam/features/dynamic_cell_filter.h"
+#include "slslam/features/grid_limit.h"
 #include "slslam/features/orb_extractor.h"
 
 namespace py = pybind11;
@@ -68,6 +71,72 @@ void BindFeatures(py::module_& m) {
       },
       py::arg("query"), py::arg("train"), py::arg("options") = MatchOptions{},
       "Mutual nearest-neighbour + ratio matching; returns (query index, train index) pairs N x 2.");
+
+  py::class_<GridLimitOptions>(m, "GridLimitOptions", "Per-cell keypoint limit (SPEC A2).")
+      .def(py::init<>())
+      .def_readwrite("cell_size_px", &GridLimitOptions::cell_size_px, "cell side P [px]")
+      .def_readwrite("max_per_cell", &GridLimitOptions::max_per_cell, "keypoints kept per cell")
+      .def("check", &GridLimitOptions::Check);
+  m.def(
+      "grid_limit",
+      [](const PixelArray& uv, const Eigen::VectorXf& score, int width, int height,
+         const GridLimitOptions& options) {
+        py::gil_scoped_release release;
+        return GridLimit(uv, score, width, height, options);
+      },
+      py::arg("uv"), py::arg("score"), py::arg("width"), py::arg("height"),
+      py::arg("options") = GridLimitOptions{},
+      "Indices (ascending) of the keypoints kept: the best max_per_cell by score in every cell.");
+
+  py::class_<DynamicCellOptions>(m, "DynamicCellOptions", "Invalid-cell filter (SPEC A2).")
+      .def(py::init<>())
+      .def_readwrite("cell_size_px", &DynamicCellOptions::cell_size_px, "cell side [px]")
+      .def_readwrite("sigma_px", &DynamicCellOptions::sigma_px, "Gaussian width of G(d) [px]")
+      .def_readwrite("alpha", &DynamicCellOptions::alpha, "weight of the current frame")
+      .def_readwrite("threshold", &DynamicCellOptions::threshold, "l: invalid below this")
+      .def("check", &DynamicCellOptions::Check);
+  py::class_<DynamicCellFilter>(m, "DynamicCellFilter",
+                                "Per-cell motion-consistency weights; drops moving objects.")
+      .def(py::init<int, int, const DynamicCellOptions&>(), py::arg("width"), py::arg("height"),
+           py::arg("options") = DynamicCellOptions{})
+      .def("update", &DynamicCellFilter::Update, py::arg("observed"), py::arg("predicted"),
+           "Update from matched positions and their motion-predicted positions (M x 2 each); "
+           "returns the validity of every cell (row-major).")
+      .def("keypoint_mask", &DynamicCellFilter::KeypointMask, py::arg("uv"))
+      .def_property_readonly("weights", &DynamicCellFilter::weights)
+      .def_property_readonly("valid", &DynamicCellFilter::valid)
+      .def_property_readonly("cells_x", &DynamicCellFilter::cells_x)
+      .def_property_readonly("cells_y", &DynamicCellFilter::cells_y)
+      .def("reset", &DynamicCellFilter::Reset);
+  m.def(
+      "predict_with_robust_pose",
+      [](const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& points_prev,
+         const PixelArray& observed, const PinholeCamera& camera, double threshold_px) {
+        RobustPrediction r = PredictWithRobustPose(points_prev, observed, camera, threshold_px);
+        return py::make_tuple(r.ok, r.predicted, r.T_cur_prev, r.inliers);
+      },
+      py::arg("points_prev"), py::arg("observed"), py::arg("camera"), py::arg("threshold_px") = 2.0,
+      "RANSAC PnP pose from 3-D points (previous camera frame) and their current pixels; returns "
+      "(ok, predicted uv N x 2, T_cur_prev 4 x 4, inlier flags).");
+
+  py::class_<GuidedMatchOptions>(m, "GuidedMatchOptions", "Window-guided descriptor matching.")
+      .def(py::init<>())
+      .def_readwrite("radius_px", &GuidedMatchOptions::radius_px, "search radius [px]")
+      .def_readwrite("max_distance", &GuidedMatchOptions::max_distance, "descriptor distance")
+      .def_readwrite("ratio", &GuidedMatchOptions::ratio, "ratio test in the window")
+      .def("check", &GuidedMatchOptions::Check);
+  m.def(
+      "guided_match",
+      [](const PixelArray& predicted, const py::array& query, const PixelArray& keypoints,
+         const py::array& train, const GuidedMatchOptions& options) {
+        const cv::Mat q = WrapDescriptors(query), t = WrapDescriptors(train);
+        py::gil_scoped_release release;
+        return GuidedMatch(predicted, q, keypoints, t, options);
+      },
+      py::arg("predicted"), py::arg("query"), py::arg("keypoints"), py::arg("train"),
+      py::arg("options") = GuidedMatchOptions{},
+      "For each predicted position (M x 2) with descriptor, the index of the best keypoint within "
+      "the radius, or -1.");
 }
 
 }  // namespace slslam::bindings

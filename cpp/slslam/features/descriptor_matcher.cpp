@@ -1,5 +1,9 @@
 #include "slslam/features/descriptor_matcher.h"
 
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
 #include <vector>
 
 #include <opencv2/features2d.hpp>
@@ -51,6 +55,94 @@ Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
     pairs(static_cast<Eigen::Index>(i), 1) = kept[i].second;
   }
   return pairs;
+}
+
+void GuidedMatchOptions::Check() const {
+  Require(radius_px > 0.0f, Message("guided.radius_px must be > 0, got ", radius_px));
+  Require(max_distance > 0.0f, Message("guided.max_distance must be > 0, got ", max_distance));
+  Require(ratio > 0.0f && ratio <= 1.0f, Message("guided.ratio must be in (0, 1], got ", ratio));
+}
+
+namespace {
+
+float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
+  if (a.type() == CV_8U) {
+    return static_cast<float>(cv::norm(a.row(i), b.row(j), cv::NORM_HAMMING));
+  }
+  const float* x = a.ptr<float>(i);
+  const float* y = b.ptr<float>(j);
+  float sum = 0.0f;
+  for (int k = 0; k < a.cols; ++k) sum += (x[k] - y[k]) * (x[k] - y[k]);
+  return std::sqrt(sum);
+}
+
+}  // namespace
+
+Eigen::VectorXi GuidedMatch(
+    const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& predicted,
+    const cv::Mat& query_descriptors,
+    const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& keypoints,
+    const cv::Mat& keypoint_descriptors, const GuidedMatchOptions& options) {
+  options.Check();
+  Require(predicted.rows() == query_descriptors.rows,
+          Message(predicted.rows(), " predictions but ", query_descriptors.rows, " descriptors"));
+  Require(keypoints.rows() == keypoint_descriptors.rows,
+          Message(keypoints.rows(), " keypoints but ", keypoint_descriptors.rows, " descriptors"));
+  Eigen::VectorXi match = Eigen::VectorXi::Constant(predicted.rows(), -1);
+  if (predicted.rows() == 0 || keypoints.rows() == 0) return match;
+  Require(query_descriptors.type() == keypoint_descriptors.type() &&
+              query_descriptors.cols == keypoint_descriptors.cols,
+          "query and keypoint descriptors differ in type or length");
+  Require(query_descriptors.type() == CV_8U || query_descriptors.type() == CV_32F,
+          "descriptors must be CV_8U (binary) or CV_32F (float)");
+
+  // Bucket the keypoints; a window of radius r around a point lies in the 3 x 3 buckets around it.
+  const float cell = options.radius_px;
+  std::unordered_map<int64_t, std::vector<int>> buckets;
+  auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffff); };
+  for (Eigen::Index j = 0; j < keypoints.rows(); ++j) {
+    const int64_t cx = static_cast<int64_t>(std::floor(keypoints(j, 0) / cell));
+    const int64_t cy = static_cast<int64_t>(std::floor(keypoints(j, 1) / cell));
+    buckets[key(cx, cy)].push_back(static_cast<int>(j));
+  }
+  std::vector<float> best_distance(keypoints.rows(), std::numeric_limits<float>::infinity());
+  std::vector<int> owner(keypoints.rows(), -1);
+  const float r2 = options.radius_px * options.radius_px;
+  for (Eigen::Index i = 0; i < predicted.rows(); ++i) {
+    const float u = predicted(i, 0), v = predicted(i, 1);
+    if (!std::isfinite(u) || !std::isfinite(v)) continue;
+    const int64_t cx = static_cast<int64_t>(std::floor(u / cell));
+    const int64_t cy = static_cast<int64_t>(std::floor(v / cell));
+    float best = std::numeric_limits<float>::infinity(), second = best;
+    int best_j = -1;
+    for (int64_t dy = -1; dy <= 1; ++dy) {
+      for (int64_t dx = -1; dx <= 1; ++dx) {
+        const auto it = buckets.find(key(cx + dx, cy + dy));
+        if (it == buckets.end()) continue;
+        for (int j : it->second) {
+          const float du = keypoints(j, 0) - u, dv = keypoints(j, 1) - v;
+          if (du * du + dv * dv > r2) continue;
+          const float d =
+              DescriptorDistance(query_descriptors, static_cast<int>(i), keypoint_descriptors, j);
+          if (d < best) {
+            second = best;
+            best = d;
+            best_j = j;
+          } else if (d < second) {
+            second = d;
+          }
+        }
+      }
+    }
+    if (best_j < 0 || best > options.max_distance) continue;
+    if (std::isfinite(second) && best >= options.ratio * second) continue;
+    if (best >= best_distance[best_j]) continue;  // the keypoint already has a better query
+    if (owner[best_j] >= 0) match(owner[best_j]) = -1;
+    owner[best_j] = static_cast<int>(i);
+    best_distance[best_j] = best;
+    match(i) = best_j;
+  }
+  return match;
 }
 
 }  // namespace slslam

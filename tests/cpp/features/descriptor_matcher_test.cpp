@@ -69,3 +69,35 @@ TEST(OrbExtractor, BlackImageGivesNoKeypoints) {
 
 }  // namespace
 }  // namespace slslam
+
+namespace slslam {
+namespace {
+
+TEST(GuidedMatch, FindsTheNearbyKeypointAndIgnoresFarTwins) {
+  // Keypoint 0 sits near the prediction; keypoint 1 has the same descriptor but is far away.
+  Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> predicted(2, 2), keypoints(3, 2);
+  predicted << 100, 100, 300, 50;
+  keypoints << 104, 97, 400, 400, 303, 52;
+  cv::Mat query = (cv::Mat_<float>(2, 2) << 1, 0, 0, 1);
+  cv::Mat train = (cv::Mat_<float>(3, 2) << 0.98f, 0.05f, 1, 0, 0.1f, 0.99f);
+  const Eigen::VectorXi match = GuidedMatch(predicted, query, keypoints, train);
+  EXPECT_EQ(match(0), 0);
+  EXPECT_EQ(match(1), 2);
+  GuidedMatchOptions tight;
+  tight.radius_px = 3.0f;  // keypoint 0 is 5 px away
+  EXPECT_EQ(GuidedMatch(predicted, query, keypoints, train, tight)(0), -1);
+}
+
+TEST(GuidedMatch, AKeypointGoesToTheBetterQueryOnly) {
+  Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> predicted(2, 2), keypoints(1, 2);
+  predicted << 10, 10, 12, 10;
+  keypoints << 11, 10;
+  cv::Mat query = (cv::Mat_<float>(2, 2) << 1, 0, 0.9f, 0.3f);
+  cv::Mat train = (cv::Mat_<float>(1, 2) << 1, 0);
+  const Eigen::VectorXi match = GuidedMatch(predicted, query, keypoints, train);
+  EXPECT_EQ(match(0), 0);
+  EXPECT_EQ(match(1), -1);
+}
+
+}  // namespace
+}  // namespace slslam

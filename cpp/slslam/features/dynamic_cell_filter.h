@@ -1,0 +1,73 @@
+// Invalid-cell filter for moving objects (SPEC A2): cells whose matched keypoints disagree with
+// the camera motion are dropped, together with their 8 neighbours.
+//
+// Per cell g at frame t, over its m matched keypoints: d = (1/m) sum ||p_i - p'_i||, where p_i is
+// the keypoint and p'_i its position predicted by the camera motion; w~ = exp(-d^2 / (2 sigma^2));
+// w_t = alpha * w~ + (1 - alpha) * w_{t-1}; a cell with w_t < threshold is invalid and so are its
+// 8 neighbours. Cells without matches keep w_{t-1}. Every cell starts at w = 1.
+//
+// The paper predicts p'_i with the constant-velocity model, so any motion-model error flags every
+// cell. Here p'_i comes from the caller; PredictWithRobustPose() provides the better choice: the
+// projections under a RANSAC PnP pose, so only cells that disagree with the consensus are flagged.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slslam/core/pinhole_camera.h"
+#include "slslam/features/grid_limit.h"
+
+namespace slslam {
+
+struct DynamicCellOptions {
+  int cell_size_px = 32;   ///< cell side [px]; use the grid limit's P
+  double sigma_px = 3.0;   ///< Gaussian width of G(d) [px]
+  double alpha = 0.7;      ///< weight of the current frame in the temporal smoothing [-], (0, 1]
+  double threshold = 0.5;  ///< l: a cell with smoothed weight below this is invalid [-]
+
+  void Check() const;
+};
+
+class DynamicCellFilter {
+ public:
+  DynamicCellFilter(int width, int height, const DynamicCellOptions& options = {});
+
+  // Updates the cell weights from one frame's matches: `observed` (M x 2) keypoint positions and
+  // `predicted` (M x 2) positions under the camera motion. Returns the new validity of every cell
+  // (row-major, cells_x * cells_y; true = valid).
+  const std::vector<bool>& Update(const PixelArray& observed, const PixelArray& predicted);
+
+  // True for keypoints in valid cells (false outside the image).
+  std::vector<bool> KeypointMask(const PixelArray& uv) const;
+
+  const std::vector<double>& weights() const { return weights_; }
+  const std::vector<bool>& valid() const { return valid_; }
+  int cells_x() const { return cells_x_; }
+  int cells_y() const { return cells_y_; }
+  void Reset();
+
+ private:
+  int CellOf(float u, float v) const;
+
+  DynamicCellOptions options_;
+  int width_, height_, cells_x_, cells_y_;
+  std::vector<double> weights_;
+  std::vector<bool> valid_;
+};
+
+struct RobustPrediction {
+  PixelArray predicted;        ///< projections of the points under the robust pose [px]
+  Eigen::Matrix4d T_cur_prev;  ///< the robust pose: previous camera frame -> current frame
+  std::vector<bool> inliers;   ///< RANSAC inliers
+  bool ok = false;             ///< false when RANSAC found no pose (then predicted is empty)
+};
+
+// Robust first pose estimate (RANSAC PnP, OpenCV) from 3-D points in the previous camera frame
+// and their matched pixels in the current image; returns the points' predicted pixels under it.
+RobustPrediction PredictWithRobustPose(
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& points_prev,
+    const PixelArray& observed, const PinholeCamera& camera,
+    double reprojection_threshold_px = 2.0);
+
+}  // namespace slslam

@@ -1,0 +1,27 @@
+// Per-cell keypoint limit (SPEC A2, "grid limitation"): the image is divided into cells of
+// P x P pixels and each cell keeps only its highest-scoring keypoints. Replaces ORB-SLAM's
+// quadtree distribution: it spreads keypoints evenly at a cost linear in their number.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace slslam {
+
+using PixelArray = Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+struct GridLimitOptions {
+  int cell_size_px = 32;  ///< P: side of a square cell [px]; the paper leaves P open
+  int max_per_cell = 8;   ///< keypoints kept per cell [-] (the paper's 8)
+
+  void Check() const;
+};
+
+// Indices (ascending) of the keypoints kept: in every cell the `max_per_cell` with the highest
+// score (ties: the lower index wins, so the result is deterministic). Keypoints outside the
+// image (u, v not in [0, width) x [0, height)) are dropped.
+std::vector<int> GridLimit(const PixelArray& uv, const Eigen::VectorXf& score, int width,
+                           int height, const GridLimitOptions& options = {});
+
+}  // namespace slslam
