@@ -42,31 +42,13 @@ def stages(options: SimOptions) -> dict[str, dict[str, float]]:
     T_body = sim.trajectory.pose(np.array([1.0]))[0]
     poses = [T_body @ cam.T_body_cam0, T_body @ cam.T_body_cam1]
     hits = sim.cast_cameras(poses, 1.0)[0]
-    shading_camera = _core.ShadingCamera(cam.fx, cam.fx, cam.cx, cam.cy, poses[0][:3, 3])
-    lamp = sim._headlamp(T_body, 0)
+    lamp = sim._headlamp(T_body)
     image = sim.render_stereo(20)[0]
     with tempfile.TemporaryDirectory() as tmp:
         png = str(Path(tmp) / "x.png")
         return {
             "raycast_both_cameras": time_calls(lambda: sim.cast_cameras(poses, 1.0), 10),
-            "shade_one_image": time_calls(
-                lambda: _core.shade_image(
-                    hits.point,
-                    hits.normal,
-                    hits.material,
-                    cam.height,
-                    cam.width,
-                    shading_camera,
-                    lamp,
-                    sim._roof_lamps,
-                    4.0,
-                    1.0,
-                    0.002,
-                    sim._sensor,
-                    0,
-                ),
-                10,
-            ),
+            "shade_one_image": time_calls(lambda: sim.shade(hits, poses[0], lamp, 1.0, 0), 10),
             "write_one_png": time_calls(lambda: _core.write_image(png, image), 10),
             "lidar_scan": time_calls(
                 lambda: sim.lidar.scan(

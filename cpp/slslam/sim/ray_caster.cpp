@@ -80,8 +80,8 @@ namespace {
 
 // Intersects one packet with `scene` and keeps, per lane, the nearer of the packet's hit and the
 // hit already recorded in `hits` at `index[lane]`.
-void IntersectPacket(RTCScene scene, const std::vector<uint8_t>& material, RTCRayHit16& rh,
-                     const int* valid, const int* index, RayHits* hits) {
+void IntersectWith(RTCScene scene, const std::vector<uint8_t>& material, RTCRayHit16& rh,
+                   const int* valid, const int* index, RayHits* hits) {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -131,6 +131,28 @@ void FillPoints(const Eigen::Vector3f& origin, const float* directions, RayHits*
 
 }  // namespace
 
+struct RayCaster::Packet {
+  alignas(64) int valid[kPacket];  // -1: lane in use (Embree's convention), 0: unused
+  int index[kPacket];              // ray index of each lane (0 for unused lanes)
+  Eigen::Vector3f direction[kPacket];
+};
+
+void RayCaster::IntersectPacket(const Packet& packet, const Eigen::Vector3f& origin,
+                                const RayCaster* dynamic, RayHits* hits) const {
+  alignas(64) RTCRayHit16 rh;
+  for (const RayCaster* caster : {this, dynamic}) {
+    if (caster == nullptr) continue;
+    ResetPacket(rh);
+    for (int lane = 0; lane < kPacket; ++lane) SetLane(rh, lane, origin, packet.direction[lane]);
+    IntersectWith(caster->embree_->scene, caster->material_, rh, packet.valid, packet.index, hits);
+  }
+  for (int lane = 0; lane < kPacket; ++lane) {
+    if (packet.valid[lane]) {
+      FillPoints(origin, packet.direction[lane].data(), hits, packet.index[lane]);
+    }
+  }
+}
+
 RayHits RayCaster::Cast(const Eigen::Vector3f& origin, const Vertices& directions,
                         const RayCaster* dynamic) const {
   Require(origin.allFinite(), "ray origin contains NaN or Inf");
@@ -140,24 +162,14 @@ RayHits RayCaster::Cast(const Eigen::Vector3f& origin, const Vertices& direction
   const std::ptrdiff_t packets = static_cast<std::ptrdiff_t>((n + kPacket - 1) / kPacket);
 #pragma omp parallel for schedule(dynamic, 64)
   for (std::ptrdiff_t p = 0; p < packets; ++p) {
-    alignas(64) RTCRayHit16 rh;
-    alignas(64) int valid[kPacket];
-    int index[kPacket];
-    for (const RayCaster* caster : {this, dynamic}) {
-      if (caster == nullptr) continue;
-      ResetPacket(rh);
-      for (int lane = 0; lane < kPacket; ++lane) {
-        const std::size_t i = static_cast<std::size_t>(p) * kPacket + lane;
-        valid[lane] = i < n ? -1 : 0;
-        index[lane] = static_cast<int>(i < n ? i : 0);
-        SetLane(rh, lane, origin, i < n ? Eigen::Vector3f(directions.row(i)) : origin);
-      }
-      IntersectPacket(caster->embree_->scene, caster->material_, rh, valid, index, &hits);
-    }
-    for (int lane = 0; lane < kPacket && valid[lane]; ++lane) {
+    Packet packet;
+    for (int lane = 0; lane < kPacket; ++lane) {
       const std::size_t i = static_cast<std::size_t>(p) * kPacket + lane;
-      FillPoints(origin, directions.row(i).data(), &hits, i);
+      packet.valid[lane] = i < n ? -1 : 0;
+      packet.index[lane] = static_cast<int>(i < n ? i : 0);
+      packet.direction[lane] = directions.row(i < n ? i : 0).transpose();
     }
+    IntersectPacket(packet, origin, dynamic, &hits);
   }
   return hits;
 }
@@ -173,7 +185,6 @@ RayHits RayCaster::CastPinhole(const Eigen::Matrix3d& R_world_cam, const Eigen::
   RayHits hits;
   hits.Resize(n);
   std::vector<float> direction_z(n, 0.0f);  // z of the unit ray in the camera frame
-  std::vector<float> directions(3 * n, 0.0f);
   const Eigen::Matrix3f R = R_world_cam.cast<float>();
   const Eigen::Vector3f o = origin.cast<float>();
   const int tiles_x = (width + kTileSide - 1) / kTileSide;
@@ -181,33 +192,20 @@ RayHits RayCaster::CastPinhole(const Eigen::Matrix3d& R_world_cam, const Eigen::
 #pragma omp parallel for schedule(dynamic, 16)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     const int u0 = (tile % tiles_x) * kTileSide, v0 = (tile / tiles_x) * kTileSide;
-    alignas(64) RTCRayHit16 rh;
-    alignas(64) int valid[kPacket];
-    int index[kPacket];
-    for (const RayCaster* caster : {this, dynamic}) {
-      if (caster == nullptr) continue;
-      ResetPacket(rh);
-      for (int lane = 0; lane < kPacket; ++lane) {
-        const int u = u0 + lane % kTileSide, v = v0 + lane / kTileSide;
-        const bool inside = u < width && v < height;
-        const std::size_t i = inside ? static_cast<std::size_t>(v) * width + u : 0;
-        valid[lane] = inside ? -1 : 0;
-        index[lane] = static_cast<int>(i);
-        Eigen::Vector3f d_cam(static_cast<float>((u - cx) / fx), static_cast<float>((v - cy) / fy),
-                              1.0f);
-        d_cam.normalize();
-        const Eigen::Vector3f d = R * d_cam;
-        if (inside) {
-          direction_z[i] = d_cam.z();
-          for (int k = 0; k < 3; ++k) directions[3 * i + k] = d[k];
-        }
-        SetLane(rh, lane, o, d);
-      }
-      IntersectPacket(caster->embree_->scene, caster->material_, rh, valid, index, &hits);
-    }
+    Packet packet;
     for (int lane = 0; lane < kPacket; ++lane) {
-      if (valid[lane]) FillPoints(o, &directions[3 * index[lane]], &hits, index[lane]);
+      const int u = u0 + lane % kTileSide, v = v0 + lane / kTileSide;
+      const bool inside = u < width && v < height;
+      const std::size_t i = inside ? static_cast<std::size_t>(v) * width + u : 0;
+      packet.valid[lane] = inside ? -1 : 0;
+      packet.index[lane] = static_cast<int>(i);
+      Eigen::Vector3f d_cam(static_cast<float>((u - cx) / fx), static_cast<float>((v - cy) / fy),
+                            1.0f);
+      d_cam.normalize();
+      packet.direction[lane] = R * d_cam;
+      if (inside) direction_z[i] = d_cam.z();
     }
+    IntersectPacket(packet, o, dynamic, &hits);
   }
   if (depth != nullptr) {
     depth->resize(n);

@@ -55,6 +55,12 @@ class RayCaster {
 
  private:
   struct Embree;
+  struct Packet;
+  // Intersects one packet with this mesh and `dynamic` (if any); the nearer hit wins. Writes t,
+  // normal, material and point of the packet's valid lanes into `hits`.
+  void IntersectPacket(const Packet& packet, const Eigen::Vector3f& origin,
+                       const RayCaster* dynamic, RayHits* hits) const;
+
   std::unique_ptr<Embree> embree_;
   std::vector<uint8_t> material_;
 };

@@ -36,7 +36,6 @@ class DustCloud:
         lamp,
         light_level: float,
         t: float,
-        seed_frame: int,
     ) -> None:
         """Add the lit particles to ``image`` (uint8, in place)."""
         if light_level <= 0.0:

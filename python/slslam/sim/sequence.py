@@ -35,6 +35,9 @@ log = logging.getLogger(__name__)
 
 Preset = Literal["straight", "loop", "junction"]
 PRESETS: tuple[str, ...] = ("straight", "loop", "junction")
+#: Power of each roof lamp and the direction-less ambient light [irradiance units (* m^2)].
+ROOF_LAMP_POWER = 4.0
+AMBIENT = 0.002
 #: First timestamp of a simulated sequence [ns] (small enough to stay exact in float64 seconds).
 T0_NS = 1_000_000_000_000
 
@@ -176,7 +179,7 @@ class Simulator:
             for T in poses_world_cam
         ]
 
-    def _headlamp(self, T_world_body: np.ndarray, frame: int) -> _core.HeadLamp:
+    def _headlamp(self, T_world_body: np.ndarray) -> _core.HeadLamp:
         lamp = _core.HeadLamp()
         lamp.position = T_world_body[:3, :3] @ np.array([0.35, 0.0, 1.0]) + T_world_body[:3, 3]
         pitch_down = np.deg2rad(6.0)
@@ -186,36 +189,48 @@ class Simulator:
         lamp.half_angle_rad = np.deg2rad(40.0)
         return lamp
 
+    def shade(
+        self,
+        hits: Hits,
+        T_world_cam: np.ndarray,
+        lamp: _core.HeadLamp,
+        level: float,
+        noise_index: int,
+    ) -> np.ndarray:
+        """Image formation (C++): textures, lights and sensor model for one camera's hits."""
+        cam = self.camera
+        shading_camera = _core.ShadingCamera(cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3])
+        return _core.shade_image(
+            hits.point,
+            hits.normal,
+            hits.material,
+            cam.height,
+            cam.width,
+            shading_camera,
+            lamp,
+            self._roof_lamps,
+            ROOF_LAMP_POWER,
+            level,
+            AMBIENT,
+            self._sensor,
+            noise_index,
+        )
+
     def render_stereo(self, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Left and right uint8 images and the left depth map (z along the optical axis, m)."""
         t = frame / self.options.rate_hz
         T_world_body = self.trajectory.pose(np.array([t]))[0]
         level = self.light_level(frame)
-        lamp = self._headlamp(T_world_body, frame)
+        lamp = self._headlamp(T_world_body)
         cam = self.camera
         poses = [T_world_body @ cam.T_body_cam0, T_world_body @ cam.T_body_cam1]
         images, depth = [], None
         for k, (T_world_cam, hits) in enumerate(
             zip(poses, self.cast_cameras(poses, t), strict=True)
         ):
-            shading_camera = _core.ShadingCamera(cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3])
-            image = _core.shade_image(
-                hits.point,
-                hits.normal,
-                hits.material,
-                cam.height,
-                cam.width,
-                shading_camera,
-                lamp,
-                self._roof_lamps,
-                4.0,
-                level,
-                0.002,
-                self._sensor,
-                2 * frame + k,
-            )
+            image = self.shade(hits, T_world_cam, lamp, level, 2 * frame + k)
             if self.dust is not None:
-                self.dust.draw(image, T_world_cam, cam, lamp, level, t, seed_frame=frame)
+                self.dust.draw(image, T_world_cam, cam, lamp, level, t)
             images.append(image)
             if k == 0:
                 depth = hits.depth.reshape(cam.height, cam.width)
