@@ -6,6 +6,7 @@
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/features/dynamic_cell_filter.h"
 #include "slslam/features/grid_limit.h"
+#include "slslam/features/non_max_suppression.h"
 #include "slslam/features/orb_extractor.h"
 
 namespace py = pybind11;
@@ -137,6 +138,16 @@ void BindFeatures(py::module_& m) {
       py::arg("options") = GuidedMatchOptions{},
       "For each predicted position (M x 2) with descriptor, the index of the best keypoint within "
       "the radius, or -1.");
+
+  m.def(
+      "suppress_non_maxima",
+      [](const PixelIndexArray& uv, const Eigen::VectorXf& score, int width, int height,
+         int radius_px) {
+        py::gil_scoped_release release;
+        return SuppressNonMaxima(uv, score, width, height, radius_px);
+      },
+      py::arg("uv"), py::arg("score"), py::arg("width"), py::arg("height"), py::arg("radius_px"),
+      "Greedy NMS of integer (u, v) candidates (N x 2 int32): kept indices, strongest first.");
 }
 
 }  // namespace slslam::bindings

@@ -227,6 +227,44 @@ def sim_command(
     )
 
 
+models_app = typer.Typer(
+    help="SuperPoint weights: how to obtain them (`slslam models guide`), check an ONNX file, "
+    "convert MagicLeap's .pth.",
+    no_args_is_help=True,
+)
+app.add_typer(models_app, name="models")
+
+
+@models_app.command("guide")
+def models_guide_command() -> None:
+    """Explain where SuperPoint weights come from and how slslam finds them."""
+    from slslam.features.models import GUIDE
+
+    Console().print(GUIDE, highlight=False, markup=False)
+
+
+@models_app.command("check")
+def models_check_command(
+    path: Annotated[Path, typer.Argument(help="A SuperPoint ONNX file.")],
+) -> None:
+    """Load an ONNX file and check its inputs and outputs fit SuperPoint."""
+    from slslam.features.models import check_model
+
+    net = check_model(path)
+    Console().print(f"{path}: SuperPoint model OK (providers: {', '.join(net.providers)})")
+
+
+@models_app.command("convert")
+def models_convert_command(
+    pth: Annotated[Path, typer.Argument(help="MagicLeap's superpoint_v1.pth.")],
+    onnx: Annotated[Path, typer.Argument(help="Output ONNX file.")],
+) -> None:
+    """Convert MagicLeap's superpoint_v1.pth to ONNX (needs PyTorch)."""
+    from slslam.features.models import convert_pth
+
+    Console().print(f"wrote {convert_pth(pth, onnx)}")
+
+
 @app.command("version")
 def version_command() -> None:
     """Print the slslam version and the C++ core it loads."""

@@ -1,0 +1,24 @@
+"""Point front ends: SuperPoint (onnxruntime) and ORB (OpenCV) with one interface.
+
+Both have ``detect(image: uint8 H x W) -> Keypoints`` (uv, scores, descriptors). The per-cell
+limit, the dynamic-cell filter and the matchers are in the C++ core (``slslam._core``:
+``grid_limit``, ``DynamicCellFilter``, ``match_descriptors``, ``guided_match``).
+"""
+
+from slslam.features.keypoints import Keypoints
+from slslam.features.superpoint import (
+    ENV_MODEL,
+    ModelError,
+    SuperPoint,
+    SuperPointOptions,
+    resolve_model_path,
+)
+
+__all__ = [
+    "ENV_MODEL",
+    "Keypoints",
+    "ModelError",
+    "SuperPoint",
+    "SuperPointOptions",
+    "resolve_model_path",
+]

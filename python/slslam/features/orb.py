@@ -1,0 +1,37 @@
+"""ORB (OpenCV, in the C++ core) behind the same interface as SuperPoint: the baseline."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from slslam import _core
+from slslam.features.keypoints import Keypoints, check_gray_image
+
+
+@dataclass(frozen=True)
+class OrbOptions:
+    """ORB settings (OpenCV's ORB; ORB-SLAM-like defaults)."""
+
+    max_keypoints: int = 1000
+    scale_factor: float = 1.2  # pyramid scale between levels [-]
+    num_levels: int = 8
+    fast_threshold: int = 20  # [gray levels]
+
+
+class Orb:
+    """``detect(image)`` returns :class:`Keypoints` with uint8 (N, 32) descriptors."""
+
+    def __init__(self, options: OrbOptions = OrbOptions()):
+        self.options = options
+        self._core_options = _core.OrbOptions()
+        self._core_options.max_features = options.max_keypoints
+        self._core_options.scale_factor = options.scale_factor
+        self._core_options.num_levels = options.num_levels
+        self._core_options.fast_threshold = options.fast_threshold
+        self._core_options.check()
+
+    def detect(self, image: np.ndarray) -> Keypoints:
+        uv, score, descriptors = _core.extract_orb(check_gray_image(image), self._core_options)
+        return Keypoints(uv.astype(np.float32), score.astype(np.float32), descriptors)
