@@ -214,3 +214,22 @@ def test_models_command_explains_checks_and_reports_errors(tmp_path, capsys):
     assert main(["models", "check", str(bad)]) == 2
     assert "output 'desc'" in capsys.readouterr().err
     assert main(["models", "convert", str(tmp_path / "none.pth"), str(tmp_path / "o.onnx")]) == 2
+
+
+def test_convert_pth_reproduces_the_reference_onnx(real_model, tmp_path):
+    """Our PyTorch SuperPoint definition + export gives the same network as the reference ONNX
+    (weights from the workplace's fp16 numpy copy, written as a MagicLeap-style .pth)."""
+    torch = pytest.importorskip("torch", reason="converting .pth weights needs PyTorch")
+    npz = REAL_MODEL.parent / "superpoint_v1_fp16.npz"
+    if not npz.is_file():
+        pytest.skip(f"numpy copy of the weights not available at {npz}")
+    from slslam.features.models import convert_pth
+
+    weights = np.load(npz)
+    pth = tmp_path / "superpoint_v1.pth"
+    torch.save({k: torch.from_numpy(weights[k].astype(np.float32)) for k in weights}, pth)
+    converted = SuperPoint(SuperPointOptions(model_path=str(convert_pth(pth, tmp_path / "c.onnx"))))
+    reference = SuperPoint(SuperPointOptions(model_path=real_model))
+    image = _euroc_image()
+    for ours, theirs in zip(converted.infer(image), reference.infer(image), strict=True):
+        np.testing.assert_allclose(ours, theirs, atol=1e-3)
