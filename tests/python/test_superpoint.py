@@ -45,13 +45,13 @@ def tiny_model(
     graph = helper.make_graph(
         nodes,
         "tiny_superpoint",
-        [helper.make_tensor_value_info(input_name, TensorProto.FLOAT, [1, 1, "H", "W"])],
+        [helper.make_tensor_value_info(input_name, TensorProto.FLOAT, ["N", 1, "H", "W"])],
         [
             helper.make_tensor_value_info(
-                "semi", TensorProto.FLOAT, [1, semi_channels, "Hc", "Wc"]
+                "semi", TensorProto.FLOAT, ["N", semi_channels, "Hc", "Wc"]
             ),
             helper.make_tensor_value_info(
-                "desc", TensorProto.FLOAT, [1, desc_channels, "Hc", "Wc"]
+                "desc", TensorProto.FLOAT, ["N", desc_channels, "Hc", "Wc"]
             ),
         ],
         initializer=[w_semi, w_desc],
@@ -117,6 +117,17 @@ def test_tiny_model_runs_on_odd_sizes_and_black_images(tmp_path):
     # dropped, not returned with meaningless descriptors.
     assert len(net.detect(np.zeros((48, 64), dtype=np.uint8))) == 0
     assert len(net.detect_batch([image, image])) == 2
+    # A batched inference of a stereo pair gives exactly what two single calls give.
+    batched = SuperPoint(
+        SuperPointOptions(model_path=str(model), max_keypoints=50, batch_images=True)
+    )
+    assert batched.batch_is_dynamic
+    other = np.ascontiguousarray(image[:, ::-1])
+    for a, b in zip(
+        batched.detect_batch([image, other]), [net.detect(image), net.detect(other)], strict=True
+    ):
+        np.testing.assert_array_equal(a.uv, b.uv)
+        np.testing.assert_allclose(a.descriptors, b.descriptors, atol=1e-6)
 
 
 @pytest.mark.parametrize(
@@ -233,3 +244,4 @@ def test_convert_pth_reproduces_the_reference_onnx(real_model, tmp_path):
     image = _euroc_image()
     for ours, theirs in zip(converted.infer(image), reference.infer(image), strict=True):
         np.testing.assert_allclose(ours, theirs, atol=1e-3)
+    assert converted.batch_is_dynamic  # our export allows batched stereo inference

@@ -84,8 +84,8 @@ def _torch_network():
 
 
 def convert_pth(pth: str | Path, onnx_path: str | Path) -> Path:
-    """Convert MagicLeap's superpoint_v1.pth to ONNX (input 'image' [1,1,H,W], outputs 'semi',
-    'desc', H and W dynamic) and check the result."""
+    """Convert MagicLeap's superpoint_v1.pth to ONNX (input 'image' [N,1,H,W], outputs 'semi',
+    'desc'; N, H and W dynamic) and check the result."""
     pth, onnx_path = Path(pth), Path(onnx_path)
     if not pth.is_file():
         raise ModelError(pth, "weights file not found")
@@ -106,9 +106,9 @@ def convert_pth(pth: str | Path, onnx_path: str | Path) -> Path:
         opset_version=17,
         dynamo=False,
         dynamic_axes={
-            "image": {2: "H", 3: "W"},
-            "semi": {2: "Hc", 3: "Wc"},
-            "desc": {2: "Hc", 3: "Wc"},
+            "image": {0: "N", 2: "H", 3: "W"},
+            "semi": {0: "N", 2: "Hc", 3: "Wc"},
+            "desc": {0: "N", 2: "Hc", 3: "Wc"},
         },
     )
     check_model(onnx_path)
