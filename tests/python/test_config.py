@@ -1,0 +1,92 @@
+from pathlib import Path
+
+import pytest
+
+from slslam import _core
+from slslam.config import (
+    Config,
+    ConfigError,
+    config_from_dict,
+    dump_config,
+    load_config,
+    make_point_frontend,
+)
+from slslam.features.orb import Orb
+from slslam.features.superpoint import ENV_MODEL, SuperPoint
+
+DEFAULT_YAML = Path(__file__).resolve().parents[2] / "configs" / "default.yaml"
+
+
+def test_documented_defaults_equal_the_code_defaults():
+    assert load_config(DEFAULT_YAML) == Config()
+    assert load_config(None) == Config()
+
+
+def test_python_and_cpp_defaults_agree():
+    features = Config().features
+    grid, dynamic, orb = _core.GridLimitOptions(), _core.DynamicCellOptions(), _core.OrbOptions()
+    assert (features.grid.cell_size_px, features.grid.max_per_cell) == (
+        grid.cell_size_px,
+        grid.max_per_cell,
+    )
+    d = features.dynamic_cells
+    assert (d.cell_size_px, d.sigma_px, d.alpha, d.threshold) == (
+        dynamic.cell_size_px,
+        dynamic.sigma_px,
+        dynamic.alpha,
+        dynamic.threshold,
+    )
+    assert features.orb.fast_threshold == orb.fast_threshold
+    assert features.orb.num_levels == orb.num_levels
+    assert features.orb.scale_factor == pytest.approx(orb.scale_factor)
+
+
+def test_partial_file_and_round_trip(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("features:\n  point_frontend: orb\n  orb:\n    max_keypoints: 500\n")
+    config = load_config(path)
+    assert config.features.point_frontend == "orb"
+    assert config.features.orb.max_keypoints == 500
+    assert config.features.grid.max_per_cell == 8
+    assert load_config(dump_config(config, tmp_path / "out.yaml")) == config
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("features:\n  orbb: {}\n", "unknown key 'config.features.orbb'"),
+        ("features:\n  point_frontend: sift\n", "must be one of"),
+        ("features:\n  grid:\n    max_per_cell: many\n", "must be an integer"),
+        ("features:\n  superpoint:\n    detection_threshold: 2.0\n", "detection_threshold"),
+        ("features: [1, 2]\n", "must be a mapping"),
+        ("features: {grid: [}\n", "not valid YAML"),
+    ],
+)
+def test_malformed_configs_name_file_and_key(tmp_path, text, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message) as info:
+        load_config(path)
+    assert str(path) in str(info.value)
+
+
+def test_missing_config_file(tmp_path):
+    with pytest.raises(ConfigError, match="config file not found"):
+        load_config(tmp_path / "none.yaml")
+
+
+def test_frontend_choice_and_model_path_precedence(tmp_path, monkeypatch, caplog):
+    from test_superpoint import tiny_model
+
+    monkeypatch.delenv(ENV_MODEL, raising=False)
+    assert isinstance(make_point_frontend(Config().features), Orb)
+    assert "using the ORB front end" in caplog.text
+    env_model = tiny_model(tmp_path / "env.onnx")
+    config_model = tiny_model(tmp_path / "config.onnx")
+    monkeypatch.setenv(ENV_MODEL, str(env_model))
+    assert make_point_frontend(Config().features).model_path == env_model
+    config = config_from_dict({"features": {"superpoint": {"model_path": str(config_model)}}})
+    frontend = make_point_frontend(config.features)
+    assert isinstance(frontend, SuperPoint) and frontend.model_path == config_model
+    orb = config_from_dict({"features": {"point_frontend": "orb"}})
+    assert isinstance(make_point_frontend(orb.features), Orb)
