@@ -1,0 +1,68 @@
+#include "slslam/features/line_extractor.h"
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/line_descriptor.hpp>
+
+#include "slslam/core/check.h"
+
+namespace slslam {
+
+namespace ld = cv::line_descriptor;
+
+cv::Mat ComputeLbd(const cv::Mat& image, const Segments& segments) {
+  Require(!image.empty() && image.type() == CV_8UC1, "LBD needs a non-empty 8-bit gray image");
+  if (segments.empty()) return cv::Mat(0, 32, CV_8U);
+  std::vector<ld::KeyLine> keylines(segments.size());
+  const float max_side = static_cast<float>(std::max(image.cols, image.rows));
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const LineSegment& s = segments[i];
+    ld::KeyLine& k = keylines[i];
+    k.startPointX = k.sPointInOctaveX = s.start.x();
+    k.startPointY = k.sPointInOctaveY = s.start.y();
+    k.endPointX = k.ePointInOctaveX = s.end.x();
+    k.endPointY = k.ePointInOctaveY = s.end.y();
+    k.lineLength = s.Length();
+    k.angle = std::atan2(s.end.y() - s.start.y(), s.end.x() - s.start.x());
+    k.pt = cv::Point2f(0.5f * (s.start.x() + s.end.x()), 0.5f * (s.start.y() + s.end.y()));
+    k.octave = 0;
+    k.class_id = static_cast<int>(i);
+    k.response = k.lineLength / max_side;
+    k.size = k.lineLength;
+    k.numOfPixels = static_cast<int>(k.lineLength);
+  }
+  cv::Mat descriptors;
+  ld::BinaryDescriptor::createBinaryDescriptor()->compute(image, keylines, descriptors);
+  Require(descriptors.rows == static_cast<int>(segments.size()),
+          "LBD dropped segments; give segments inside the image");
+  return descriptors;
+}
+
+LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options) {
+  options.Check();
+  Require(!image.empty() && image.type() == CV_8UC1, "LSD needs a non-empty 8-bit gray image");
+  std::vector<cv::Vec4f> raw;
+  cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(image, raw);
+  Segments segments;
+  segments.reserve(raw.size());
+  for (const cv::Vec4f& l : raw) segments.push_back({{l[0], l[1]}, {l[2], l[3]}});
+  LineFeatures out;
+  out.raw_count = static_cast<int>(segments.size());
+  out.segments = options.run_preprocess
+                     ? PreprocessLines(segments, image.cols, image.rows, options.preprocess)
+                     : segments;
+  // Keep segments within the image so LBD's bands stay valid.
+  Segments inside;
+  for (const LineSegment& s : out.segments) {
+    LineSegment c = s;
+    for (Eigen::Vector2f* p : {&c.start, &c.end}) {
+      p->x() = std::clamp(p->x(), 0.0f, image.cols - 1.0f);
+      p->y() = std::clamp(p->y(), 0.0f, image.rows - 1.0f);
+    }
+    if (c.Length() > 1.0f) inside.push_back(c);
+  }
+  out.segments = std::move(inside);
+  out.descriptors = ComputeLbd(image, out.segments);
+  return out;
+}
+
+}  // namespace slslam
