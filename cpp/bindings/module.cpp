@@ -8,6 +8,7 @@ void BindCore(py::module_& m);
 void BindFeatures(py::module_& m);
 void BindSim(py::module_& m);
 void BindRayCaster(py::module_& m);
+void BindLines(py::module_& m);
 }  // namespace slslam::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -17,4 +18,5 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindFeatures(m);
   slslam::bindings::BindSim(m);
   slslam::bindings::BindRayCaster(m);
+  slslam::bindings::BindLines(m);
 }
