@@ -48,3 +48,19 @@ def write_results(name: str, results: dict, out: Path | None = None) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"benchmark": name, "machine": machine(), **results}, indent=2))
     return path
+
+
+def transfer_pixels(
+    uv: np.ndarray, depth_a: np.ndarray, T_b_a: np.ndarray, cam
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pixels of rectified camera A moved into camera B through A's depth map (ground truth
+    correspondences of the simulator): (uv in B (N, 2), depth in A (N,), depth in B (N,))."""
+    u = np.clip(np.round(uv[:, 0]).astype(int), 0, cam.width - 1)
+    v = np.clip(np.round(uv[:, 1]).astype(int), 0, cam.height - 1)
+    z = depth_a[v, u]
+    p = np.column_stack([(uv[:, 0] - cam.cx) / cam.fx * z, (uv[:, 1] - cam.cy) / cam.fx * z, z])
+    q = p @ T_b_a[:3, :3].T + T_b_a[:3, 3]
+    uv_b = np.column_stack(
+        [cam.fx * q[:, 0] / q[:, 2] + cam.cx, cam.fx * q[:, 1] / q[:, 2] + cam.cy]
+    )
+    return uv_b, z, q[:, 2]

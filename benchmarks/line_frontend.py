@@ -26,7 +26,7 @@ from slslam.datasets import EurocSequence
 from slslam.features.orb import Orb
 from slslam.sim import SimOptions, Simulator
 
-from common import SHARED_DATA, write_results
+from common import SHARED_DATA, transfer_pixels, write_results
 
 EPS_PX = 3.0
 
@@ -127,17 +127,7 @@ def evaluate_pair(img_a, img_b, transfer, points, figure: Path | None = None) ->
 
 
 def _depth_transfer(depth_a, T_b_a, cam):
-    def transfer(uv: np.ndarray) -> np.ndarray:
-        u = np.clip(np.round(uv[:, 0]).astype(int), 0, cam.width - 1)
-        v = np.clip(np.round(uv[:, 1]).astype(int), 0, cam.height - 1)
-        z = depth_a[v, u]
-        p = np.column_stack([(uv[:, 0] - cam.cx) / cam.fx * z, (uv[:, 1] - cam.cy) / cam.fx * z, z])
-        q = p @ T_b_a[:3, :3].T + T_b_a[:3, 3]
-        return np.column_stack(
-            [cam.fx * q[:, 0] / q[:, 2] + cam.cx, cam.fx * q[:, 1] / q[:, 2] + cam.cy]
-        )
-
-    return transfer
+    return lambda uv: transfer_pixels(uv, depth_a, T_b_a, cam)[0]
 
 
 def simulated(points, figures: Path | None) -> dict:

@@ -29,7 +29,7 @@ import numpy as np
 from slslam import _core
 from slslam.sim import SimOptions, Simulator
 
-from common import SHARED_DATA, time_calls, write_results
+from common import SHARED_DATA, time_calls, transfer_pixels, write_results
 
 EPS_PX = 3.0
 NUM_KEYPOINTS = 1000
@@ -140,25 +140,18 @@ def _depth_warp(depth_a, T_b_a, cam, depth_b):
     """Map pixels of A into B through A's depth and the relative pose; NaN where occluded."""
 
     def warp(uv: np.ndarray) -> np.ndarray:
-        u = np.clip(np.round(uv[:, 0]).astype(int), 0, cam.width - 1)
-        v = np.clip(np.round(uv[:, 1]).astype(int), 0, cam.height - 1)
-        z = depth_a[v, u]
-        p = np.column_stack([(uv[:, 0] - cam.cx) / cam.fx * z, (uv[:, 1] - cam.cy) / cam.fx * z, z])
-        q = p @ T_b_a[:3, :3].T + T_b_a[:3, 3]
-        out = np.column_stack(
-            [cam.fx * q[:, 0] / q[:, 2] + cam.cx, cam.fx * q[:, 1] / q[:, 2] + cam.cy]
-        )
+        out, z_a, z_b = transfer_pixels(uv, depth_a, T_b_a, cam)
         ub = np.clip(np.round(out[:, 0]).astype(int), 0, cam.width - 1)
         vb = np.clip(np.round(out[:, 1]).astype(int), 0, cam.height - 1)
         visible = (
-            np.isfinite(z)
-            & (q[:, 2] > 0.1)
+            np.isfinite(z_a)
+            & (z_b > 0.1)
             & (out[:, 0] >= 0)
             & (out[:, 1] >= 0)
             & (out[:, 0] < cam.width)
             & (out[:, 1] < cam.height)
         )
-        visible &= np.abs(depth_b[vb, ub] - q[:, 2]) < 0.05 * q[:, 2]  # not occluded in B
+        visible &= np.abs(depth_b[vb, ub] - z_b) < 0.05 * z_b  # not occluded in B
         out[~visible] = np.nan
         return out
 
