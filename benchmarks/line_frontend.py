@@ -8,13 +8,15 @@ reports: LSD segments before / after preprocessing, point-line associations, and
 the number of line matches, their precision and the time. A line match (a, b) is correct when a's
 endpoints, transferred into B (ray-cast depth and true pose for the simulator), lie within
 EPS_PX of b's line on average and the transferred segment overlaps b along the line.
-Point matches (the input of point-driven matching) come from ORB, or from SuperPoint when
---superpoint is given and weights are found.
+Point matches (the input of point-driven matching) come from SuperPoint when weights are found
+($SLSLAM_SUPERPOINT_MODEL, else the workplace copy in ../shared/models), as in the paper, and from
+ORB with --orb or without weights.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -190,13 +192,18 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--figures", type=Path, default=None, help="write match pictures here")
-    parser.add_argument("--superpoint", action="store_true", help="SuperPoint point matches")
+    parser.add_argument("--orb", action="store_true", help="ORB point matches instead")
     args = parser.parse_args()
+    model = os.environ.get("SLSLAM_SUPERPOINT_MODEL") or str(
+        SHARED_DATA.parent / "models" / "superpoint_v1" / "superpoint_v1.onnx"
+    )
     points = Orb()
-    if args.superpoint:
-        from slslam.config import Config, make_point_frontend
+    if not args.orb and Path(model).is_file():
+        from slslam.features import SuperPoint, SuperPointOptions
 
-        points = make_point_frontend(Config().features)
+        points = SuperPoint(SuperPointOptions(model_path=model, max_keypoints=1000))
+    elif not args.orb:
+        print("SuperPoint weights not found: ORB point matches")
     results = {
         "eps_px": EPS_PX,
         "points": type(points).__name__,
