@@ -12,25 +12,6 @@
 namespace py = pybind11;
 
 namespace slslam::bindings {
-namespace {
-
-cv::Mat WrapDescriptors(const py::array& array) {
-  if (array.ndim() != 2) throw py::value_error("descriptors must be a 2-D (N x D) array");
-  if (py::isinstance<py::array_t<uint8_t, py::array::c_style>>(array) &&
-      (array.flags() & py::array::c_style)) {
-    return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_8U,
-                   const_cast<void*>(array.data()));
-  }
-  if (py::isinstance<py::array_t<float, py::array::c_style>>(array) &&
-      (array.flags() & py::array::c_style)) {
-    return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_32F,
-                   const_cast<void*>(array.data()));
-  }
-  throw py::value_error("descriptors must be C-contiguous uint8 (binary) or float32 arrays");
-}
-
-}  // namespace
-
 void BindFeatures(py::module_& m) {
   py::class_<OrbOptions>(m, "OrbOptions", "ORB extractor options (OpenCV ORB).")
       .def(py::init<>())

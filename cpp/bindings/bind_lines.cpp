@@ -35,12 +35,11 @@ SegmentArray ToArray(const Segments& s) {
 }
 
 cv::Mat WrapLbd(const py::array& a, const char* what) {
-  if (a.ndim() != 2 || (a.shape(0) > 0 && a.shape(1) != 32) ||
-      !py::isinstance<py::array_t<uint8_t, py::array::c_style>>(a) ||
-      !(a.flags() & py::array::c_style)) {
+  const cv::Mat d = WrapDescriptors(a);
+  if (d.type() != CV_8U || (d.rows > 0 && d.cols != 32)) {
     throw py::value_error(std::string(what) + " must be a C-contiguous uint8 (N, 32) LBD array");
   }
-  return cv::Mat(static_cast<int>(a.shape(0)), 32, CV_8U, const_cast<void*>(a.data()));
+  return d;
 }
 
 }  // namespace

@@ -28,6 +28,22 @@ inline cv::Mat WrapGray(const py::array& array, const std::string& what) {
                  const_cast<void*>(array.data()));
 }
 
+// Wraps an (N, D) descriptor table without copying: uint8 -> CV_8U (binary), float32 -> CV_32F.
+inline cv::Mat WrapDescriptors(const py::array& array) {
+  if (array.ndim() != 2) throw py::value_error("descriptors must be a 2-D (N x D) array");
+  if (py::isinstance<py::array_t<uint8_t, py::array::c_style>>(array) &&
+      (array.flags() & py::array::c_style)) {
+    return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_8U,
+                   const_cast<void*>(array.data()));
+  }
+  if (py::isinstance<py::array_t<float, py::array::c_style>>(array) &&
+      (array.flags() & py::array::c_style)) {
+    return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_32F,
+                   const_cast<void*>(array.data()));
+  }
+  throw py::value_error("descriptors must be C-contiguous uint8 (binary) or float32 arrays");
+}
+
 // Copies a cv::Mat (8U or 32F, 1 channel) into a new numpy array.
 inline py::array ToNumpy(const cv::Mat& mat) {
   const cv::Mat contiguous = mat.isContinuous() ? mat : mat.clone();
