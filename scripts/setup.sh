@@ -15,7 +15,7 @@ shift || true
 
 APT_PACKAGES=(
   build-essential pkg-config ccache python3-venv
-  libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libembree-dev libgtest-dev
+  libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libembree-dev libgtest-dev libpcl-dev
 )
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do

@@ -9,6 +9,9 @@ void BindFeatures(py::module_& m);
 void BindSim(py::module_& m);
 void BindRayCaster(py::module_& m);
 void BindLines(py::module_& m);
+#ifdef SLSLAM_WITH_PCL
+void BindLidar(py::module_& m);
+#endif
 }  // namespace slslam::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -19,4 +22,7 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindSim(m);
   slslam::bindings::BindRayCaster(m);
   slslam::bindings::BindLines(m);
+#ifdef SLSLAM_WITH_PCL
+  slslam::bindings::BindLidar(m);
+#endif
 }
