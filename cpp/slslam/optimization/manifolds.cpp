@@ -1,0 +1,107 @@
+#include "slslam/optimization/manifolds.h"
+
+#include "slslam/geometry/rotation.h"
+
+namespace slslam {
+
+namespace {
+
+// [I; 0] (ambient x tangent, row-major) and its transpose [I, 0] (tangent x ambient).
+void LiftedIdentity(int ambient, int tangent, double* jacobian) {
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian, ambient, tangent);
+  j.setZero();
+  j.topRows(tangent).setIdentity();
+}
+
+void LoweredIdentity(int ambient, int tangent, double* jacobian) {
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian, tangent, ambient);
+  j.setZero();
+  j.leftCols(tangent).setIdentity();
+}
+
+}  // namespace
+
+void PoseToParameters(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, double* params) {
+  Eigen::Map<Eigen::Vector3d> t(params);
+  t = t_cw;
+  Eigen::Map<Eigen::Quaterniond>(params + 3) = Eigen::Quaterniond(R_cw).normalized();
+}
+
+void ParametersToPose(const double* params, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) {
+  *t_cw = Eigen::Map<const Eigen::Vector3d>(params);
+  *R_cw = Eigen::Map<const Eigen::Quaterniond>(params + 3).normalized().toRotationMatrix();
+}
+
+void LineToParameters(const OrthonormalLine& line, double* params) {
+  Eigen::Map<Eigen::Quaterniond> q(params);
+  q = line.U.normalized();
+  params[4] = line.phi;
+}
+
+OrthonormalLine ParametersToLine(const double* params) {
+  OrthonormalLine line;
+  line.U = Eigen::Map<const Eigen::Quaterniond>(params).normalized();
+  line.phi = params[4];
+  return line;
+}
+
+bool PoseManifold::Plus(const double* x, const double* delta, double* x_plus_delta) const {
+  const Eigen::Map<const Eigen::Vector3d> t(x);
+  const Eigen::Map<const Eigen::Quaterniond> q(x + 3);
+  const Eigen::Map<const Eigen::Vector3d> rho(delta);
+  const Eigen::Quaterniond dq = ExpQuaternion(Eigen::Map<const Eigen::Vector3d>(delta + 3));
+  Eigen::Map<Eigen::Vector3d> t_out(x_plus_delta);
+  t_out = dq * t + rho;
+  Eigen::Map<Eigen::Quaterniond>(x_plus_delta + 3) = (dq * q).normalized();
+  return true;
+}
+
+bool PoseManifold::PlusJacobian(const double*, double* jacobian) const {
+  LiftedIdentity(kPoseSize, kPoseTangentSize, jacobian);
+  return true;
+}
+
+bool PoseManifold::Minus(const double* y, const double* x, double* y_minus_x) const {
+  // delta with Plus(x, delta) = y: omega = Log(q_y q_x^-1), rho = t_y - Exp(omega) t_x.
+  const Eigen::Map<const Eigen::Quaterniond> qx(x + 3);
+  const Eigen::Map<const Eigen::Quaterniond> qy(y + 3);
+  const Eigen::Quaterniond dq = (qy * qx.conjugate()).normalized();
+  Eigen::Map<Eigen::Vector3d>(y_minus_x + 3) = LogSO3(dq);
+  Eigen::Map<Eigen::Vector3d> rho(y_minus_x);
+  rho = Eigen::Map<const Eigen::Vector3d>(y) - dq * Eigen::Map<const Eigen::Vector3d>(x);
+  return true;
+}
+
+bool PoseManifold::MinusJacobian(const double*, double* jacobian) const {
+  LoweredIdentity(kPoseSize, kPoseTangentSize, jacobian);
+  return true;
+}
+
+bool LineManifold::Plus(const double* x, const double* delta, double* x_plus_delta) const {
+  Eigen::Vector4d d(delta[0], delta[1], delta[2], delta[3]);
+  LineToParameters(ParametersToLine(x).Plus(d), x_plus_delta);
+  return true;
+}
+
+bool LineManifold::PlusJacobian(const double*, double* jacobian) const {
+  LiftedIdentity(kLineSize, kLineTangentSize, jacobian);
+  return true;
+}
+
+bool LineManifold::Minus(const double* y, const double* x, double* y_minus_x) const {
+  const OrthonormalLine lx = ParametersToLine(x);
+  const OrthonormalLine ly = ParametersToLine(y);
+  Eigen::Map<Eigen::Vector3d> theta(y_minus_x);
+  theta = LogSO3(lx.U.conjugate() * ly.U);
+  y_minus_x[3] = ly.phi - lx.phi;
+  return true;
+}
+
+bool LineManifold::MinusJacobian(const double*, double* jacobian) const {
+  LoweredIdentity(kLineSize, kLineTangentSize, jacobian);
+  return true;
+}
+
+}  // namespace slslam

@@ -1,0 +1,53 @@
+// Ceres manifolds for camera poses (SE(3), 7 ambient / 6 tangent) and map lines (orthonormal
+// representation, 5 ambient / 4 tangent).
+//
+// The cost functions in cost_functions.h give analytic Jacobians with respect to the tangent
+// increment directly, written into the first tangent-size columns of the ambient Jacobian (the rest
+// zero). The manifolds' PlusJacobian is correspondingly [I; 0], so Ceres' product
+// J_ambient * PlusJacobian is exactly the analytic tangent Jacobian. This is the usual way of
+// feeding Lie-group Jacobians to Ceres; it means these manifolds only pair with these costs.
+#pragma once
+
+#include <ceres/manifold.h>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "slslam/geometry/plucker_line.h"
+
+namespace slslam {
+
+// Pose parameter block layout: [tx, ty, tz, qx, qy, qz, qw] of T_cw (x_c = R x_w + t).
+constexpr int kPoseSize = 7;
+constexpr int kPoseTangentSize = 6;
+// Line parameter block layout: [qx, qy, qz, qw, phi] of the orthonormal representation.
+constexpr int kLineSize = 5;
+constexpr int kLineTangentSize = 4;
+
+void PoseToParameters(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, double* params);
+void ParametersToPose(const double* params, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw);
+void LineToParameters(const OrthonormalLine& line, double* params);
+OrthonormalLine ParametersToLine(const double* params);
+
+// Plus(x, delta): R <- Exp(omega) R, t <- Exp(omega) t + rho for delta = (rho, omega).
+class PoseManifold final : public ceres::Manifold {
+ public:
+  int AmbientSize() const override { return kPoseSize; }
+  int TangentSize() const override { return kPoseTangentSize; }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override;
+  bool PlusJacobian(const double* x, double* jacobian) const override;
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override;
+  bool MinusJacobian(const double* x, double* jacobian) const override;
+};
+
+// Plus(x, delta): U <- U Exp(theta), phi <- phi + dphi for delta = (theta, dphi).
+class LineManifold final : public ceres::Manifold {
+ public:
+  int AmbientSize() const override { return kLineSize; }
+  int TangentSize() const override { return kLineTangentSize; }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override;
+  bool PlusJacobian(const double* x, double* jacobian) const override;
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override;
+  bool MinusJacobian(const double* x, double* jacobian) const override;
+};
+
+}  // namespace slslam

@@ -1,0 +1,59 @@
+// Motion-only bundle adjustment (tracking): the pose of one stereo frame against fixed map points
+// and map lines, with the unified point-line cost, Huber kernels and ORB-SLAM3's outlier rounds
+// (optimise, classify every observation by its chi-square, drop outliers, optimise again; the
+// kernel is removed in the last round).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slslam/geometry/plucker_line.h"
+#include "slslam/geometry/reprojection.h"
+
+namespace slslam {
+
+struct PointObservation {
+  Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< map point [m]
+  Eigen::Vector3d observed = Eigen::Vector3d::Zero();  ///< (u_left, v, u_right) [px]
+  bool stereo = false;                                 ///< false: u_right is ignored
+  double sigma_px = 1.0;                               ///< measurement standard deviation [px]
+};
+
+struct LineObservation {
+  PluckerLine line_w;                                  ///< map line (world frame)
+  Eigen::Vector2d start_px = Eigen::Vector2d::Zero();  ///< observed segment, left image [px]
+  Eigen::Vector2d end_px = Eigen::Vector2d::Zero();
+  double sigma_px = 1.0;  ///< standard deviation of the endpoint distances [px]
+};
+
+struct PoseOptimizerOptions {
+  int rounds = 4;                 ///< optimise-classify rounds [-]
+  int iterations_per_round = 10;  ///< Levenberg-Marquardt iterations per round [-]
+  int robust_rounds = 3;          ///< rounds that use the Huber kernel (the rest use none) [-]
+  double chi2_mono = 5.991;       ///< inlier bound, 2 residuals (95 %, as ORB-SLAM3) [-]
+  double chi2_stereo = 7.815;     ///< inlier bound, 3 residuals [-]
+  double chi2_line = 5.991;       ///< inlier bound on the two endpoint distances [-]
+  double line_angle_weight = 10.0;  ///< scale of the bounded angle term e3 [px]
+  double line_weight = 1.0;         ///< weight of the line terms against the point terms [-]
+};
+
+struct PoseOptimizerResult {
+  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  std::vector<bool> point_inlier;  ///< per input point observation
+  std::vector<bool> line_inlier;   ///< per input line observation
+  int point_inliers = 0;
+  int line_inliers = 0;
+  bool success = false;  ///< false: too few usable observations, the pose is the initial one
+};
+
+// Optimises T_cw from an initial guess. Observations of landmarks behind the camera at the start
+// count as outliers. Deterministic (single-threaded Ceres).
+PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
+                                 const Eigen::Vector3d& t_cw,
+                                 const std::vector<PointObservation>& points,
+                                 const std::vector<LineObservation>& lines,
+                                 const PoseOptimizerOptions& options = {});
+
+}  // namespace slslam

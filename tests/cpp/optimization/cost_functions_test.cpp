@@ -1,0 +1,145 @@
+// The Ceres costs, seen through their manifolds the way Ceres sees them (J_ambient * PlusJacobian),
+// against central differences of residual(Plus(x, delta)).
+#include "slslam/optimization/cost_functions.h"
+
+#include <array>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "slslam/geometry/rotation.h"
+#include "slslam/optimization/manifolds.h"
+
+namespace slslam {
+namespace {
+
+StereoRig TestRig() {
+  StereoRig rig;
+  rig.camera.fx = 458.0;
+  rig.camera.fy = 457.0;
+  rig.camera.cx = 367.0;
+  rig.camera.cy = 248.0;
+  rig.camera.width = 752;
+  rig.camera.height = 480;
+  rig.baseline_m = 0.11;
+  return rig;
+}
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Checks every parameter block's tangent Jacobian of `cost`; manifolds[i] may be null (Euclidean).
+void CheckCost(const ceres::CostFunction& cost, std::vector<std::vector<double>> params,
+               const std::vector<const ceres::Manifold*>& manifolds) {
+  const int rows = cost.num_residuals();
+  const auto& sizes = cost.parameter_block_sizes();
+  std::vector<const double*> ptrs;
+  for (auto& p : params) ptrs.push_back(p.data());
+  std::vector<RowMatrix> ambient;
+  std::vector<double*> jac_ptrs;
+  for (int size : sizes) ambient.emplace_back(rows, size);
+  for (auto& j : ambient) jac_ptrs.push_back(j.data());
+  Eigen::VectorXd residual(rows);
+  ASSERT_TRUE(cost.Evaluate(ptrs.data(), residual.data(), jac_ptrs.data()));
+
+  for (size_t b = 0; b < params.size(); ++b) {
+    const ceres::Manifold* m = manifolds[b];
+    const int tangent = m ? m->TangentSize() : sizes[b];
+    RowMatrix lift = RowMatrix::Identity(sizes[b], tangent);
+    if (m) m->PlusJacobian(params[b].data(), lift.data());
+    const Eigen::MatrixXd analytic = ambient[b] * lift;
+    Eigen::MatrixXd numeric(rows, tangent);
+    const double h = 1e-6;
+    for (int k = 0; k < tangent; ++k) {
+      Eigen::VectorXd r_plus(rows), r_minus(rows);
+      for (int sign : {1, -1}) {
+        std::vector<double> delta(tangent, 0.0);
+        delta[k] = sign * h;
+        std::vector<double> moved(sizes[b]);
+        if (m) {
+          m->Plus(params[b].data(), delta.data(), moved.data());
+        } else {
+          for (int i = 0; i < sizes[b]; ++i) moved[i] = params[b][i] + delta[i];
+        }
+        std::vector<const double*> p2 = ptrs;
+        p2[b] = moved.data();
+        ASSERT_TRUE(cost.Evaluate(p2.data(), (sign > 0 ? r_plus : r_minus).data(), nullptr));
+      }
+      numeric.col(k) = (r_plus - r_minus) / (2 * h);
+    }
+    const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
+    EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale)
+        << "block " << b << "\nanalytic\n" << analytic << "\nnumeric\n" << numeric;
+  }
+}
+
+std::vector<double> PoseParams() {
+  std::vector<double> p(kPoseSize);
+  PoseToParameters(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2)), Eigen::Vector3d(0.3, -0.1, 0.5),
+                   p.data());
+  return p;
+}
+
+TEST(CostFunctions, PointCostJacobiansThroughManifold) {
+  const StereoRig rig = TestRig();
+  PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.5);
+  PoseManifold pose_manifold;
+  CheckCost(cost, {PoseParams(), {0.4, -0.2, 5.0}}, {&pose_manifold, nullptr});
+}
+
+TEST(CostFunctions, StereoPointCostJacobiansThroughManifold) {
+  const StereoRig rig = TestRig();
+  StereoPointCost cost(rig, Eigen::Vector3d(300.0, 200.0, 290.0), 1.0);
+  PoseManifold pose_manifold;
+  CheckCost(cost, {PoseParams(), {0.4, -0.2, 5.0}}, {&pose_manifold, nullptr});
+}
+
+TEST(CostFunctions, LineCostJacobiansThroughManifold) {
+  const StereoRig rig = TestRig();
+  LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
+                1.0);
+  std::vector<double> line(kLineSize);
+  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(
+                       Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5))),
+                   line.data());
+  PoseManifold pose_manifold;
+  LineManifold line_manifold;
+  CheckCost(cost, {PoseParams(), line}, {&pose_manifold, &line_manifold});
+}
+
+TEST(Manifolds, MinusInvertsPlus) {
+  PoseManifold pose_manifold;
+  const std::vector<double> x = PoseParams();
+  const std::array<double, 6> delta{0.1, -0.2, 0.3, 0.05, -0.1, 0.2};
+  std::array<double, kPoseSize> y;
+  std::array<double, 6> back;
+  pose_manifold.Plus(x.data(), delta.data(), y.data());
+  pose_manifold.Minus(y.data(), x.data(), back.data());
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(back[i], delta[i], 1e-12);
+
+  LineManifold line_manifold;
+  std::array<double, kLineSize> l;
+  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(
+                       Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(-1, 0, 5))),
+                   l.data());
+  const std::array<double, 4> dl{0.1, -0.05, 0.2, 0.1};
+  std::array<double, kLineSize> l2;
+  std::array<double, 4> dl_back;
+  line_manifold.Plus(l.data(), dl.data(), l2.data());
+  line_manifold.Minus(l2.data(), l.data(), dl_back.data());
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(dl_back[i], dl[i], 1e-12);
+}
+
+TEST(CostFunctions, BehindCameraIsNotEvaluated) {
+  const StereoRig rig = TestRig();
+  PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.0);
+  std::vector<double> pose(kPoseSize);
+  PoseToParameters(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), pose.data());
+  const double point[3] = {0.0, 0.0, -3.0};
+  const double* params[2] = {pose.data(), point};
+  double residual[2];
+  EXPECT_FALSE(cost.Evaluate(params, residual, nullptr));
+  EXPECT_THROW(PointCost(rig.camera, Eigen::Vector2d(1, 1), 0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam

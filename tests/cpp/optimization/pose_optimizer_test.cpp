@@ -1,0 +1,150 @@
+#include "slslam/optimization/pose_optimizer.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "slslam/geometry/rotation.h"
+
+namespace slslam {
+namespace {
+
+StereoRig TestRig() {
+  StereoRig rig;
+  rig.camera.fx = 458.0;
+  rig.camera.fy = 457.0;
+  rig.camera.cx = 367.0;
+  rig.camera.cy = 248.0;
+  rig.camera.width = 752;
+  rig.camera.height = 480;
+  rig.baseline_m = 0.11;
+  return rig;
+}
+
+struct Scene {
+  Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.05, -0.4, 0.1));
+  Eigen::Vector3d t = Eigen::Vector3d(0.2, -0.1, 1.0);
+  std::vector<PointObservation> points;
+  std::vector<LineObservation> lines;
+  std::vector<bool> corrupted_points;
+  std::vector<bool> corrupted_lines;
+};
+
+// Landmarks 2-12 m in front of the true camera, observed with 0.5 px noise; a fraction of the
+// observations are gross outliers (20-60 px off).
+Scene MakeScene(int num_points, int num_lines, double outlier_fraction, unsigned seed) {
+  const StereoRig rig = TestRig();
+  Scene s;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uu(30.0, 720.0), vv(30.0, 450.0), depth(2.0, 12.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), gross(20.0, 60.0);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  const Eigen::Matrix3d R_wc = s.R.transpose();
+  const Eigen::Vector3d t_wc = -R_wc * s.t;
+  auto world_point = [&](double u, double v, double z) {
+    return Eigen::Vector3d(R_wc * (z * rig.camera.Unproject(Eigen::Vector2d(u, v))) + t_wc);
+  };
+  for (int i = 0; i < num_points; ++i) {
+    const double u = uu(rng), v = vv(rng), z = depth(rng);
+    PointObservation obs;
+    obs.point_w = world_point(u, v, z);
+    obs.stereo = i % 2 == 0;
+    obs.observed << u + noise(rng), v + noise(rng), u - rig.camera.fx * rig.baseline_m / z + noise(rng);
+    const bool bad = unit(rng) < outlier_fraction;
+    if (bad) obs.observed += Eigen::Vector3d(gross(rng), -gross(rng), gross(rng));
+    s.points.push_back(obs);
+    s.corrupted_points.push_back(bad);
+  }
+  for (int i = 0; i < num_lines; ++i) {
+    const Eigen::Vector2d a(uu(rng), vv(rng)), b(uu(rng), vv(rng));
+    const Eigen::Vector3d pa = world_point(a.x(), a.y(), depth(rng));
+    const Eigen::Vector3d pb = world_point(b.x(), b.y(), depth(rng));
+    LineObservation obs;
+    obs.line_w = PluckerLine::FromPoints(pa, pb);
+    obs.start_px = a + Eigen::Vector2d(noise(rng), noise(rng));
+    obs.end_px = b + Eigen::Vector2d(noise(rng), noise(rng));
+    const bool bad = unit(rng) < outlier_fraction;
+    if (bad) obs.end_px += Eigen::Vector2d(gross(rng), gross(rng));
+    s.lines.push_back(obs);
+    s.corrupted_lines.push_back(bad);
+  }
+  return s;
+}
+
+double RotationErrorDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return LogSO3(Eigen::Quaterniond(a * b.transpose())).norm() * 180.0 / M_PI;
+}
+
+void PerturbedStart(const Scene& s, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  *R = s.R;
+  *t = s.t;
+  Eigen::Matrix<double, 6, 1> delta;
+  delta << 0.08, -0.05, 0.1, 0.03, -0.02, 0.025;  // 8-10 cm, about 2.5 deg
+  PerturbPose(delta, R, t);
+}
+
+TEST(PoseOptimizer, PointsWithOutliersRecoverPoseAndFlagOutliers) {
+  const Scene s = MakeScene(150, 0, 0.2, 1);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, s.points, {});
+  ASSERT_TRUE(r.success);
+  EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
+  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
+  int agree = 0;
+  for (size_t i = 0; i < s.points.size(); ++i) agree += r.point_inlier[i] != s.corrupted_points[i];
+  EXPECT_GE(agree, static_cast<int>(0.97 * s.points.size()));
+}
+
+TEST(PoseOptimizer, LinesAloneRecoverPose) {
+  const Scene s = MakeScene(0, 60, 0.1, 2);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, {}, s.lines);
+  ASSERT_TRUE(r.success);
+  EXPECT_LT((r.t_cw - s.t).norm(), 0.02);
+  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.2);
+  int flagged = 0;
+  for (size_t i = 0; i < s.lines.size(); ++i) {
+    if (s.corrupted_lines[i]) flagged += !r.line_inlier[i];
+  }
+  EXPECT_EQ(flagged, std::count(s.corrupted_lines.begin(), s.corrupted_lines.end(), true));
+}
+
+TEST(PoseOptimizer, PointsAndLinesTogether) {
+  const Scene s = MakeScene(40, 30, 0.15, 3);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
+  ASSERT_TRUE(r.success);
+  EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
+  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
+  EXPECT_GT(r.line_inliers, 20);
+}
+
+TEST(PoseOptimizer, TooFewObservationsKeepsInitialPose) {
+  const Scene s = MakeScene(2, 0, 0.0, 4);
+  const PoseOptimizerResult r = OptimizePose(TestRig(), s.R, s.t, s.points, {});
+  EXPECT_FALSE(r.success);
+  EXPECT_TRUE(r.R_cw.isApprox(s.R));
+  Eigen::Matrix3d nan_r = s.R;
+  nan_r(0, 0) = NAN;
+  EXPECT_THROW(OptimizePose(TestRig(), nan_r, s.t, s.points, {}), std::invalid_argument);
+}
+
+TEST(PoseOptimizer, Deterministic) {
+  const Scene s = MakeScene(80, 20, 0.1, 5);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const PoseOptimizerResult a = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
+  const PoseOptimizerResult b = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
+  EXPECT_EQ(a.t_cw, b.t_cw);
+  EXPECT_EQ(a.R_cw, b.R_cw);
+}
+
+}  // namespace
+}  // namespace slslam
