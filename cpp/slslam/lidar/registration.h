@@ -35,7 +35,8 @@ struct RegistrationOptions {
   double max_range_m = 80.0;    ///< drop points farther than this [m]; <= 0: no limit
   double fine_voxel_m = 0.4;    ///< voxel edge of the fine level (last ICP level) [m]
   double coarse_voxel_m = 1.0;  ///< voxel edge of the coarse level (keypoints, first ICP level) [m]
-  int outlier_k = 8;            ///< neighbours of the statistical outlier filter; 0: filter off
+  int outlier_k = 8;  ///< neighbours of the statistical outlier filter, which runs on the coarse
+                      ///< level and drops the fine points of a dropped coarse voxel; 0: off [-]
   double outlier_std_mul = 2.0;  ///< drop points whose mean k-NN distance > mean + mul * std [-]
   int normal_k = 12;             ///< neighbours for normal estimation [-]
 
@@ -48,14 +49,26 @@ struct RegistrationOptions {
   int sac_ia_randomness = 4;          ///< sample among this many nearest descriptors [-]
   double sac_ia_min_sample_m = 2.0;   ///< minimum distance between sampled keypoints [m]
   double sac_ia_max_corr_m = 2.0;     ///< inlier distance of the SAC-IA error metric [m]
+  double sac_ia_edge_similarity = 0.9;  ///< prerejection: a hypothesis is scored only when every
+                                        ///< sampled edge has the same length in source and target
+                                        ///< to this ratio; 0: score every hypothesis [-]
+  double sac_ia_confidence = 0.99;  ///< stop SAC-IA once a better hypothesis would have been drawn
+                                    ///< with this probability (adaptive RANSAC bound from the
+                                    ///< best hypothesis' correspondence inlier ratio); 1: never [-]
+  bool sac_ia_try_identity = true;  ///< also score the identity (no motion) as a hypothesis [-]
 
   // --- Fine alignment (ICP, coarse-to-fine) ------------------------------------------------
   bool point_to_plane = true;          ///< point-to-plane (true) or point-to-point ICP objective
   int icp_iterations_coarse = 30;      ///< iteration bound on the coarse level [-]
   int icp_iterations_fine = 20;        ///< iteration bound on the fine level [-]
+  int icp_source_points_coarse = 1000;  ///< source points (evenly thinned) aligned on the coarse
+                                        ///< level; 0: all [-]
+  int icp_source_points_fine = 3000;    ///< source points (evenly thinned) aligned on the fine
+                                        ///< level; 0: all [-]
   double icp_max_corr_coarse_m = 2.0;  ///< correspondence rejection distance, coarse level [m]
   double icp_max_corr_fine_m = 0.6;    ///< correspondence rejection distance, fine level [m]
-  double icp_transformation_epsilon = 1e-8;  ///< stop when the squared step falls below this [-]
+  double icp_transformation_epsilon = 1e-8;  ///< stop when the squared step falls below this in
+                                             ///< translation [m^2] and rotation [rad^2]
   double icp_fitness_epsilon = 1e-6;   ///< stop when the mean squared error change is below [m^2]
   bool icp_reject_one_to_one = false;  ///< keep only the closest source per target point
 
@@ -65,7 +78,8 @@ struct RegistrationOptions {
   int ndt_iterations = 35;        ///< iteration bound per level [-]
 
   // --- Runtime -----------------------------------------------------------------------------
-  int num_threads = 0;  ///< OpenMP threads for normals and descriptors; 0: all cores
+  int num_threads = 0;  ///< threads (OpenMP) for preprocessing, descriptors, nearest-neighbour
+                        ///< queries and ICP; 0: all cores [-]
 
   // Throws std::invalid_argument naming the first out-of-range field.
   void Check() const;
@@ -85,7 +99,8 @@ struct RegistrationResult {
   double preprocess_ms = 0.0;  ///< range crop, voxel pyramid, outlier removal, normals [ms]
   double features_ms = 0.0;    ///< FPFH / PFH descriptors [ms]
   double coarse_ms = 0.0;      ///< SAC-IA [ms]
-  double fine_ms = 0.0;        ///< ICP or NDT levels [ms]
+  double fine_ms = 0.0;  ///< ICP or NDT levels, with the target's fine normals that ICP pairs
+                         ///< with (computed on demand) [ms]
   double total_ms = 0.0;       ///< the whole call, input conversion and scoring included [ms]
 };
 
