@@ -9,6 +9,7 @@ void BindFeatures(py::module_& m);
 void BindSim(py::module_& m);
 void BindRayCaster(py::module_& m);
 void BindLines(py::module_& m);
+void BindTracking(py::module_& m);
 #ifdef SLSLAM_WITH_PCL
 void BindLidar(py::module_& m);
 #endif
@@ -22,6 +23,7 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindSim(m);
   slslam::bindings::BindRayCaster(m);
   slslam::bindings::BindLines(m);
+  slslam::bindings::BindTracking(m);
 #ifdef SLSLAM_WITH_PCL
   slslam::bindings::BindLidar(m);
 #endif

@@ -227,6 +227,75 @@ def sim_command(
     )
 
 
+@app.command("run")
+def run_command(
+    dataset: Annotated[
+        Path,
+        typer.Argument(
+            help="Sequence folder: EuRoC ASL (the folder holding mav0/, or mav0 itself), e.g. "
+            "what `slslam sim` writes."
+        ),
+    ],
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("slslam_run"),
+    config: Annotated[
+        Path | None,
+        typer.Option(help="YAML config (keys as in configs/default.yaml); defaults otherwise."),
+    ] = None,
+    max_frames: Annotated[int, typer.Option(help="Track only the first N frames (0 = all).")] = 0,
+    groundtruth: Annotated[
+        Path | None,
+        typer.Option(
+            help="Ground-truth trajectory file (TUM / EuRoC csv / KITTI, left camera) to score "
+            "against instead of the sequence's own state_groundtruth_estimate0."
+        ),
+    ] = None,
+    orb: Annotated[
+        bool, typer.Option("--orb", help="Use the ORB point front end (overrides the config).")
+    ] = False,
+    no_lines: Annotated[
+        bool, typer.Option("--no-lines", help="Points only (overrides the config).")
+    ] = False,
+    progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+) -> None:
+    """Stereo point-line SLAM over a sequence.
+
+    Writes trajectory.tum (every frame; flushed as it goes), frames.csv (state, counts and stage
+    times per frame), map.ply (points and lines), metrics.json and ape.png (ATE against ground
+    truth when the sequence has it), config.yaml. SuperPoint is used when weights are configured
+    ($SLSLAM_SUPERPOINT_MODEL or features.superpoint.model_path), ORB otherwise.
+    """
+    import dataclasses
+
+    from slslam.config import load_config
+    from slslam.tracking import run_sequence
+
+    cfg = load_config(config)
+    if orb:
+        cfg = dataclasses.replace(
+            cfg, features=dataclasses.replace(cfg.features, point_frontend="orb")
+        )
+    if no_lines:
+        cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
+    summary = run_sequence(
+        dataset,
+        out,
+        cfg,
+        max_frames=max_frames or None,
+        progress=progress,
+        groundtruth=groundtruth,
+    )
+    m = summary.metrics
+    console = Console()
+    console.print(
+        f"{m['frames']} frames, {m['tracked_ratio'] * 100:.1f} % tracked "
+        f"({m['frontend']}{' + lines' if m['lines'] else ''}), {m['keyframes']} keyframes, "
+        f"{m['map_points']} points, {m['map_lines']} lines"
+    )
+    if "ape" in m:
+        console.print(f"ATE RMSE (SE3, tracked frames): {m['ape']['rmse']:.4f} m")
+    console.print(f"results in {out}")
+
+
 models_app = typer.Typer(
     help="SuperPoint weights: how to obtain them (`slslam models guide`), check an ONNX file, "
     "convert MagicLeap's .pth.",

@@ -65,10 +65,33 @@ class FeaturesConfig:
 
 
 @dataclass(frozen=True)
+class TrackingConfig:
+    """Tracking and local mapping (SPEC A5-A6); mirrors C++ ``TrackerOptions``."""
+
+    use_lines: bool = True  # line features in tracking and mapping
+    sequential: bool = True  # local mapping inline: exactly reproducible; false: own thread
+    min_init_points: int = 50  # stereo points a frame needs to start a map
+    min_inliers: int = 15  # fewer inliers after motion-only BA: the frame is LOST
+    search_radius_px: float = 15.0  # guided matching window [px] (doubled on a retry)
+    max_distance_binary: float = 50.0  # guided matching bound for ORB [Hamming bits]
+    max_distance_float: float = 0.8  # guided matching bound for SuperPoint [L2]
+    keyframe_max_frames: int = 20  # a keyframe at least this often [frames]
+    keyframe_track_ratio: float = 0.75  # tracked / reference keyframe points below: keyframe
+    keyframe_min_inliers: int = 100  # fewer tracked points: keyframe
+    local_keyframes: int = 10  # covisible keyframes in the local map and local BA
+    line_weight: float = 1.0  # weight of line terms against point terms in both BAs
+    line_angle_weight: float = 10.0  # scale of the bounded angle term e3 [px]
+    max_depth_baselines: float = 60.0  # stereo depths beyond this many baselines are unused
+    point_sigma_px: float = 1.0  # keypoint measurement sigma [px]
+    line_sigma_px: float = 1.5  # line endpoint distance sigma [px]
+
+
+@dataclass(frozen=True)
 class Config:
     """Everything configurable; ``load_config`` reads it, ``dump_config`` writes it."""
 
     features: FeaturesConfig = field(default_factory=FeaturesConfig)
+    tracking: TrackingConfig = field(default_factory=TrackingConfig)
 
 
 def _build(cls: type, data: Any, where: str, source: Path | None):

@@ -63,8 +63,6 @@ void GuidedMatchOptions::Check() const {
   Require(ratio > 0.0f && ratio <= 1.0f, Message("guided.ratio must be in (0, 1], got ", ratio));
 }
 
-namespace {
-
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   if (a.type() == CV_8U) {
     return static_cast<float>(cv::norm(a.row(i), b.row(j), cv::NORM_HAMMING));
@@ -75,8 +73,6 @@ float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   for (int k = 0; k < a.cols; ++k) sum += (x[k] - y[k]) * (x[k] - y[k]);
   return std::sqrt(sum);
 }
-
-}  // namespace
 
 Eigen::VectorXi GuidedMatch(
     const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& predicted,

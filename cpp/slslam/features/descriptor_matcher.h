@@ -20,6 +20,9 @@ struct MatchOptions {
 Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
     const cv::Mat& query, const cv::Mat& train, const MatchOptions& options = {});
 
+// Distance between row i of a and row j of b: Hamming bits for CV_8U, L2 for CV_32F.
+float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j);
+
 struct GuidedMatchOptions {
   float radius_px = 15.0f;    ///< search window around each predicted position [px]
   float max_distance = 0.7f;  ///< largest accepted distance (L2 for unit float, bits for binary)

@@ -1,0 +1,224 @@
+// slslam._core tracking: the stereo point-line tracker with local mapping. Python hands over the
+// images and the point features (SuperPoint runs in Python through onnxruntime, ORB in C++);
+// line extraction, stereo matching, tracking and mapping run here with the GIL released.
+#include <chrono>
+#include <future>
+#include <memory>
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "bindings/image_conversion.h"
+#include "slslam/core/check.h"
+#include "slslam/features/line_extractor.h"
+#include "slslam/tracking/tracker.h"
+
+namespace py = pybind11;
+
+namespace slslam::bindings {
+namespace {
+
+using PixelArray = Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, const char* side) {
+  Keypoints k;
+  k.uv = uv;
+  const cv::Mat d = WrapDescriptors(descriptors);
+  Require(d.rows == uv.rows(), Message(side, " keypoints: ", uv.rows(), " positions but ", d.rows,
+                                       " descriptor rows"));
+  k.descriptors = d.clone();  // the frame outlives the numpy array
+  k.score = Eigen::VectorXf::Ones(uv.rows());
+  k.octave = Eigen::VectorXi::Zero(uv.rows());
+  return k;
+}
+
+double Ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+      .count();
+}
+
+// The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
+class TrackerSession {
+ public:
+  TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
+      : options_(options), lines_(lines), tracker_(options) {
+    lines_.Check();
+  }
+
+  py::dict Track(int index, double timestamp, const py::array& left_image,
+                 const py::array& right_image, const PixelArray& left_uv,
+                 const py::array& left_descriptors, const PixelArray& right_uv,
+                 const py::array& right_descriptors) {
+    const cv::Mat left = WrapGray(left_image, "left image");
+    const cv::Mat right = WrapGray(right_image, "right image");
+    const PinholeCamera& cam = options_.rig.camera;
+    Require(left.cols == cam.width && left.rows == cam.height,
+            Message("left image is ", left.cols, "x", left.rows, ", calibration says ", cam.width,
+                    "x", cam.height));
+    Require(right.size() == left.size(), "left and right images differ in size");
+    Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
+    Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
+    TrackResult r;
+    double line_ms = 0.0, stereo_ms = 0.0;
+    int num_lines = 0;
+    {
+      py::gil_scoped_release release;
+      auto start = std::chrono::steady_clock::now();
+      LineFeatures ll, lr;
+      if (options_.use_lines) {
+        // LSD is single-threaded: the two images on two threads.
+        auto right_lines = std::async(std::launch::async, [&] { return ExtractLines(right, lines_); });
+        ll = ExtractLines(left, lines_);
+        lr = right_lines.get();
+      }
+      line_ms = Ms(start);
+      start = std::chrono::steady_clock::now();
+      auto frame = std::make_shared<StereoFrame>(MakeStereoFrame(
+          index, timestamp, kl, kr, options_.use_lines ? &ll : nullptr,
+          options_.use_lines ? &lr : nullptr, options_.rig, options_.stereo));
+      num_lines = frame->NumLines();
+      stereo_ms = Ms(start);
+      r = tracker_.Track(frame);
+    }
+    py::dict out;
+    out["state"] = TrackingStateName(r.state);
+    out["R_cw"] = r.R_cw;
+    out["t_cw"] = r.t_cw;
+    out["map_index"] = r.map_index;
+    out["matched_points"] = r.matched_points;
+    out["inlier_points"] = r.inlier_points;
+    out["matched_lines"] = r.matched_lines;
+    out["inlier_lines"] = r.inlier_lines;
+    out["lines"] = num_lines;
+    out["keyframe"] = r.keyframe;
+    out["line_extraction_ms"] = line_ms;
+    out["stereo_matching_ms"] = stereo_ms;
+    out["matching_ms"] = r.matching_ms;
+    out["optimisation_ms"] = r.optimisation_ms;
+    out["mapping_ms"] = r.mapping_ms;
+    return out;
+  }
+
+  py::dict Map() {
+    MapExport m;
+    {
+      py::gil_scoped_release release;
+      tracker_.Flush();
+      m = tracker_.ExportMap();
+    }
+    py::dict out;
+    out["points"] = m.points;
+    out["lines"] = m.lines;
+    out["point_map"] = m.point_map;
+    out["line_map"] = m.line_map;
+    out["keyframes"] = m.keyframes;
+    out["maps"] = tracker_.num_maps();
+    const LocalMappingStats s = tracker_.mapping_stats();
+    out["keyframes_processed"] = s.keyframes_processed;
+    out["keyframes_culled"] = s.keyframes_culled;
+    out["points_culled"] = s.points_culled;
+    out["lines_culled"] = s.lines_culled;
+    out["points_triangulated"] = s.points_triangulated;
+    out["lines_triangulated"] = s.lines_triangulated;
+    out["local_mapping_ms"] = s.total_ba_ms;
+    return out;
+  }
+
+  void Flush() {
+    py::gil_scoped_release release;
+    tracker_.Flush();
+  }
+
+ private:
+  TrackerOptions options_;
+  LineExtractorOptions lines_;
+  Tracker tracker_;
+};
+
+}  // namespace
+
+void BindTracking(py::module_& m) {
+  py::class_<StereoRig>(m, "StereoRig", "Rectified stereo pair: left intrinsics and baseline.")
+      .def(py::init<>())
+      .def(py::init([](const PinholeCamera& camera, double baseline_m) {
+             StereoRig rig{camera, baseline_m};
+             rig.Check();
+             return rig;
+           }),
+           py::arg("camera"), py::arg("baseline_m"))
+      .def_readwrite("camera", &StereoRig::camera)
+      .def_readwrite("baseline_m", &StereoRig::baseline_m)
+      .def("check", &StereoRig::Check);
+
+  py::class_<PoseOptimizerOptions>(m, "PoseOptimizerOptions", "Motion-only bundle adjustment.")
+      .def(py::init<>())
+      .def_readwrite("rounds", &PoseOptimizerOptions::rounds)
+      .def_readwrite("iterations_per_round", &PoseOptimizerOptions::iterations_per_round)
+      .def_readwrite("line_angle_weight", &PoseOptimizerOptions::line_angle_weight)
+      .def_readwrite("line_weight", &PoseOptimizerOptions::line_weight);
+  py::class_<BundleAdjustmentOptions>(m, "BundleAdjustmentOptions", "Local bundle adjustment.")
+      .def(py::init<>())
+      .def_readwrite("robust_iterations", &BundleAdjustmentOptions::robust_iterations)
+      .def_readwrite("refine_iterations", &BundleAdjustmentOptions::refine_iterations)
+      .def_readwrite("line_angle_weight", &BundleAdjustmentOptions::line_angle_weight)
+      .def_readwrite("line_weight", &BundleAdjustmentOptions::line_weight);
+  py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
+      .def(py::init<>())
+      .def_readwrite("local_keyframes", &LocalMapperOptions::local_keyframes)
+      .def_readwrite("max_fixed_keyframes", &LocalMapperOptions::max_fixed_keyframes)
+      .def_readwrite("cull_keyframes", &LocalMapperOptions::cull_keyframes)
+      .def_readwrite("redundant_ratio", &LocalMapperOptions::redundant_ratio)
+      .def_readwrite("triangulate", &LocalMapperOptions::triangulate)
+      .def_readwrite("ba", &LocalMapperOptions::ba);
+  py::class_<StereoMatchOptions>(m, "StereoMatchOptions", "Stereo keypoint matching.")
+      .def(py::init<>())
+      .def_readwrite("max_row_offset_px", &StereoMatchOptions::max_row_offset_px)
+      .def_readwrite("max_disparity_px", &StereoMatchOptions::max_disparity_px)
+      .def_readwrite("max_distance_binary", &StereoMatchOptions::max_distance_binary)
+      .def_readwrite("max_distance_float", &StereoMatchOptions::max_distance_float)
+      .def_readwrite("ratio", &StereoMatchOptions::ratio)
+      .def_readwrite("max_depth_baselines", &StereoMatchOptions::max_depth_baselines);
+
+  py::class_<TrackerOptions>(m, "TrackerOptions", "Tracking, mapping and front-end thresholds.")
+      .def(py::init<>())
+      .def_readwrite("rig", &TrackerOptions::rig)
+      .def_readwrite("stereo", &TrackerOptions::stereo)
+      .def_readwrite("pose", &TrackerOptions::pose)
+      .def_readwrite("mapping", &TrackerOptions::mapping)
+      .def_readwrite("use_lines", &TrackerOptions::use_lines)
+      .def_readwrite("sequential", &TrackerOptions::sequential)
+      .def_readwrite("min_init_points", &TrackerOptions::min_init_points)
+      .def_readwrite("min_inliers", &TrackerOptions::min_inliers)
+      .def_readwrite("search_radius_px", &TrackerOptions::search_radius_px)
+      .def_readwrite("max_distance_binary", &TrackerOptions::max_distance_binary)
+      .def_readwrite("max_distance_float", &TrackerOptions::max_distance_float)
+      .def_readwrite("match_ratio", &TrackerOptions::match_ratio)
+      .def_readwrite("line_search_px", &TrackerOptions::line_search_px)
+      .def_readwrite("line_max_angle_rad", &TrackerOptions::line_max_angle_rad)
+      .def_readwrite("line_max_lbd", &TrackerOptions::line_max_lbd)
+      .def_readwrite("keyframe_max_frames", &TrackerOptions::keyframe_max_frames)
+      .def_readwrite("keyframe_min_frames", &TrackerOptions::keyframe_min_frames)
+      .def_readwrite("keyframe_track_ratio", &TrackerOptions::keyframe_track_ratio)
+      .def_readwrite("close_depth_baselines", &TrackerOptions::close_depth_baselines)
+      .def_readwrite("keyframe_min_inliers", &TrackerOptions::keyframe_min_inliers)
+      .def_readwrite("point_sigma_px", &TrackerOptions::point_sigma_px)
+      .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
+      .def("check", &TrackerOptions::Check);
+
+  py::class_<TrackerSession>(m, "TrackerCore",
+                             "Stereo point-line tracker with local mapping (use slslam.Tracker).")
+      .def(py::init([](const TrackerOptions& options, const LinePreprocessOptions& preprocess) {
+             return std::make_unique<TrackerSession>(options, LineExtractorOptions{preprocess, true});
+           }),
+           py::arg("options"), py::arg("line_preprocess"))
+      .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
+           py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
+           py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
+           "Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).")
+      .def("map", &TrackerSession::Map, "Waits for local mapping, returns points and lines.")
+      .def("flush", &TrackerSession::Flush);
+}
+
+}  // namespace slslam::bindings

@@ -1,0 +1,170 @@
+#include "slslam/map/map.h"
+
+#include <algorithm>
+
+#include "slslam/core/check.h"
+
+namespace slslam {
+
+std::shared_ptr<KeyFrame> Map::AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
+                                           std::shared_ptr<const StereoFrame> frame) {
+  Require(frame != nullptr, "a keyframe needs its frame");
+  auto kf = std::make_shared<KeyFrame>();
+  kf->id = next_keyframe_++;
+  kf->R_cw = R_cw;
+  kf->t_cw = t_cw;
+  kf->point_ids.assign(frame->NumKeypoints(), -1);
+  kf->line_ids.assign(frame->NumLines(), -1);
+  kf->frame = std::move(frame);
+  keyframes_[kf->id] = kf;
+  return kf;
+}
+
+std::shared_ptr<MapPoint> Map::AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
+                                        int keyframe_id) {
+  auto p = std::make_shared<MapPoint>();
+  p->id = next_point_++;
+  p->position = position;
+  p->descriptor = descriptor.clone();
+  p->first_keyframe = keyframe_id;
+  points_[p->id] = p;
+  return p;
+}
+
+std::shared_ptr<MapLine> Map::AddLine(const PluckerLine& line, const Eigen::Vector3d& start,
+                                      const Eigen::Vector3d& end, const cv::Mat& descriptor,
+                                      int keyframe_id) {
+  auto l = std::make_shared<MapLine>();
+  l->id = next_line_++;
+  l->line = line;
+  l->start = start;
+  l->end = end;
+  l->descriptor = descriptor.clone();
+  l->first_keyframe = keyframe_id;
+  lines_[l->id] = l;
+  return l;
+}
+
+void Map::AddPointObservation(int point_id, int keyframe_id, int keypoint) {
+  auto p = point(point_id);
+  auto kf = keyframe(keyframe_id);
+  if (!p || !kf) return;
+  p->observations[keyframe_id] = keypoint;
+  kf->point_ids[keypoint] = point_id;
+}
+
+void Map::AddLineObservation(int line_id, int keyframe_id, int segment) {
+  auto l = line(line_id);
+  auto kf = keyframe(keyframe_id);
+  if (!l || !kf) return;
+  l->observations[keyframe_id] = segment;
+  kf->line_ids[segment] = line_id;
+}
+
+void Map::UpdateConnections(int keyframe_id) {
+  auto kf = keyframe(keyframe_id);
+  if (!kf) return;
+  std::map<int, int> counts;
+  for (int pid : kf->point_ids) {
+    if (pid < 0) continue;
+    auto p = point(pid);
+    if (!p || p->bad) continue;
+    for (const auto& [other, idx] : p->observations) {
+      (void)idx;
+      if (other != keyframe_id) ++counts[other];
+    }
+  }
+  // ORB-SLAM keeps edges with at least 15 shared points, or the single best one.
+  constexpr int kMinShared = 15;
+  int best = -1;
+  int best_count = 0;
+  kf->covisibility.clear();
+  for (const auto& [other, count] : counts) {
+    if (count > best_count) {
+      best = other;
+      best_count = count;
+    }
+    if (count >= kMinShared) kf->covisibility[other] = count;
+  }
+  if (kf->covisibility.empty() && best >= 0) kf->covisibility[best] = best_count;
+  for (const auto& [other, count] : kf->covisibility) {
+    if (auto o = keyframe(other)) o->covisibility[keyframe_id] = count;
+  }
+  if (kf->parent < 0 && best >= 0 && best < keyframe_id) kf->parent = best;
+}
+
+void Map::ErasePoint(int point_id) {
+  auto p = point(point_id);
+  if (!p) return;
+  for (const auto& [kf_id, idx] : p->observations) {
+    if (auto kf = keyframe(kf_id); kf && idx < static_cast<int>(kf->point_ids.size())) {
+      if (kf->point_ids[idx] == point_id) kf->point_ids[idx] = -1;
+    }
+  }
+  points_.erase(point_id);
+}
+
+void Map::EraseLine(int line_id) {
+  auto l = line(line_id);
+  if (!l) return;
+  for (const auto& [kf_id, idx] : l->observations) {
+    if (auto kf = keyframe(kf_id); kf && idx < static_cast<int>(kf->line_ids.size())) {
+      if (kf->line_ids[idx] == line_id) kf->line_ids[idx] = -1;
+    }
+  }
+  lines_.erase(line_id);
+}
+
+void Map::EraseKeyFrame(int keyframe_id) {
+  auto kf = keyframe(keyframe_id);
+  if (!kf) return;
+  kf->bad = true;
+  for (int pid : kf->point_ids) {
+    if (auto p = point(pid)) p->observations.erase(keyframe_id);
+  }
+  for (int lid : kf->line_ids) {
+    if (auto l = line(lid)) l->observations.erase(keyframe_id);
+  }
+  for (const auto& [other, count] : kf->covisibility) {
+    (void)count;
+    if (auto o = keyframe(other)) o->covisibility.erase(keyframe_id);
+  }
+  for (auto& [id, other] : keyframes_) {
+    (void)id;
+    if (other->parent == keyframe_id) other->parent = kf->parent;
+  }
+  keyframes_.erase(keyframe_id);
+}
+
+std::shared_ptr<KeyFrame> Map::keyframe(int id) const {
+  auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<MapPoint> Map::point(int id) const {
+  auto it = points_.find(id);
+  return it == points_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<MapLine> Map::line(int id) const {
+  auto it = lines_.find(id);
+  return it == lines_.end() ? nullptr : it->second;
+}
+
+std::vector<int> Map::BestCovisible(int id, int n) const {
+  auto kf = keyframe(id);
+  if (!kf) return {};
+  std::vector<std::pair<int, int>> ranked;
+  for (const auto& [other, count] : kf->covisibility) ranked.emplace_back(count, other);
+  std::sort(ranked.begin(), ranked.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+  std::vector<int> out;
+  for (const auto& [count, other] : ranked) {
+    (void)count;
+    if (static_cast<int>(out.size()) >= n) break;
+    out.push_back(other);
+  }
+  return out;
+}
+
+}  // namespace slslam

@@ -1,0 +1,100 @@
+// The sparse map (SPEC A6): keyframes, map points, map lines, their observations, the
+// covisibility graph and the spanning tree. One mutex guards the whole map: tracking reads under
+// it, local mapping writes under it (coarse, but simple to reason about; the expensive parts of
+// local mapping run on copies outside the lock).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "slslam/geometry/plucker_line.h"
+#include "slslam/tracking/stereo_frame.h"
+
+namespace slslam {
+
+struct MapPoint {
+  int id = -1;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< world frame [m]
+  cv::Mat descriptor;                                  ///< one row, from the first observation
+  std::map<int, int> observations;                     ///< keyframe id -> keypoint index
+  int visible = 0;  ///< frames in whose view the point projected [-]
+  int found = 0;    ///< frames that matched it [-]
+  int first_keyframe = -1;
+  bool bad = false;
+};
+
+struct MapLine {
+  int id = -1;
+  PluckerLine line;  ///< world frame
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();  ///< display endpoints, world frame [m]
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();
+  cv::Mat descriptor;               ///< LBD row from the first observation
+  std::map<int, int> observations;  ///< keyframe id -> segment index
+  int visible = 0;
+  int found = 0;
+  int first_keyframe = -1;
+  bool bad = false;
+};
+
+struct KeyFrame {
+  int id = -1;
+  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
+  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  std::shared_ptr<const StereoFrame> frame;
+  std::vector<int> point_ids;  ///< per keypoint: map point id or -1
+  std::vector<int> line_ids;   ///< per segment: map line id or -1
+  std::map<int, int> covisibility;  ///< other keyframe id -> shared map points
+  int parent = -1;                  ///< spanning tree parent (-1: root)
+  bool bad = false;
+
+  Eigen::Vector3d Center() const { return -R_cw.transpose() * t_cw; }
+};
+
+class Map {
+ public:
+  std::mutex& mutex() const { return mutex_; }
+
+  // All below expect the caller to hold mutex().
+  std::shared_ptr<KeyFrame> AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
+                                        std::shared_ptr<const StereoFrame> frame);
+  std::shared_ptr<MapPoint> AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
+                                     int keyframe_id);
+  std::shared_ptr<MapLine> AddLine(const PluckerLine& line, const Eigen::Vector3d& start,
+                                   const Eigen::Vector3d& end, const cv::Mat& descriptor,
+                                   int keyframe_id);
+  void AddPointObservation(int point_id, int keyframe_id, int keypoint);
+  void AddLineObservation(int line_id, int keyframe_id, int segment);
+  // Recomputes the covisibility weights of a keyframe (and its neighbours' back links) and, for a
+  // keyframe without parent, links it to its strongest neighbour in the spanning tree.
+  void UpdateConnections(int keyframe_id);
+  void ErasePoint(int point_id);
+  void EraseLine(int line_id);
+  // Marks a keyframe bad, removes its observations and reparents its children to its parent.
+  void EraseKeyFrame(int keyframe_id);
+
+  std::shared_ptr<KeyFrame> keyframe(int id) const;
+  std::shared_ptr<MapPoint> point(int id) const;
+  std::shared_ptr<MapLine> line(int id) const;
+  const std::map<int, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
+  const std::map<int, std::shared_ptr<MapPoint>>& points() const { return points_; }
+  const std::map<int, std::shared_ptr<MapLine>>& lines() const { return lines_; }
+  // Keyframes sharing the most map points with `id`, strongest first (at most n).
+  std::vector<int> BestCovisible(int id, int n) const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<int, std::shared_ptr<KeyFrame>> keyframes_;
+  std::map<int, std::shared_ptr<MapPoint>> points_;
+  std::map<int, std::shared_ptr<MapLine>> lines_;
+  int next_keyframe_ = 0;
+  int next_point_ = 0;
+  int next_line_ = 0;
+};
+
+}  // namespace slslam

@@ -1,0 +1,279 @@
+#include "slslam/mapping/local_mapper.h"
+
+#include <chrono>
+#include <set>
+#include <unordered_map>
+
+namespace slslam {
+
+namespace {
+
+// Moves display endpoints onto a re-estimated line.
+Eigen::Vector3d ProjectOntoLine(const PluckerLine& line, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d p0 = line.ClosestPointToOrigin();
+  const Eigen::Vector3d d = line.v.normalized();
+  return p0 + (p - p0).dot(d) * d;
+}
+
+}  // namespace
+
+LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential)
+    : rig_(rig), options_(options), sequential_(sequential) {
+  if (!sequential_) worker_ = std::thread([this] { Run(); });
+}
+
+LocalMapper::~LocalMapper() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void LocalMapper::Insert(Map* map, int keyframe_id) {
+  if (sequential_) {
+    Process(map, keyframe_id);
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.emplace_back(map, keyframe_id);
+  }
+  queue_cv_.notify_one();
+}
+
+void LocalMapper::Flush() {
+  if (sequential_) return;
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  idle_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
+}
+
+LocalMappingStats LocalMapper::stats() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return stats_;
+}
+
+void LocalMapper::Run() {
+  while (true) {
+    std::pair<Map*, int> job;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (stop_ && queue_.empty()) return;
+      job = queue_.front();
+      queue_.pop_front();
+      busy_ = true;
+    }
+    Process(job.first, job.second);
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      busy_ = false;
+    }
+    idle_cv_.notify_all();
+  }
+}
+
+void LocalMapper::Process(Map* map, int keyframe_id) {
+  const auto start = std::chrono::steady_clock::now();
+  BaProblem problem;
+  std::vector<int> pose_kf;   // BaProblem pose index -> keyframe id
+  std::vector<int> point_id;  // BaProblem point index -> map point id
+  std::vector<int> line_id;
+  std::vector<std::pair<int, int>> point_obs_ref;  // (map point id, keyframe id) per observation
+  std::vector<std::pair<int, int>> line_obs_ref;
+  TriangulationStats triangulated;
+  {
+    std::lock_guard<std::mutex> lock(map->mutex());
+    auto current = map->keyframe(keyframe_id);
+    if (!current) return;
+    if (options_.triangulate) {
+      triangulated = CreateNewLandmarks(map, keyframe_id, rig_, options_.triangulation);
+      if (triangulated.points > 0) map->UpdateConnections(keyframe_id);
+    }
+    std::vector<int> local = {keyframe_id};
+    for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) local.push_back(id);
+    const std::set<int> local_set(local.begin(), local.end());
+    std::unordered_map<int, int> pose_index;
+    auto add_pose = [&](int kf_id, bool fixed) {
+      auto kf = map->keyframe(kf_id);
+      pose_index[kf_id] = static_cast<int>(problem.poses.size());
+      problem.poses.push_back({kf->R_cw, kf->t_cw, fixed});
+      pose_kf.push_back(kf_id);
+    };
+    const int first_keyframe = map->keyframes().begin()->first;
+    for (int id : local) add_pose(id, id == first_keyframe);
+    std::set<int> local_points, local_lines;
+    for (int id : local) {
+      auto kf = map->keyframe(id);
+      for (int pid : kf->point_ids) {
+        if (pid >= 0) local_points.insert(pid);
+      }
+      for (int lid : kf->line_ids) {
+        if (lid >= 0) local_lines.insert(lid);
+      }
+    }
+    int fixed_added = 0;
+    auto ensure_pose = [&](int kf_id) -> int {
+      auto it = pose_index.find(kf_id);
+      if (it != pose_index.end()) return it->second;
+      if (fixed_added >= options_.max_fixed_keyframes) return -1;
+      ++fixed_added;
+      add_pose(kf_id, true);
+      return pose_index[kf_id];
+    };
+    for (int pid : local_points) {
+      auto p = map->point(pid);
+      if (!p || p->bad) continue;
+      const int index = static_cast<int>(problem.points.size());
+      problem.points.push_back(p->position);
+      point_id.push_back(pid);
+      for (const auto& [kf_id, kp] : p->observations) {
+        const int pose = ensure_pose(kf_id);
+        if (pose < 0) continue;
+        const StereoFrame& f = *map->keyframe(kf_id)->frame;
+        BaPointObservation o;
+        o.pose = pose;
+        o.point = index;
+        o.stereo = f.u_right[kp] >= 0.0;
+        o.observed << f.keypoints.uv(kp, 0), f.keypoints.uv(kp, 1), f.u_right[kp];
+        o.sigma_px = options_.point_sigma_px;
+        problem.point_observations.push_back(o);
+        point_obs_ref.emplace_back(pid, kf_id);
+      }
+    }
+    for (int lid : local_lines) {
+      auto l = map->line(lid);
+      if (!l || l->bad) continue;
+      const int index = static_cast<int>(problem.lines.size());
+      problem.lines.push_back(l->line);
+      line_id.push_back(lid);
+      for (const auto& [kf_id, seg] : l->observations) {
+        const int pose = ensure_pose(kf_id);
+        if (pose < 0) continue;
+        const StereoFrame& f = *map->keyframe(kf_id)->frame;
+        BaLineObservation o;
+        o.pose = pose;
+        o.line = index;
+        o.start_px = f.lines[seg].start.cast<double>();
+        o.end_px = f.lines[seg].end.cast<double>();
+        o.sigma_px = options_.line_sigma_px;
+        problem.line_observations.push_back(o);
+        line_obs_ref.emplace_back(lid, kf_id);
+      }
+    }
+  }
+
+  // The solve runs without the map lock: tracking goes on meanwhile.
+  const BundleAdjustmentReport report = SolveBundleAdjustment(rig_, &problem, options_.ba);
+
+  std::lock_guard<std::mutex> lock(map->mutex());
+  if (report.solved) {
+    for (size_t i = 0; i < problem.poses.size(); ++i) {
+      if (problem.poses[i].fixed) continue;
+      if (auto kf = map->keyframe(pose_kf[i])) {
+        kf->R_cw = problem.poses[i].R_cw;
+        kf->t_cw = problem.poses[i].t_cw;
+      }
+    }
+    for (size_t i = 0; i < point_id.size(); ++i) {
+      if (auto p = map->point(point_id[i])) p->position = problem.points[i];
+    }
+    for (size_t i = 0; i < line_id.size(); ++i) {
+      if (auto l = map->line(line_id[i])) {
+        l->line = problem.lines[i];
+        l->start = ProjectOntoLine(l->line, l->start);
+        l->end = ProjectOntoLine(l->line, l->end);
+      }
+    }
+    // Outlier observations leave the map.
+    for (size_t i = 0; i < point_obs_ref.size(); ++i) {
+      if (!report.point_outlier[i]) continue;
+      const auto [pid, kf_id] = point_obs_ref[i];
+      auto p = map->point(pid);
+      auto kf = map->keyframe(kf_id);
+      if (!p || !kf) continue;
+      auto it = p->observations.find(kf_id);
+      if (it == p->observations.end()) continue;
+      kf->point_ids[it->second] = -1;
+      p->observations.erase(it);
+    }
+    for (size_t i = 0; i < line_obs_ref.size(); ++i) {
+      if (!report.line_outlier[i]) continue;
+      const auto [lid, kf_id] = line_obs_ref[i];
+      auto l = map->line(lid);
+      auto kf = map->keyframe(kf_id);
+      if (!l || !kf) continue;
+      auto it = l->observations.find(kf_id);
+      if (it == l->observations.end()) continue;
+      kf->line_ids[it->second] = -1;
+      l->observations.erase(it);
+    }
+  }
+
+  // Landmark culling: unobserved points and lines, and those tracking rarely finds where it
+  // expects them.
+  int points_culled = 0, lines_culled = 0;
+  std::vector<int> erase_points, erase_lines;
+  for (const auto& [pid, p] : map->points()) {
+    const bool unreliable = p->visible >= 4 && p->found < options_.min_found_ratio * p->visible;
+    const bool stale = p->observations.empty() ||
+                       (keyframe_id - p->first_keyframe >= 3 && p->observations.size() < 2);
+    if (unreliable || stale) erase_points.push_back(pid);
+  }
+  for (const auto& [lid, l] : map->lines()) {
+    const bool unreliable = l->visible >= 4 && l->found < options_.min_found_ratio * l->visible;
+    const bool stale = l->observations.empty() ||
+                       (keyframe_id - l->first_keyframe >= 3 && l->observations.size() < 2);
+    if (unreliable || stale) erase_lines.push_back(lid);
+  }
+  for (int pid : erase_points) map->ErasePoint(pid);
+  for (int lid : erase_lines) map->EraseLine(lid);
+  points_culled = static_cast<int>(erase_points.size());
+  lines_culled = static_cast<int>(erase_lines.size());
+  map->UpdateConnections(keyframe_id);
+
+  // Keyframe culling among the covisible keyframes (never the first or the newest).
+  int keyframes_culled = 0;
+  if (options_.cull_keyframes) {
+    const int first_keyframe = map->keyframes().begin()->first;
+    for (int kf_id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
+      if (kf_id == first_keyframe || kf_id == keyframe_id) continue;
+      auto kf = map->keyframe(kf_id);
+      if (!kf) continue;
+      int total = 0, redundant = 0;
+      for (int pid : kf->point_ids) {
+        auto p = pid >= 0 ? map->point(pid) : nullptr;
+        if (!p) continue;
+        ++total;
+        if (static_cast<int>(p->observations.size()) - 1 >= options_.redundant_observers) {
+          ++redundant;
+        }
+      }
+      if (total > 0 && redundant > options_.redundant_ratio * total) {
+        map->EraseKeyFrame(kf_id);
+        ++keyframes_culled;
+      }
+    }
+    // Points that culling left without observations go too.
+    std::vector<int> orphans;
+    for (const auto& [pid, p] : map->points()) {
+      if (p->observations.empty()) orphans.push_back(pid);
+    }
+    for (int pid : orphans) map->ErasePoint(pid);
+    points_culled += static_cast<int>(orphans.size());
+  }
+
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  std::lock_guard<std::mutex> stats_lock(queue_mutex_);
+  stats_.keyframes_processed += 1;
+  stats_.keyframes_culled += keyframes_culled;
+  stats_.points_culled += points_culled;
+  stats_.lines_culled += lines_culled;
+  stats_.points_triangulated += triangulated.points;
+  stats_.lines_triangulated += triangulated.lines;
+  stats_.total_ba_ms += ms;
+}
+
+}  // namespace slslam

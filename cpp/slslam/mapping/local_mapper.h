@@ -1,0 +1,76 @@
+// Local mapping (SPEC A6): for every new keyframe, new points and lines triangulated with its
+// covisible keyframes (triangulation.h), local bundle adjustment over the keyframe and
+// its covisible keyframes with the points and lines they see (keyframes outside that set that see
+// those landmarks stay fixed), removal of outlier observations, landmark culling and keyframe
+// culling (a keyframe is redundant when > 90 % of its map points are seen by >= 3 other
+// keyframes). Runs inline (sequential mode, exactly reproducible) or on a background thread as in
+// ORB-SLAM3.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "slslam/map/map.h"
+#include "slslam/mapping/triangulation.h"
+#include "slslam/optimization/bundle_adjustment.h"
+
+namespace slslam {
+
+struct LocalMapperOptions {
+  int local_keyframes = 10;       ///< covisible keyframes optimised with the new one [-]
+  int max_fixed_keyframes = 10;   ///< fixed keyframes that anchor the local window [-]
+  double redundant_ratio = 0.9;   ///< keyframe culling: share of points seen by enough others [-]
+  int redundant_observers = 3;    ///< keyframe culling: other keyframes that must see a point [-]
+  double min_found_ratio = 0.25;  ///< point culling: found / visible below this removes it [-]
+  bool cull_keyframes = true;
+  bool triangulate = true;        ///< new points and lines from covisible keyframe pairs
+  TriangulationOptions triangulation;
+  double point_sigma_px = 1.0;    ///< [px]
+  double line_sigma_px = 1.5;     ///< [px]
+  BundleAdjustmentOptions ba;
+};
+
+struct LocalMappingStats {
+  int keyframes_processed = 0;
+  int keyframes_culled = 0;
+  int points_culled = 0;
+  int lines_culled = 0;
+  int points_triangulated = 0;
+  int lines_triangulated = 0;
+  double total_ba_ms = 0.0;
+};
+
+class LocalMapper {
+ public:
+  LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential);
+  ~LocalMapper();
+  LocalMapper(const LocalMapper&) = delete;
+  LocalMapper& operator=(const LocalMapper&) = delete;
+
+  // Queues (threaded) or processes at once (sequential) a new keyframe of `map`. The map must
+  // outlive the processing (Flush before destroying it).
+  void Insert(Map* map, int keyframe_id);
+  // Waits until every queued keyframe has been processed.
+  void Flush();
+  LocalMappingStats stats() const;
+
+ private:
+  void Process(Map* map, int keyframe_id);
+  void Run();
+
+  StereoRig rig_;
+  LocalMapperOptions options_;
+  bool sequential_;
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::condition_variable idle_cv_;
+  std::deque<std::pair<Map*, int>> queue_;
+  bool busy_ = false;
+  bool stop_ = false;
+  LocalMappingStats stats_;
+  std::thread worker_;
+};
+
+}  // namespace slslam

@@ -1,0 +1,298 @@
+#include "slslam/mapping/triangulation.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/SVD>
+
+#include "slslam/core/check.h"
+#include "slslam/features/descriptor_matcher.h"
+
+namespace slslam {
+
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return S;
+}
+
+// Fundamental matrix mapping pixels of view 1 to epipolar lines of view 2 (same intrinsics).
+Eigen::Matrix3d Fundamental21(const PinholeCamera& camera, const Eigen::Matrix3d& R1,
+                              const Eigen::Vector3d& t1, const Eigen::Matrix3d& R2,
+                              const Eigen::Vector3d& t2) {
+  const Eigen::Matrix3d R21 = R2 * R1.transpose();
+  const Eigen::Vector3d t21 = t2 - R21 * t1;
+  Eigen::Matrix3d K;
+  K << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
+  const Eigen::Matrix3d K_inv = K.inverse();
+  return K_inv.transpose() * Skew(t21) * R21 * K_inv;
+}
+
+struct View {
+  const KeyFrame* keyframe;
+  const StereoFrame* frame;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  Eigen::Vector3d center;
+};
+
+View MakeView(const KeyFrame& kf) {
+  return {&kf, kf.frame.get(), kf.R_cw, kf.t_cw, kf.Center()};
+}
+
+// Index pairs (i in view 1, j in view 2) of free keypoints matched along the epipolar lines.
+std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const View& b,
+                                                         const PinholeCamera& camera,
+                                                         const TriangulationOptions& options) {
+  const Keypoints& ka = a.frame->keypoints;
+  const Keypoints& kb = b.frame->keypoints;
+  std::vector<int> free_b;
+  for (int j = 0; j < kb.size(); ++j) {
+    if (b.keyframe->point_ids[j] < 0) free_b.push_back(j);
+  }
+  const bool binary = ka.descriptors.type() == CV_8U;
+  const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
+  const Eigen::Matrix3d F = Fundamental21(camera, a.R, a.t, b.R, b.t);
+  std::vector<float> owner_distance(kb.size(), std::numeric_limits<float>::max());
+  std::vector<int> owner(kb.size(), -1);
+  std::vector<int> match(ka.size(), -1);
+  for (int i = 0; i < ka.size(); ++i) {
+    if (a.keyframe->point_ids[i] >= 0) continue;
+    const Eigen::Vector3d line = F * Eigen::Vector3d(ka.uv(i, 0), ka.uv(i, 1), 1.0);
+    const double norm = std::hypot(line.x(), line.y());
+    if (norm < 1e-12) continue;
+    float best = std::numeric_limits<float>::max();
+    float second = best;
+    int best_j = -1;
+    for (int j : free_b) {
+      const double distance =
+          std::abs(line.x() * kb.uv(j, 0) + line.y() * kb.uv(j, 1) + line.z()) / norm;
+      if (distance > options.epipolar_px) continue;
+      const float d = DescriptorDistance(ka.descriptors, i, kb.descriptors, j);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_j = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j < 0 || best > max_distance || best > options.ratio * second) continue;
+    if (best < owner_distance[best_j]) {
+      if (owner[best_j] >= 0) match[owner[best_j]] = -1;
+      owner_distance[best_j] = best;
+      owner[best_j] = i;
+      match[i] = best_j;
+    }
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < ka.size(); ++i) {
+    if (match[i] >= 0) pairs.emplace_back(i, match[i]);
+  }
+  return pairs;
+}
+
+// Index pairs (a, b) of free segments that are each other's best LBD match, with a ratio test.
+std::vector<std::pair<int, int>> MatchFreeSegments(const View& a, const View& b,
+                                                   const TriangulationOptions& options) {
+  const StereoFrame& fa = *a.frame;
+  const StereoFrame& fb = *b.frame;
+  std::vector<int> free_a, free_b;
+  for (int i = 0; i < fa.NumLines(); ++i) {
+    if (a.keyframe->line_ids[i] < 0) free_a.push_back(i);
+  }
+  for (int j = 0; j < fb.NumLines(); ++j) {
+    if (b.keyframe->line_ids[j] < 0) free_b.push_back(j);
+  }
+  if (free_a.empty() || free_b.empty()) return {};
+  const int na = static_cast<int>(free_a.size());
+  const int nb = static_cast<int>(free_b.size());
+  std::vector<float> distance(static_cast<size_t>(na) * nb);
+  for (int x = 0; x < na; ++x) {
+    for (int y = 0; y < nb; ++y) {
+      distance[static_cast<size_t>(x) * nb + y] =
+          DescriptorDistance(fa.line_descriptors, free_a[x], fb.line_descriptors, free_b[y]);
+    }
+  }
+  std::vector<int> best_of_b(nb, -1);
+  for (int y = 0; y < nb; ++y) {
+    float best = std::numeric_limits<float>::max();
+    for (int x = 0; x < na; ++x) {
+      if (distance[static_cast<size_t>(x) * nb + y] < best) {
+        best = distance[static_cast<size_t>(x) * nb + y];
+        best_of_b[y] = x;
+      }
+    }
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (int x = 0; x < na; ++x) {
+    float best = std::numeric_limits<float>::max();
+    float second = best;
+    int best_y = -1;
+    for (int y = 0; y < nb; ++y) {
+      const float d = distance[static_cast<size_t>(x) * nb + y];
+      if (d < best) {
+        second = best;
+        best = d;
+        best_y = y;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_y < 0 || best > options.line_max_lbd || best > options.line_ratio * second) continue;
+    if (best_of_b[best_y] != x) continue;
+    pairs.emplace_back(free_a[x], free_b[best_y]);
+  }
+  return pairs;
+}
+
+int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& rig,
+                      const TriangulationOptions& options) {
+  const PinholeCamera& camera = rig.camera;
+  const double max_depth = options.max_depth_baselines * rig.baseline_m;
+  const double cos_max = std::cos(options.min_parallax_deg * kDegToRad);
+  const double bound = options.chi2 * options.sigma_px * options.sigma_px;
+  int made = 0;
+  for (const auto& [i, j] : MatchAlongEpipolarLines(a, b, camera, options)) {
+    const Eigen::Vector2d uv_a = a.frame->keypoints.uv.row(i).cast<double>().transpose();
+    const Eigen::Vector2d uv_b = b.frame->keypoints.uv.row(j).cast<double>().transpose();
+    Eigen::Vector3d p;
+    if (!TriangulatePoint(a.R, a.t, camera.Unproject(uv_a), b.R, b.t, camera.Unproject(uv_b), &p)) {
+      continue;
+    }
+    const Eigen::Vector3d ray_a = p - a.center;
+    const Eigen::Vector3d ray_b = p - b.center;
+    if (ray_a.dot(ray_b) / (ray_a.norm() * ray_b.norm()) > cos_max) continue;
+    const double za = (a.R * p + a.t).z();
+    const double zb = (b.R * p + b.t).z();
+    if (!(za > 0.0 && zb > 0.0 && za < max_depth && zb < max_depth)) continue;
+    Eigen::Vector2d ea, eb;
+    if (!PointResidual(camera, a.R, a.t, p, uv_a, &ea) ||
+        !PointResidual(camera, b.R, b.t, p, uv_b, &eb)) {
+      continue;
+    }
+    if (ea.squaredNorm() > bound || eb.squaredNorm() > bound) continue;
+    auto point = map->AddPoint(p, a.frame->keypoints.descriptors.row(i), a.keyframe->id);
+    map->AddPointObservation(point->id, a.keyframe->id, i);
+    map->AddPointObservation(point->id, b.keyframe->id, j);
+    ++made;
+  }
+  return made;
+}
+
+int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& rig,
+                     const TriangulationOptions& options) {
+  const PinholeCamera& camera = rig.camera;
+  const double max_depth = options.max_depth_baselines * rig.baseline_m;
+  const double bound = options.chi2 * options.sigma_px * options.sigma_px;
+  const double cos_max = std::cos(options.min_plane_angle_deg * kDegToRad);
+  int made = 0;
+  for (const auto& [ia, ib] : MatchFreeSegments(a, b, options)) {
+    const LineSegment& sa = a.frame->lines[ia];
+    const LineSegment& sb = b.frame->lines[ib];
+    const Eigen::Vector2d a0 = sa.start.cast<double>(), a1 = sa.end.cast<double>();
+    const Eigen::Vector2d b0 = sb.start.cast<double>(), b1 = sb.end.cast<double>();
+    const Eigen::Vector4d plane_a = BackProjectedPlane(camera, a.R, a.t, a0, a1);
+    const Eigen::Vector4d plane_b = BackProjectedPlane(camera, b.R, b.t, b0, b1);
+    const double cos_planes = std::abs(plane_a.head<3>().normalized().dot(plane_b.head<3>().normalized()));
+    if (!(cos_planes < cos_max)) continue;
+    PluckerLine line;
+    try {
+      line = PluckerLine::FromPlanes(plane_a, plane_b).Normalized();
+    } catch (const std::invalid_argument&) {
+      continue;
+    }
+    // Endpoints: where the rays of view a's segment endpoints pass the line, in both cameras.
+    const PluckerLine in_a = line.Transformed(a.R, a.t);
+    const PluckerLine in_b = line.Transformed(b.R, b.t);
+    const Eigen::Vector3d s_a = in_a.ClosestPointToRay(camera.Unproject(a0));
+    const Eigen::Vector3d e_a = in_a.ClosestPointToRay(camera.Unproject(a1));
+    const Eigen::Vector3d s_b = in_b.ClosestPointToRay(camera.Unproject(b0));
+    const Eigen::Vector3d e_b = in_b.ClosestPointToRay(camera.Unproject(b1));
+    bool in_front = true;
+    for (const Eigen::Vector3d& q : {s_a, e_a, s_b, e_b}) {
+      in_front = in_front && q.z() > 0.0 && q.z() < max_depth;
+    }
+    if (!in_front) continue;
+    Eigen::Vector3d ea, eb;
+    if (!LineResidual(camera, a.R, a.t, line, a0, a1, 0.0, &ea) ||
+        !LineResidual(camera, b.R, b.t, line, b0, b1, 0.0, &eb)) {
+      continue;
+    }
+    if (ea.head<2>().squaredNorm() > bound || eb.head<2>().squaredNorm() > bound) continue;
+    const Eigen::Matrix3d R_wa = a.R.transpose();
+    const Eigen::Vector3d start = R_wa * (s_a - a.t);
+    const Eigen::Vector3d end = R_wa * (e_a - a.t);
+    if ((end - start).norm() < 1e-3) continue;
+    auto map_line = map->AddLine(line, start, end, a.frame->line_descriptors.row(ia), a.keyframe->id);
+    map->AddLineObservation(map_line->id, a.keyframe->id, ia);
+    map->AddLineObservation(map_line->id, b.keyframe->id, ib);
+    ++made;
+  }
+  return made;
+}
+
+}  // namespace
+
+void TriangulationOptions::Check() const {
+  Require(neighbours >= 0, "triangulation.neighbours must be >= 0");
+  Require(epipolar_px > 0.0, "triangulation.epipolar_px must be > 0");
+  Require(max_distance_binary > 0.0f && max_distance_float > 0.0f,
+          "triangulation descriptor bounds must be > 0");
+  Require(ratio > 0.0f && ratio <= 1.0f && line_ratio > 0.0f && line_ratio <= 1.0f,
+          "triangulation ratios must be in (0, 1]");
+  Require(min_parallax_deg >= 0.0 && min_plane_angle_deg >= 0.0,
+          "triangulation angles must be >= 0");
+  Require(max_depth_baselines > 0.0 && chi2 > 0.0 && sigma_px > 0.0,
+          "triangulation depth, chi2 and sigma must be > 0");
+}
+
+bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
+                      const Eigen::Vector3d& x1, const Eigen::Matrix3d& R2,
+                      const Eigen::Vector3d& t2, const Eigen::Vector3d& x2, Eigen::Vector3d* p_w) {
+  // x ~ P X with P = [R | t]: each view gives two rows of A X = 0.
+  Eigen::Matrix4d A;
+  Eigen::Matrix<double, 3, 4> P1, P2;
+  P1 << R1, t1;
+  P2 << R2, t2;
+  A.row(0) = x1.x() * P1.row(2) - P1.row(0);
+  A.row(1) = x1.y() * P1.row(2) - P1.row(1);
+  A.row(2) = x2.x() * P2.row(2) - P2.row(0);
+  A.row(3) = x2.y() * P2.row(2) - P2.row(1);
+  const Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d X = svd.matrixV().col(3);
+  if (std::abs(X.w()) < 1e-12 || !X.allFinite()) return false;
+  *p_w = X.head<3>() / X.w();
+  return true;
+}
+
+TriangulationStats CreateNewLandmarks(Map* map, int keyframe_id, const StereoRig& rig,
+                                      const TriangulationOptions& options) {
+  Require(map != nullptr, "triangulation needs a map");
+  TriangulationStats stats;
+  auto kf = map->keyframe(keyframe_id);
+  if (!kf || kf->bad) return stats;
+  const View a = MakeView(*kf);
+  for (int other : map->BestCovisible(keyframe_id, options.neighbours)) {
+    auto kf2 = map->keyframe(other);
+    if (!kf2 || kf2->bad) continue;
+    const View b = MakeView(*kf2);
+    // A baseline shorter than the stereo pair's adds nothing stereo did not (ORB-SLAM3's rule).
+    if ((b.center - a.center).norm() < rig.baseline_m) continue;
+    if (b.frame->keypoints.descriptors.type() == a.frame->keypoints.descriptors.type()) {
+      stats.points += TriangulatePoints(map, a, b, rig, options);
+    }
+    if (options.lines && a.frame->NumLines() > 0 && b.frame->NumLines() > 0) {
+      stats.lines += TriangulateLines(map, a, b, rig, options);
+    }
+  }
+  return stats;
+}
+
+}  // namespace slslam

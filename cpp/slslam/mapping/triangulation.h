@@ -1,0 +1,57 @@
+// New landmarks from pairs of keyframes (SPEC A6, ORB-SLAM3's CreateNewMapPoints), run by local
+// mapping for every new keyframe against its covisible keyframes. Stereo already gives the close
+// keypoints and the non-horizontal segments a 3-D position when the keyframe is made; what is left
+// is what one stereo pair cannot fix: keypoints without a stereo match (far, or seen by one camera)
+// and segments along the epipolar lines (near-horizontal: roof edges, rails, cables). Two
+// keyframes a motion apart can.
+//
+// Points: keypoints of both keyframes without a map point are paired along the epipolar line
+// (distance to it, depth range, descriptor distance with a ratio test, one-to-one), triangulated
+// linearly (DLT) and kept when they lie in front of both cameras, reproject within the chi-square
+// bound and have enough parallax.
+// Lines: segments of both keyframes without a map line are paired by LBD distance (mutual best
+// with a ratio test); the 3-D line is the intersection of the two back-projected planes (the
+// dual Pluecker matrix of SPEC A5), kept when the planes are not near-parallel, the line lies in
+// front of both cameras and its projection is within the chi-square bound of both observations.
+#pragma once
+
+#include "slslam/geometry/reprojection.h"
+#include "slslam/map/map.h"
+
+namespace slslam {
+
+struct TriangulationOptions {
+  int neighbours = 10;               ///< covisible keyframes paired with the new one [-]
+  double epipolar_px = 2.0;          ///< largest distance to the epipolar line [px]
+  float max_distance_binary = 50.0f;  ///< descriptor bound, ORB (Hamming) [bits]
+  float max_distance_float = 0.7f;    ///< descriptor bound, SuperPoint (L2) [-]
+  float ratio = 0.8f;                 ///< best / second best descriptor distance [-]
+  double min_parallax_deg = 1.0;      ///< smallest angle between the two rays [deg]
+  double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
+  double chi2 = 5.991;               ///< reprojection bound in both views (2 dof, 95 %) [-]
+  double sigma_px = 1.0;             ///< keypoint / endpoint sigma [px]
+  bool lines = true;                 ///< also triangulate lines
+  float line_max_lbd = 60.0f;        ///< LBD bound for line pairs [bits]
+  float line_ratio = 0.8f;           ///< best / second best LBD distance [-]
+  double min_plane_angle_deg = 2.0;  ///< smallest angle between the two planes [deg]
+
+  void Check() const;
+};
+
+struct TriangulationStats {
+  int points = 0;  ///< map points made
+  int lines = 0;   ///< map lines made
+};
+
+// Linear two-view triangulation of the rays x1, x2 (normalised image coordinates, z = 1) seen
+// from poses T1, T2 (x_c = R x_w + t). False when the system is degenerate.
+bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
+                      const Eigen::Vector3d& x1, const Eigen::Matrix3d& R2,
+                      const Eigen::Vector3d& t2, const Eigen::Vector3d& x2, Eigen::Vector3d* p_w);
+
+// Pairs keyframe `keyframe_id` with its best covisible keyframes and adds the new landmarks to
+// the map. The caller holds map.mutex().
+TriangulationStats CreateNewLandmarks(Map* map, int keyframe_id, const StereoRig& rig,
+                                      const TriangulationOptions& options = {});
+
+}  // namespace slslam

@@ -1,0 +1,169 @@
+#include "slslam/optimization/bundle_adjustment.h"
+
+#include <array>
+#include <cmath>
+
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+
+#include "slslam/core/check.h"
+#include "slslam/optimization/cost_functions.h"
+#include "slslam/optimization/manifolds.h"
+
+namespace slslam {
+
+namespace {
+
+struct Parameters {
+  std::vector<std::array<double, kPoseSize>> poses;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<double, kLineSize>> lines;
+};
+
+double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObservation& o) {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  ParametersToPose(p.poses[o.pose].data(), &R, &t);
+  const double w = 1.0 / (o.sigma_px * o.sigma_px);
+  if (o.stereo) {
+    Eigen::Vector3d e;
+    if (!StereoPointResidual(rig, R, t, p.points[o.point], o.observed, &e)) return INFINITY;
+    return w * e.squaredNorm();
+  }
+  Eigen::Vector2d e;
+  if (!PointResidual(rig.camera, R, t, p.points[o.point], o.observed.head<2>(), &e)) {
+    return INFINITY;
+  }
+  return w * e.squaredNorm();
+}
+
+double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservation& o) {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  ParametersToPose(p.poses[o.pose].data(), &R, &t);
+  const PluckerLine line = ParametersToLine(p.lines[o.line].data()).ToPlucker();
+  Eigen::Vector3d e;
+  if (!LineResidual(rig.camera, R, t, line, o.start_px, o.end_px, 0.0, &e)) return INFINITY;
+  const Eigen::Vector3d middle = line.Transformed(R, t).ClosestPointToRay(
+      rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
+  if (!(middle.z() > 0.0)) return INFINITY;
+  return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);
+}
+
+}  // namespace
+
+BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
+                                             const BundleAdjustmentOptions& options) {
+  rig.Check();
+  Require(problem != nullptr, "bundle adjustment needs a problem");
+  BaProblem& ba = *problem;
+  for (const auto& o : ba.point_observations) {
+    Require(o.pose >= 0 && o.pose < static_cast<int>(ba.poses.size()) && o.point >= 0 &&
+                o.point < static_cast<int>(ba.points.size()),
+            "point observation refers to a missing pose or point");
+  }
+  for (const auto& o : ba.line_observations) {
+    Require(o.pose >= 0 && o.pose < static_cast<int>(ba.poses.size()) && o.line >= 0 &&
+                o.line < static_cast<int>(ba.lines.size()),
+            "line observation refers to a missing pose or line");
+  }
+
+  Parameters params;
+  params.poses.resize(ba.poses.size());
+  for (size_t i = 0; i < ba.poses.size(); ++i) {
+    PoseToParameters(ba.poses[i].R_cw, ba.poses[i].t_cw, params.poses[i].data());
+  }
+  params.points = ba.points;
+  params.lines.resize(ba.lines.size());
+  for (size_t i = 0; i < ba.lines.size(); ++i) {
+    LineToParameters(OrthonormalLine::FromPlucker(ba.lines[i]), params.lines[i].data());
+  }
+
+  BundleAdjustmentReport report;
+  report.point_outlier.assign(ba.point_observations.size(), false);
+  report.line_outlier.assign(ba.line_observations.size(), false);
+  for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+    report.point_outlier[i] = !std::isfinite(PointChi2(rig, params, ba.point_observations[i]));
+  }
+  for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+    report.line_outlier[i] = !std::isfinite(LineChi2(rig, params, ba.line_observations[i]));
+  }
+
+  for (int pass = 0; pass < 2; ++pass) {
+    const bool robust = pass == 0;
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem solver_problem(problem_options);
+    std::vector<bool> pose_used(ba.poses.size(), false);
+    std::vector<bool> line_used(ba.lines.size(), false);
+    int blocks = 0;
+    for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+      if (report.point_outlier[i]) continue;
+      const BaPointObservation& o = ba.point_observations[i];
+      ceres::CostFunction* cost =
+          o.stereo ? static_cast<ceres::CostFunction*>(new StereoPointCost(rig, o.observed, o.sigma_px))
+                   : new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px);
+      ceres::LossFunction* loss =
+          robust ? new ceres::HuberLoss(std::sqrt(o.stereo ? options.chi2_stereo : options.chi2_mono))
+                 : nullptr;
+      solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
+                                      params.points[o.point].data());
+      pose_used[o.pose] = true;
+      ++blocks;
+    }
+    for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+      if (report.line_outlier[i] || options.line_weight <= 0.0) continue;
+      const BaLineObservation& o = ba.line_observations[i];
+      ceres::CostFunction* cost =
+          new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px);
+      ceres::LossFunction* loss = robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
+      if (options.line_weight != 1.0) {
+        loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
+      }
+      solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
+                                      params.lines[o.line].data());
+      if (!line_used[o.line]) solver_problem.SetManifold(params.lines[o.line].data(), new LineManifold);
+      line_used[o.line] = true;
+      pose_used[o.pose] = true;
+      ++blocks;
+    }
+    if (blocks == 0) return report;
+    for (size_t i = 0; i < ba.poses.size(); ++i) {
+      if (!pose_used[i]) continue;
+      solver_problem.SetManifold(params.poses[i].data(), new PoseManifold);
+      if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.poses[i].data());
+    }
+
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    solver_options.max_num_iterations = robust ? options.robust_iterations : options.refine_iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &solver_problem, &summary);
+    if (pass == 0) report.initial_cost = summary.initial_cost;
+    report.final_cost = summary.final_cost;
+    report.solved = summary.IsSolutionUsable();
+
+    for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+      const BaPointObservation& o = ba.point_observations[i];
+      const double bound = o.stereo ? options.chi2_stereo : options.chi2_mono;
+      report.point_outlier[i] = !(PointChi2(rig, params, o) <= bound);
+    }
+    for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+      report.line_outlier[i] = !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
+    }
+  }
+
+  for (size_t i = 0; i < ba.poses.size(); ++i) {
+    ParametersToPose(params.poses[i].data(), &ba.poses[i].R_cw, &ba.poses[i].t_cw);
+  }
+  ba.points = params.points;
+  for (size_t i = 0; i < ba.lines.size(); ++i) {
+    ba.lines[i] = ParametersToLine(params.lines[i].data()).ToPlucker();
+  }
+  return report;
+}
+
+}  // namespace slslam

@@ -1,0 +1,68 @@
+// Bundle adjustment over keyframe poses, points and lines (local BA of local mapping) with the
+// unified point-line cost and Huber kernels: one robust pass, outlier removal by chi-square, one
+// more pass without the outliers (ORB-SLAM3's LocalBundleAdjustment schedule).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slslam/geometry/plucker_line.h"
+#include "slslam/geometry/reprojection.h"
+
+namespace slslam {
+
+struct BaPose {
+  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  bool fixed = false;
+};
+
+struct BaPointObservation {
+  int pose = 0;   ///< index into BaProblem::poses
+  int point = 0;  ///< index into BaProblem::points
+  Eigen::Vector3d observed = Eigen::Vector3d::Zero();  ///< (u_left, v, u_right) [px]
+  bool stereo = false;
+  double sigma_px = 1.0;
+};
+
+struct BaLineObservation {
+  int pose = 0;
+  int line = 0;  ///< index into BaProblem::lines
+  Eigen::Vector2d start_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d end_px = Eigen::Vector2d::Zero();
+  double sigma_px = 1.0;
+};
+
+struct BaProblem {
+  std::vector<BaPose> poses;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<PluckerLine> lines;
+  std::vector<BaPointObservation> point_observations;
+  std::vector<BaLineObservation> line_observations;
+};
+
+struct BundleAdjustmentOptions {
+  int robust_iterations = 5;   ///< iterations of the robust pass [-]
+  int refine_iterations = 10;  ///< iterations after outlier removal [-]
+  double chi2_mono = 5.991;    ///< [-]
+  double chi2_stereo = 7.815;  ///< [-]
+  double chi2_line = 5.991;    ///< on the two endpoint distances [-]
+  double line_angle_weight = 10.0;  ///< [px]
+  double line_weight = 1.0;         ///< [-]
+};
+
+struct BundleAdjustmentReport {
+  std::vector<bool> point_outlier;  ///< per point observation, after the solve
+  std::vector<bool> line_outlier;   ///< per line observation
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  bool solved = false;
+};
+
+// Optimises the problem in place (poses that are not fixed, every point and line observed at
+// least once). Deterministic (single-threaded Ceres, Schur solver).
+BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
+                                             const BundleAdjustmentOptions& options = {});
+
+}  // namespace slslam

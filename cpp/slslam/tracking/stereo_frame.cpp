@@ -1,0 +1,150 @@
+#include "slslam/tracking/stereo_frame.h"
+
+#include <cmath>
+#include <limits>
+
+#include "slslam/core/check.h"
+#include "slslam/features/descriptor_matcher.h"
+
+namespace slslam {
+
+void StereoMatchOptions::Check() const {
+  Require(max_row_offset_px >= 0.0f, "stereo.max_row_offset_px must be >= 0");
+  Require(min_disparity_px > 0.0f && max_disparity_px > min_disparity_px,
+          "stereo disparities must satisfy 0 < min_disparity_px < max_disparity_px");
+  Require(max_distance_binary > 0.0f && max_distance_float > 0.0f,
+          "stereo descriptor distance bounds must be > 0");
+  Require(ratio > 0.0f && ratio <= 1.0f, "stereo.ratio must be in (0, 1]");
+  Require(max_depth_baselines > 0.0f, "stereo.max_depth_baselines must be > 0");
+  lines.Check();
+}
+
+Eigen::Vector3d StereoFrame::Backproject(const PinholeCamera& camera, int i) const {
+  return depth[i] * camera.Unproject(keypoints.uv.row(i).cast<double>().transpose());
+}
+
+namespace {
+
+void CheckKeypoints(const Keypoints& k, const char* side) {
+  Require(k.uv.rows() == k.descriptors.rows || k.uv.rows() == 0,
+          Message(side, " keypoints: ", k.uv.rows(), " positions but ", k.descriptors.rows,
+                  " descriptor rows"));
+  Require(k.uv.allFinite(), Message(side, " keypoint positions must be finite"));
+}
+
+}  // namespace
+
+StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
+                            const Keypoints& right, const LineFeatures* left_lines,
+                            const LineFeatures* right_lines, const StereoRig& rig,
+                            const StereoMatchOptions& options) {
+  rig.Check();
+  options.Check();
+  CheckKeypoints(left, "left");
+  CheckKeypoints(right, "right");
+  Require(std::isfinite(timestamp), "frame timestamp must be finite");
+  const bool have_right = right.size() > 0 && left.size() > 0;
+  if (have_right) {
+    Require(left.descriptors.type() == right.descriptors.type() &&
+                left.descriptors.cols == right.descriptors.cols,
+            "left and right descriptors differ in type or length");
+  }
+
+  StereoFrame frame;
+  frame.index = index;
+  frame.timestamp = timestamp;
+  frame.keypoints = left;
+  const int n = left.size();
+  frame.u_right.assign(n, -1.0);
+  frame.depth.assign(n, -1.0);
+
+  if (have_right) {
+    // Right keypoints bucketed by integer row, so a left keypoint visits its row band only.
+    const int rows = rig.camera.height + 1;
+    std::vector<std::vector<int>> by_row(rows);
+    for (int j = 0; j < right.size(); ++j) {
+      const int r = static_cast<int>(std::lround(right.uv(j, 1)));
+      if (r >= 0 && r < rows) by_row[r].push_back(j);
+    }
+    const bool binary = left.descriptors.type() == CV_8U;
+    const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
+    const int band = static_cast<int>(std::ceil(options.max_row_offset_px));
+    const double max_depth = options.max_depth_baselines * rig.baseline_m;
+    // Best left keypoint per right keypoint, to keep matches one-to-one.
+    std::vector<float> right_best(right.size(), std::numeric_limits<float>::max());
+    std::vector<int> right_owner(right.size(), -1);
+    std::vector<int> match(n, -1);
+    for (int i = 0; i < n; ++i) {
+      const float ul = left.uv(i, 0);
+      const float vl = left.uv(i, 1);
+      const int r0 = static_cast<int>(std::lround(vl));
+      float best = std::numeric_limits<float>::max();
+      float second = best;
+      int best_j = -1;
+      for (int r = std::max(0, r0 - band); r <= std::min(rows - 1, r0 + band); ++r) {
+        for (int j : by_row[r]) {
+          if (std::abs(right.uv(j, 1) - vl) > options.max_row_offset_px) continue;
+          const float disparity = ul - right.uv(j, 0);
+          if (disparity < options.min_disparity_px || disparity > options.max_disparity_px) {
+            continue;
+          }
+          const float d = DescriptorDistance(left.descriptors, i, right.descriptors, j);
+          if (d < best) {
+            second = best;
+            best = d;
+            best_j = j;
+          } else if (d < second) {
+            second = d;
+          }
+        }
+      }
+      if (best_j < 0 || best > max_distance || best > options.ratio * second) continue;
+      if (best < right_best[best_j]) {
+        if (right_owner[best_j] >= 0) match[right_owner[best_j]] = -1;
+        right_best[best_j] = best;
+        right_owner[best_j] = i;
+        match[i] = best_j;
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      if (match[i] < 0) continue;
+      const double u_r = right.uv(match[i], 0);
+      const double disparity = left.uv(i, 0) - u_r;
+      const double z = rig.camera.fx * rig.baseline_m / disparity;
+      if (z > max_depth) continue;
+      frame.u_right[i] = u_r;
+      frame.depth[i] = z;
+    }
+  }
+
+  if (left_lines) {
+    Require(left_lines->descriptors.rows == static_cast<int>(left_lines->segments.size()),
+            "left line descriptors do not match the segments");
+    frame.lines = left_lines->segments;
+    frame.line_descriptors = left_lines->descriptors;
+    const int m = frame.NumLines();
+    frame.line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+    frame.line_has_depth.assign(m, false);
+    if (right_lines && m > 0 && !right_lines->segments.empty()) {
+      const IndexPairs pairs =
+          MatchStereoLines(left_lines->segments, left_lines->descriptors, right_lines->segments,
+                           right_lines->descriptors, options.lines);
+      const double max_depth = options.max_depth_baselines * rig.baseline_m;
+      for (Eigen::Index k = 0; k < pairs.rows(); ++k) {
+        const int a = pairs(k, 0);
+        Eigen::Vector3d s, e;
+        if (!TriangulateStereoLine(left_lines->segments[a], right_lines->segments[pairs(k, 1)],
+                                   rig.camera, rig.baseline_m, &s, &e,
+                                   options.lines.min_disparity_px)) {
+          continue;
+        }
+        if (s.z() > max_depth || e.z() > max_depth) continue;
+        frame.line_endpoints[a] = {s, e};
+        frame.line_has_depth[a] = true;
+      }
+    }
+  }
+  return frame;
+}
+
+}  // namespace slslam

@@ -1,0 +1,56 @@
+// One rectified stereo frame as tracking sees it: left keypoints with their right-image match
+// (disparity, depth), and left line segments with their stereo-triangulated endpoints.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "slslam/features/keypoints.h"
+#include "slslam/features/line_extractor.h"
+#include "slslam/features/line_matcher.h"
+#include "slslam/geometry/reprojection.h"
+
+namespace slslam {
+
+struct StereoMatchOptions {
+  float max_row_offset_px = 2.0f;    ///< |v_left - v_right| bound on rectified images [px]
+  float min_disparity_px = 0.5f;     ///< [px]
+  float max_disparity_px = 120.0f;   ///< [px]
+  float max_distance_binary = 60.0f;  ///< largest Hamming distance (ORB, 256 bits) [bits]
+  float max_distance_float = 0.9f;    ///< largest L2 distance (unit float descriptors) [-]
+  float ratio = 0.9f;                 ///< best / second best along the row band [-]
+  float max_depth_baselines = 60.0f;  ///< depths beyond this many baselines count as unknown [-]
+  StereoLineOptions lines;
+
+  void Check() const;
+};
+
+struct StereoFrame {
+  int index = 0;          ///< input frame number (0-based)
+  double timestamp = 0.0;  ///< [s]
+  Keypoints keypoints;     ///< left image
+  std::vector<double> u_right;  ///< per keypoint: matched right column [px], or -1
+  std::vector<double> depth;    ///< per keypoint: depth from the stereo match [m], or -1
+  Segments lines;               ///< left image segments
+  cv::Mat line_descriptors;     ///< LBD rows of `lines`
+  /// per line: 3-D endpoints in the left camera frame [m] when the stereo pair triangulated it
+  std::vector<std::array<Eigen::Vector3d, 2>> line_endpoints;
+  std::vector<bool> line_has_depth;
+
+  int NumKeypoints() const { return keypoints.size(); }
+  int NumLines() const { return static_cast<int>(lines.size()); }
+  // Camera-frame point of keypoint i (requires depth[i] > 0).
+  Eigen::Vector3d Backproject(const PinholeCamera& camera, int i) const;
+};
+
+// Builds a frame: row-band stereo matching of the keypoints (same descriptor type on both sides),
+// and stereo matching + triangulation of the lines when line features are given (may be null).
+StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
+                            const Keypoints& right, const LineFeatures* left_lines,
+                            const LineFeatures* right_lines, const StereoRig& rig,
+                            const StereoMatchOptions& options = {});
+
+}  // namespace slslam

@@ -1,0 +1,272 @@
+"""``slslam.Tracker``: stereo point-line SLAM on rectified image pairs.
+
+Python runs the point network (SuperPoint through onnxruntime, or ORB) and the per-cell limit (C++);
+line extraction, stereo matching, tracking, motion-only BA and local mapping run in the C++ core
+with the GIL released.
+
+    with slslam.Tracker(camera, config) as tracker:
+        for frame in sequence:
+            result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
+        stamps, poses, states = tracker.trajectory()
+        cloud = tracker.map()
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from slslam import _core
+from slslam.config import Config, make_point_frontend
+from slslam.datasets.euroc import RectifiedStereoCamera
+from slslam.errors import InputError
+from slslam.features.keypoints import Keypoints, check_gray_image
+
+log = logging.getLogger(__name__)
+
+#: Per-frame states: OK (tracked), LOST (pose is the constant-velocity prediction), NEW_MAP (a
+#: new map started after a loss, anchored at the predicted pose), NOT_INITIALIZED (no map yet).
+STATES = ("NOT_INITIALIZED", "OK", "LOST", "NEW_MAP")
+TRACKED_STATES = ("OK", "NEW_MAP")
+
+
+@dataclass
+class TrackResult:
+    """The outcome of one frame.
+
+    Attributes:
+        state: one of ``STATES``.
+        T_wc: 4x4 pose of the left camera in the world (map) frame.
+        timings_ms: per stage: inference, grid, line_extraction, stereo_matching, matching,
+            optimisation, mapping, total.
+        counts: matched / inlier points and lines, keypoints, lines, keyframe (0/1).
+    """
+
+    index: int
+    timestamp: float
+    state: str
+    T_wc: np.ndarray
+    timings_ms: dict[str, float] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def tracked(self) -> bool:
+        return self.state in TRACKED_STATES
+
+
+@dataclass
+class MapData:
+    """Sparse map: ``points`` (N, 3) and ``lines`` (M, 6: start xyz, end xyz) in metres, the
+    number of keyframes and maps, and local-mapping counters (``stats``: keyframes processed and
+    culled, points / lines triangulated and culled, local mapping time in ms)."""
+
+    points: np.ndarray
+    lines: np.ndarray
+    keyframes: int
+    maps: int
+    stats: dict[str, float] = field(default_factory=dict)
+
+
+def _core_options(camera: RectifiedStereoCamera, config: Config) -> _core.TrackerOptions:
+    t = config.tracking
+    pinhole = _core.PinholeCamera(
+        camera.fx, camera.fy, camera.cx, camera.cy, camera.width, camera.height
+    )
+    options = _core.TrackerOptions()
+    options.rig = _core.StereoRig(pinhole, camera.baseline_m)
+    for name in (
+        "use_lines",
+        "sequential",
+        "min_init_points",
+        "min_inliers",
+        "search_radius_px",
+        "max_distance_binary",
+        "max_distance_float",
+        "keyframe_max_frames",
+        "keyframe_track_ratio",
+        "keyframe_min_inliers",
+        "point_sigma_px",
+        "line_sigma_px",
+    ):
+        setattr(options, name, getattr(t, name))
+    options.stereo.max_depth_baselines = t.max_depth_baselines
+    options.mapping.local_keyframes = t.local_keyframes
+    options.pose.line_weight = t.line_weight
+    options.pose.line_angle_weight = t.line_angle_weight
+    options.mapping.ba.line_weight = t.line_weight
+    options.mapping.ba.line_angle_weight = t.line_angle_weight
+    try:
+        options.check()
+    except ValueError as exc:
+        raise InputError("tracking config", str(exc)) from exc
+    return options
+
+
+class Tracker:
+    """Stereo point-line visual SLAM.
+
+    Args:
+        camera: rectified stereo intrinsics and baseline (``EurocSequence.camera``).
+        config: configuration (``slslam.load_config``); defaults when None.
+        frontend: a point front end with ``detect(image) -> Keypoints``; by default the one the
+            config names (SuperPoint, or ORB when no SuperPoint weights are configured).
+    """
+
+    def __init__(
+        self,
+        camera: RectifiedStereoCamera,
+        config: Config | None = None,
+        frontend=None,
+    ) -> None:
+        self.config = config or Config()
+        self.camera = camera
+        self.frontend = (
+            frontend if frontend is not None else make_point_frontend(self.config.features)
+        )
+        self.frontend_name = type(self.frontend).__name__
+        grid = self.config.features.grid
+        self._grid = _core.GridLimitOptions()
+        self._grid.cell_size_px = grid.cell_size_px
+        self._grid.max_per_cell = grid.max_per_cell
+        self._core = _core.TrackerCore(
+            _core_options(camera, self.config), _core.LinePreprocessOptions()
+        )
+        self._results: list[TrackResult] = []
+        self._closed = False
+
+    # -- per frame -----------------------------------------------------------------------------
+    def _detect(self, image: np.ndarray) -> Keypoints:
+        keypoints = self.frontend.detect(image)
+        if len(keypoints) == 0:
+            return keypoints
+        keep = _core.grid_limit(
+            np.ascontiguousarray(keypoints.uv, dtype=np.float32),
+            np.ascontiguousarray(keypoints.scores, dtype=np.float32),
+            image.shape[1],
+            image.shape[0],
+            self._grid,
+        )
+        return keypoints.select(np.asarray(keep))
+
+    def track(self, left: np.ndarray, right: np.ndarray, timestamp: float) -> TrackResult:
+        """Tracks one rectified stereo pair (uint8 H x W each) taken at ``timestamp`` seconds.
+
+        Bad input (wrong size or type, non-finite or decreasing time) raises ``InputError``;
+        a frame that cannot be tracked (black, blurred, textureless) returns state LOST.
+        """
+        if self._closed:
+            raise RuntimeError("the tracker is closed")
+        index = len(self._results)
+        where = f"frame {index}"
+        try:
+            left = check_gray_image(left)
+            right = check_gray_image(right)
+        except ValueError as exc:
+            raise InputError(where, str(exc)) from exc
+        expected = (self.camera.height, self.camera.width)
+        if left.shape != expected or right.shape != expected:
+            raise InputError(
+                where,
+                f"image sizes {left.shape[::-1]} / {right.shape[::-1]} differ from the "
+                f"calibration's {expected[::-1]} (width x height)",
+            )
+        if not math.isfinite(timestamp):
+            raise InputError(where, f"timestamp {timestamp} is not finite")
+        if self._results and timestamp <= self._results[-1].timestamp:
+            raise InputError(
+                where,
+                f"timestamp {timestamp} does not increase (previous {self._results[-1].timestamp})",
+            )
+
+        start = time.perf_counter()
+        kl = self._detect(left)
+        kr = self._detect(right)
+        inference_ms = (time.perf_counter() - start) * 1e3
+        out = self._core.track(
+            index,
+            float(timestamp),
+            left,
+            right,
+            np.ascontiguousarray(kl.uv, dtype=np.float32).reshape(-1, 2),
+            np.ascontiguousarray(kl.descriptors),
+            np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
+            np.ascontiguousarray(kr.descriptors),
+        )
+        T_cw = np.eye(4)
+        T_cw[:3, :3] = out["R_cw"]
+        T_cw[:3, 3] = out["t_cw"]
+        T_wc = np.linalg.inv(T_cw)
+        if not np.all(np.isfinite(T_wc)):  # never hand out a NaN pose
+            raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
+        timings = {
+            "inference": inference_ms,
+            "line_extraction": out["line_extraction_ms"],
+            "stereo_matching": out["stereo_matching_ms"],
+            "matching": out["matching_ms"],
+            "optimisation": out["optimisation_ms"],
+            "mapping": out["mapping_ms"],
+        }
+        timings["total"] = (time.perf_counter() - start) * 1e3
+        counts = {
+            "keypoints": len(kl),
+            "lines": out["lines"],
+            "matched_points": out["matched_points"],
+            "inlier_points": out["inlier_points"],
+            "matched_lines": out["matched_lines"],
+            "inlier_lines": out["inlier_lines"],
+            "keyframe": int(out["keyframe"]),
+            "map": out["map_index"],
+        }
+        result = TrackResult(index, float(timestamp), out["state"], T_wc, timings, counts)
+        self._results.append(result)
+        return result
+
+    # -- results -------------------------------------------------------------------------------
+    @property
+    def results(self) -> list[TrackResult]:
+        """Every frame's result so far, in input order."""
+        return list(self._results)
+
+    def trajectory(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """(timestamps (N,), poses T_wc (N, 4, 4), states) for every tracked frame so far."""
+        stamps = np.array([r.timestamp for r in self._results])
+        poses = np.array([r.T_wc for r in self._results]).reshape(-1, 4, 4)
+        return stamps, poses, [r.state for r in self._results]
+
+    def map(self) -> MapData:
+        """The sparse map of every map of the atlas (waits for local mapping first)."""
+        m = self._core.map()
+        return MapData(
+            np.asarray(m["points"]).reshape(-1, 3),
+            np.asarray(m["lines"]).reshape(-1, 6),
+            int(m["keyframes"]),
+            int(m["maps"]),
+            {
+                k: m[k]
+                for k in (
+                    "keyframes_processed",
+                    "keyframes_culled",
+                    "points_triangulated",
+                    "lines_triangulated",
+                    "points_culled",
+                    "lines_culled",
+                    "local_mapping_ms",
+                )
+            },
+        )
+
+    def close(self) -> None:
+        """Finishes local mapping. The results and the map stay readable."""
+        if not self._closed:
+            self._core.flush()
+            self._closed = True
+
+    def __enter__(self) -> Tracker:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
