@@ -4,6 +4,7 @@
 #include <chrono>
 #include <future>
 #include <memory>
+#include <mutex>
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -65,6 +66,7 @@ class TrackerSession {
     int num_lines = 0;
     {
       py::gil_scoped_release release;
+      std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
       auto start = std::chrono::steady_clock::now();
       LineFeatures ll, lr;
       if (options_.use_lines) {
@@ -78,6 +80,7 @@ class TrackerSession {
       auto frame = std::make_shared<StereoFrame>(MakeStereoFrame(
           index, timestamp, kl, kr, options_.use_lines ? &ll : nullptr,
           options_.use_lines ? &lr : nullptr, options_.rig, options_.stereo));
+      RefineStereoSubpixel(left, right, options_.rig, options_.stereo, frame.get());
       num_lines = frame->NumLines();
       stereo_ms = Ms(start);
       r = tracker_.Track(frame);
@@ -103,10 +106,15 @@ class TrackerSession {
 
   py::dict Map() {
     MapExport m;
+    LocalMappingStats s;
+    int maps = 0;
     {
       py::gil_scoped_release release;
+      std::lock_guard<std::mutex> lock(mutex_);
       tracker_.Flush();
       m = tracker_.ExportMap();
+      s = tracker_.mapping_stats();
+      maps = tracker_.num_maps();
     }
     py::dict out;
     out["points"] = m.points;
@@ -114,8 +122,7 @@ class TrackerSession {
     out["point_map"] = m.point_map;
     out["line_map"] = m.line_map;
     out["keyframes"] = m.keyframes;
-    out["maps"] = tracker_.num_maps();
-    const LocalMappingStats s = tracker_.mapping_stats();
+    out["maps"] = maps;
     out["keyframes_processed"] = s.keyframes_processed;
     out["keyframes_culled"] = s.keyframes_culled;
     out["points_culled"] = s.points_culled;
@@ -128,6 +135,7 @@ class TrackerSession {
 
   void Flush() {
     py::gil_scoped_release release;
+    std::lock_guard<std::mutex> lock(mutex_);
     tracker_.Flush();
   }
 
@@ -135,6 +143,7 @@ class TrackerSession {
   TrackerOptions options_;
   LineExtractorOptions lines_;
   Tracker tracker_;
+  std::mutex mutex_;
 };
 
 }  // namespace
@@ -179,7 +188,9 @@ void BindTracking(py::module_& m) {
       .def_readwrite("max_distance_binary", &StereoMatchOptions::max_distance_binary)
       .def_readwrite("max_distance_float", &StereoMatchOptions::max_distance_float)
       .def_readwrite("ratio", &StereoMatchOptions::ratio)
-      .def_readwrite("max_depth_baselines", &StereoMatchOptions::max_depth_baselines);
+      .def_readwrite("max_depth_baselines", &StereoMatchOptions::max_depth_baselines)
+      .def_readwrite("subpixel_window", &StereoMatchOptions::subpixel_window)
+      .def_readwrite("subpixel_search", &StereoMatchOptions::subpixel_search);
 
   py::class_<TrackerOptions>(m, "TrackerOptions", "Tracking, mapping and front-end thresholds.")
       .def(py::init<>())

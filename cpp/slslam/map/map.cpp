@@ -125,12 +125,11 @@ void Map::EraseKeyFrame(int keyframe_id) {
   for (int lid : kf->line_ids) {
     if (auto l = line(lid)) l->observations.erase(keyframe_id);
   }
-  for (const auto& [other, count] : kf->covisibility) {
-    (void)count;
-    if (auto o = keyframe(other)) o->covisibility.erase(keyframe_id);
-  }
+  // Every keyframe, not only kf's own neighbours: UpdateConnections rebuilds one side of an edge,
+  // so another keyframe may still hold a link to kf that kf no longer lists.
   for (auto& [id, other] : keyframes_) {
     (void)id;
+    other->covisibility.erase(keyframe_id);
     if (other->parent == keyframe_id) other->parent = kf->parent;
   }
   keyframes_.erase(keyframe_id);

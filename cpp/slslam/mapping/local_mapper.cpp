@@ -1,6 +1,8 @@
 #include "slslam/mapping/local_mapper.h"
 
+#include <algorithm>
 #include <chrono>
+#include <exception>
 #include <set>
 #include <unordered_map>
 
@@ -47,6 +49,11 @@ void LocalMapper::Flush() {
   if (sequential_) return;
   std::unique_lock<std::mutex> lock(queue_mutex_);
   idle_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
+  if (error_) {
+    std::exception_ptr error = error_;
+    error_ = nullptr;
+    std::rethrow_exception(error);
+  }
 }
 
 LocalMappingStats LocalMapper::stats() const {
@@ -65,10 +72,16 @@ void LocalMapper::Run() {
       queue_.pop_front();
       busy_ = true;
     }
-    Process(job.first, job.second);
+    std::exception_ptr error;
+    try {
+      Process(job.first, job.second);
+    } catch (...) {  // a throw on this thread would terminate the process
+      error = std::current_exception();
+    }
     {
       std::lock_guard<std::mutex> lock(queue_mutex_);
       busy_ = false;
+      if (error && !error_) error_ = error;
     }
     idle_cv_.notify_all();
   }
@@ -92,7 +105,9 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
       if (triangulated.points > 0) map->UpdateConnections(keyframe_id);
     }
     std::vector<int> local = {keyframe_id};
-    for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) local.push_back(id);
+    for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
+      if (map->keyframe(id)) local.push_back(id);
+    }
     const std::set<int> local_set(local.begin(), local.end());
     std::unordered_map<int, int> pose_index;
     auto add_pose = [&](int kf_id, bool fixed) {
@@ -101,8 +116,12 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
       problem.poses.push_back({kf->R_cw, kf->t_cw, fixed});
       pose_kf.push_back(kf_id);
     };
+    // The gauge: the map's first keyframe when it is in the window, else the window's oldest.
     const int first_keyframe = map->keyframes().begin()->first;
-    for (int id : local) add_pose(id, id == first_keyframe);
+    const int anchor = std::find(local.begin(), local.end(), first_keyframe) != local.end()
+                           ? first_keyframe
+                           : *std::min_element(local.begin(), local.end());
+    for (int id : local) add_pose(id, id == anchor);
     std::set<int> local_points, local_lines;
     for (int id : local) {
       auto kf = map->keyframe(id);
@@ -238,7 +257,8 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
   if (options_.cull_keyframes) {
     const int first_keyframe = map->keyframes().begin()->first;
     for (int kf_id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
-      if (kf_id == first_keyframe || kf_id == keyframe_id) continue;
+      // Never the first keyframe, this one, or newer ones still queued (threaded mode).
+      if (kf_id == first_keyframe || kf_id >= keyframe_id) continue;
       auto kf = map->keyframe(kf_id);
       if (!kf) continue;
       int total = 0, redundant = 0;

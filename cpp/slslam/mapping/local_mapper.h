@@ -9,6 +9,7 @@
 
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <thread>
 
@@ -52,7 +53,8 @@ class LocalMapper {
   // Queues (threaded) or processes at once (sequential) a new keyframe of `map`. The map must
   // outlive the processing (Flush before destroying it).
   void Insert(Map* map, int keyframe_id);
-  // Waits until every queued keyframe has been processed.
+  // Waits until every queued keyframe has been processed; rethrows the first error the mapping
+  // thread caught since the last Flush.
   void Flush();
   LocalMappingStats stats() const;
 
@@ -69,6 +71,7 @@ class LocalMapper {
   std::deque<std::pair<Map*, int>> queue_;
   bool busy_ = false;
   bool stop_ = false;
+  std::exception_ptr error_;
   LocalMappingStats stats_;
   std::thread worker_;
 };

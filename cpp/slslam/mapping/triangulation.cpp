@@ -192,20 +192,22 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
   const double bound = options.chi2 * options.sigma_px * options.sigma_px;
   const double cos_max = std::cos(options.min_plane_angle_deg * kDegToRad);
+  const double line_bound = options.chi2 * options.line_sigma_px * options.line_sigma_px;
   int made = 0;
   for (const auto& [ia, ib] : MatchFreeSegments(a, b, options)) {
     const LineSegment& sa = a.frame->lines[ia];
     const LineSegment& sb = b.frame->lines[ib];
     const Eigen::Vector2d a0 = sa.start.cast<double>(), a1 = sa.end.cast<double>();
     const Eigen::Vector2d b0 = sb.start.cast<double>(), b1 = sb.end.cast<double>();
-    const Eigen::Vector4d plane_a = BackProjectedPlane(camera, a.R, a.t, a0, a1);
-    const Eigen::Vector4d plane_b = BackProjectedPlane(camera, b.R, b.t, b0, b1);
-    const double cos_planes = std::abs(plane_a.head<3>().normalized().dot(plane_b.head<3>().normalized()));
-    if (!(cos_planes < cos_max)) continue;
     PluckerLine line;
     try {
+      const Eigen::Vector4d plane_a = BackProjectedPlane(camera, a.R, a.t, a0, a1);
+      const Eigen::Vector4d plane_b = BackProjectedPlane(camera, b.R, b.t, b0, b1);
+      const double cos_planes =
+          std::abs(plane_a.head<3>().normalized().dot(plane_b.head<3>().normalized()));
+      if (!(cos_planes < cos_max)) continue;
       line = PluckerLine::FromPlanes(plane_a, plane_b).Normalized();
-    } catch (const std::invalid_argument&) {
+    } catch (const std::invalid_argument&) {  // degenerate segment or parallel planes
       continue;
     }
     // Endpoints: where the rays of view a's segment endpoints pass the line, in both cameras.
@@ -225,7 +227,9 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
         !LineResidual(camera, b.R, b.t, line, b0, b1, 0.0, &eb)) {
       continue;
     }
-    if (ea.head<2>().squaredNorm() > bound || eb.head<2>().squaredNorm() > bound) continue;
+    if (ea.head<2>().squaredNorm() > line_bound || eb.head<2>().squaredNorm() > line_bound) {
+      continue;
+    }
     const Eigen::Matrix3d R_wa = a.R.transpose();
     const Eigen::Vector3d start = R_wa * (s_a - a.t);
     const Eigen::Vector3d end = R_wa * (e_a - a.t);
@@ -249,7 +253,7 @@ void TriangulationOptions::Check() const {
           "triangulation ratios must be in (0, 1]");
   Require(min_parallax_deg >= 0.0 && min_plane_angle_deg >= 0.0,
           "triangulation angles must be >= 0");
-  Require(max_depth_baselines > 0.0 && chi2 > 0.0 && sigma_px > 0.0,
+  Require(max_depth_baselines > 0.0 && chi2 > 0.0 && sigma_px > 0.0 && line_sigma_px > 0.0,
           "triangulation depth, chi2 and sigma must be > 0");
 }
 

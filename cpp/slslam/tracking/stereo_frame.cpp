@@ -16,6 +16,8 @@ void StereoMatchOptions::Check() const {
           "stereo descriptor distance bounds must be > 0");
   Require(ratio > 0.0f && ratio <= 1.0f, "stereo.ratio must be in (0, 1]");
   Require(max_depth_baselines > 0.0f, "stereo.max_depth_baselines must be > 0");
+  Require(subpixel_window >= 0 && subpixel_search >= 1,
+          "stereo.subpixel_window must be >= 0 and stereo.subpixel_search >= 1");
   lines.Check();
 }
 
@@ -145,6 +147,83 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
     }
   }
   return frame;
+}
+
+void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                          const StereoMatchOptions& options, StereoFrame* frame) {
+  Require(frame != nullptr, "subpixel refinement needs a frame");
+  Require(left.type() == CV_8UC1 && right.type() == CV_8UC1 && left.size() == right.size(),
+          "subpixel refinement needs two 8-bit gray images of one size");
+  const int w = options.subpixel_window;
+  const int L = options.subpixel_search;
+  if (w <= 0) return;
+  const double max_depth = options.max_depth_baselines * rig.baseline_m;
+  const int n = frame->NumKeypoints();
+  std::vector<float> sad(2 * L + 1);
+  for (int i = 0; i < n; ++i) {
+    if (frame->u_right[i] < 0.0) continue;
+    const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
+    const int v = static_cast<int>(std::lround(frame->keypoints.uv(i, 1)));
+    const int ur0 = static_cast<int>(std::lround(frame->u_right[i]));
+    if (v - w < 0 || v + w >= left.rows || ul - w < 0 || ul + w >= left.cols ||
+        ur0 - L - w < 0 || ur0 + L + w >= right.cols) {
+      continue;  // too close to the border to refine: keep the descriptor match
+    }
+    auto patch_mean = [w, v](const cv::Mat& image, int u) {
+      int sum = 0;
+      for (int dy = -w; dy <= w; ++dy) {
+        const uchar* row = image.ptr<uchar>(v + dy);
+        for (int dx = -w; dx <= w; ++dx) sum += row[u + dx];
+      }
+      return static_cast<float>(sum) / static_cast<float>((2 * w + 1) * (2 * w + 1));
+    };
+    const float mean_left = patch_mean(left, ul);
+    int best = -1;
+    float best_sad = std::numeric_limits<float>::max();
+    for (int k = -L; k <= L; ++k) {
+      const int ur = ur0 + k;
+      const float mean_right = patch_mean(right, ur);
+      float sum = 0.0f;
+      for (int dy = -w; dy <= w; ++dy) {
+        const uchar* row_l = left.ptr<uchar>(v + dy);
+        const uchar* row_r = right.ptr<uchar>(v + dy);
+        for (int dx = -w; dx <= w; ++dx) {
+          sum += std::abs((row_l[ul + dx] - mean_left) - (row_r[ur + dx] - mean_right));
+        }
+      }
+      sad[k + L] = sum;
+      if (sum < best_sad) {
+        best_sad = sum;
+        best = k + L;
+      }
+    }
+    if (best <= 0 || best >= 2 * L) {  // minimum on the edge: unreliable
+      frame->u_right[i] = -1.0;
+      frame->depth[i] = -1.0;
+      continue;
+    }
+    // Equiangular (V-shaped) fit: the SAD cost is V-shaped near its minimum, where a parabola
+    // pulls the estimate towards the integer column.
+    const float d1 = sad[best - 1], d2 = sad[best], d3 = sad[best + 1];
+    const float slope = std::max(d1, d3) - d2;
+    const float delta = slope > 0.0f ? 0.5f * (d1 - d3) / slope : 0.0f;
+    if (delta < -1.0f || delta > 1.0f) {
+      frame->u_right[i] = -1.0;
+      frame->depth[i] = -1.0;
+      continue;
+    }
+    const double u_r = ur0 + (best - L) + delta;
+    const double disparity = ul - u_r;
+    const double z = disparity > 0.0 ? rig.camera.fx * rig.baseline_m / disparity : -1.0;
+    if (!(disparity >= options.min_disparity_px && z < max_depth)) {
+      frame->u_right[i] = -1.0;
+      frame->depth[i] = -1.0;
+      continue;
+    }
+    // The disparity was measured at the pixel centre ul; the keypoint keeps its own column.
+    frame->u_right[i] = frame->keypoints.uv(i, 0) - disparity;
+    frame->depth[i] = z;
+  }
 }
 
 }  // namespace slslam

@@ -23,6 +23,8 @@ struct StereoMatchOptions {
   float max_distance_float = 0.9f;    ///< largest L2 distance (unit float descriptors) [-]
   float ratio = 0.9f;                 ///< best / second best along the row band [-]
   float max_depth_baselines = 60.0f;  ///< depths beyond this many baselines count as unknown [-]
+  int subpixel_window = 5;     ///< half size of the SAD patch for subpixel disparity [px]; 0: off
+  int subpixel_search = 5;     ///< columns searched on each side of the descriptor match [px]
   StereoLineOptions lines;
 
   void Check() const;
@@ -52,5 +54,14 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
                             const Keypoints& right, const LineFeatures* left_lines,
                             const LineFeatures* right_lines, const StereoRig& rig,
                             const StereoMatchOptions& options = {});
+
+// Refines the right-image column of every stereo-matched keypoint to subpixel precision (as
+// ORB-SLAM's ComputeStereoMatches): the (2w+1)^2 patch around the left keypoint is slid along the
+// right row within +-search columns of the descriptor match, each patch minus its mean (robust
+// to an offset between the cameras); the best sum of absolute differences and a V-shaped
+// (equiangular) fit through it and its neighbours give the column. A minimum on the edge of the search is no reliable match:
+// the keypoint loses its depth. Depths are recomputed. Images: the rectified 8-bit pair.
+void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                          const StereoMatchOptions& options, StereoFrame* frame);
 
 }  // namespace slslam

@@ -64,6 +64,7 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   mapping.point_sigma_px = options_.point_sigma_px;
   mapping.line_sigma_px = options_.line_sigma_px;
   mapping.triangulation.sigma_px = options_.point_sigma_px;
+  mapping.triangulation.line_sigma_px = options_.line_sigma_px;
   mapping.triangulation.max_depth_baselines = options_.stereo.max_depth_baselines;
   mapping.triangulation.lines = options_.use_lines;
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
@@ -349,7 +350,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     const int tracked = pose.point_inliers;
     // A young map has few points seen by three keyframes; the inliers of the first frame tracked
     // after the keyframe stand in for the reference then (how many of its points can be tracked).
-    if (frames_since == 1) first_tracked_ = tracked;
+    if (first_tracked_ == 0 && frames_since >= 1) first_tracked_ = tracked;
     reference = std::max(reference, first_tracked_);
     const bool c1 = frames_since >= options_.keyframe_max_frames ||
                     frames_since >= options_.keyframe_min_frames ||
