@@ -6,6 +6,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "slslam/lidar/point_cloud_io.h"
 #include "slslam/lidar/registration.h"
 
 namespace py = pybind11;
@@ -63,6 +64,11 @@ void BindLidar(py::module_& m) {
   SLSLAM_FIELD(sac_ia_randomness);
   SLSLAM_FIELD(sac_ia_min_sample_m);
   SLSLAM_FIELD(sac_ia_max_corr_m);
+  SLSLAM_FIELD(sac_ia_edge_similarity);
+  SLSLAM_FIELD(sac_ia_confidence);
+  SLSLAM_FIELD(sac_ia_try_identity);
+  SLSLAM_FIELD(icp_source_points_coarse);
+  SLSLAM_FIELD(icp_source_points_fine);
   SLSLAM_FIELD(point_to_plane);
   SLSLAM_FIELD(icp_iterations_coarse);
   SLSLAM_FIELD(icp_iterations_fine);
@@ -109,6 +115,19 @@ void BindLidar(py::module_& m) {
       py::arg("method") = Method::kFpfhSacIaIcp,
       "Register source onto target (float32 (N, 3|4) arrays [m]). Returns a RegistrationResult "
       "whose transform (4x4) is T_target_source: it maps source points into the target frame.");
+  m.def(
+      "read_point_cloud",
+      [](const std::string& path) {
+        PointMatrix points;
+        {
+          py::gil_scoped_release release;
+          points = lidar::ReadPointCloud(path);
+        }
+        return points;
+      },
+      py::arg("path"),
+      "Read a KITTI .bin, PCD or PLY point cloud (by extension) as float32 (N, 4): x, y, z "
+      "[m], intensity (0 when the file has none). Raises ValueError naming the file.");
 }
 
 }  // namespace slslam::bindings

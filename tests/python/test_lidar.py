@@ -74,3 +74,27 @@ def test_bad_shapes_and_nan_raise_value_error():
         register(good, good, method="go-icp")
     with pytest.raises(ValueError, match="fine_voxel_m"):
         register(good, good, fine_voxel_m=0.0)
+
+
+def test_read_points_reads_kitti_pcd_and_ply_and_names_bad_files(tmp_path):
+    from conftest import shared_path
+
+    from slslam.errors import InputError
+    from slslam.lidar import read_points
+
+    kitti = shared_path("lidar", "kitti00_scancontext", "000094.bin")
+    raw = np.fromfile(kitti, dtype=np.float32).reshape(-1, 4)
+    points = read_points(kitti)
+    assert points.dtype == np.float32 and np.array_equal(points, raw)
+    gicp = shared_path("lidar", "gicp_pairs")
+    ply = read_points(gicp / "small_gicp_source.ply")
+    pcd = read_points(gicp / "fast_gicp_251371071.pcd")
+    # The two files hold the same HDL-32E scan in two formats.
+    assert ply.shape == pcd.shape == (69792, 4)
+    assert np.allclose(np.sort(ply[:, 0]), np.sort(pcd[:, 0]))
+    with pytest.raises(InputError, match="not found"):
+        read_points(tmp_path / "missing.pcd")
+    bad = tmp_path / "bad.bin"
+    bad.write_bytes(b"123")  # not a multiple of 16 bytes
+    with pytest.raises(InputError, match="bad.bin"):
+        read_points(bad)

@@ -1,6 +1,10 @@
 #include "slslam/lidar/registration.h"
 
 #include <algorithm>
+#include <unordered_map>
+#include <tuple>
+#include <cstdint>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -127,15 +131,53 @@ struct Prepared {
   std::vector<signed char> fine_normal;
 };
 
-CloudXYZ::Ptr Crop(const PointMatrix& points, const RegistrationOptions& options) {
-  auto cloud = std::make_shared<CloudXYZ>();
-  cloud->reserve(points.rows());
+// Range crop and voxel grid of a raw scan in one pass: the centroid of the points in each occupied
+// voxel (voxel i covers [i, i + 1) * leaf on each axis), ordered by (z, y, x) voxel index as
+// pcl::VoxelGrid orders them. pcl::VoxelGrid needs a copy of the cropped scan and a sort of every
+// point's voxel index (120,000 on a KITTI scan); a hash map over the occupied voxels needs
+// neither. Together with scoring on the ICP subset this took the FPFH pipeline on the KITTI pairs
+// from 61 / 49 ms to 47 / 48 ms (benchmarks/lidar_registration.cpp, medians, back to back).
+CloudXYZ::Ptr CropToVoxelCentroids(const PointMatrix& points, const RegistrationOptions& options) {
   const double min2 = options.min_range_m * options.min_range_m;
   const double max2 = options.max_range_m > 0 ? options.max_range_m * options.max_range_m : 1e300;
+  const double inverse_leaf = 1.0 / options.fine_voxel_m;
+  struct Voxel {
+    std::array<std::int32_t, 3> ijk;
+    Eigen::Vector3d sum;
+    int count;
+  };
+  std::vector<Voxel> voxels;
+  std::unordered_map<std::uint64_t, int> slot;
+  slot.reserve(static_cast<std::size_t>(points.rows()) / 4);
+  constexpr std::int64_t kOffset = 1 << 20;  // +-1M voxels per axis
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    const pcl::PointXYZ p(points(i, 0), points(i, 1), points(i, 2));
-    const double r2 = double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z;
-    if (r2 >= min2 && r2 <= max2) cloud->push_back(p);
+    const Eigen::Vector3d p(points(i, 0), points(i, 1), points(i, 2));
+    const double r2 = p.squaredNorm();
+    if (!(r2 >= min2 && r2 <= max2)) continue;
+    std::array<std::int32_t, 3> ijk;
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      ijk[a] = static_cast<std::int32_t>(std::floor(p[a] * inverse_leaf));
+      const std::int64_t shifted = std::clamp<std::int64_t>(ijk[a] + kOffset, 0, 2 * kOffset - 1);
+      key = (key << 21) | static_cast<std::uint64_t>(shifted);
+    }
+    const auto [it, inserted] = slot.try_emplace(key, static_cast<int>(voxels.size()));
+    if (inserted) {
+      voxels.push_back({ijk, p, 1});
+    } else {
+      voxels[it->second].sum += p;
+      voxels[it->second].count += 1;
+    }
+  }
+  std::sort(voxels.begin(), voxels.end(), [](const Voxel& a, const Voxel& b) {
+    return std::tie(a.ijk[2], a.ijk[1], a.ijk[0]) < std::tie(b.ijk[2], b.ijk[1], b.ijk[0]);
+  });
+  auto cloud = std::make_shared<CloudXYZ>();
+  cloud->reserve(voxels.size());
+  for (const Voxel& v : voxels) {
+    const Eigen::Vector3d c = v.sum / v.count;
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(c.x()), static_cast<float>(c.y()),
+                                   static_cast<float>(c.z())));
   }
   return cloud;
 }
@@ -204,8 +246,8 @@ void AddFineNormals(const pcl::Indices& wanted, const RegistrationOptions& optio
 // was dropped are dropped too.
 Prepared Preprocess(const PointMatrix& points, const RegistrationOptions& options,
                     bool fine_tree, int threads, const char* name) {
-  pcl::VoxelGrid<pcl::PointXYZ> fine_grid, coarse_grid;
-  const CloudXYZ::Ptr fine = Downsample(&fine_grid, Crop(points, options), options.fine_voxel_m);
+  pcl::VoxelGrid<pcl::PointXYZ> coarse_grid;
+  const CloudXYZ::Ptr fine = CropToVoxelCentroids(points, options);
   Require(static_cast<int>(fine->size()) > options.normal_k,
           Message(name, ": only ", fine->size(),
                   " points left after range crop and voxel grid (need more than normal_k = ",
@@ -730,12 +772,19 @@ Eigen::Matrix4f NdtAlign(const Prepared& source, const Prepared& target,
 }
 
 // Fitness and inlier RMSE of the fine source level under `transform`.
+// Fitness and inlier RMSE of the fine source points under `transform`. On the evenly thinned
+// subset that fine ICP aligns (icp_source_points_fine), an unbiased estimate at a fraction of
+// the nearest-neighbour queries.
 void Score(const Prepared& source, const Prepared& target, const Eigen::Matrix4f& transform,
            double inlier_m, const RegistrationOptions& options, RegistrationResult* result) {
-  CloudN moved(*source.fine);
-  for (PointN& p : moved.points) {
+  const pcl::IndicesPtr subset = Thinned(source.fine->size(), options.icp_source_points_fine);
+  CloudN moved;
+  moved.reserve(subset->size());
+  for (pcl::index_t i : *subset) {
+    PointN p = (*source.fine)[i];
     p.getVector3fMap() =
         transform.topLeftCorner<3, 3>() * p.getVector3fMap() + transform.topRightCorner<3, 1>();
+    moved.push_back(p);
   }
   std::vector<pcl::Indices> index;
   std::vector<std::vector<float>> dist2;

@@ -41,7 +41,7 @@ struct RegistrationOptions {
   int normal_k = 12;             ///< neighbours for normal estimation [-]
 
   // --- Descriptors and coarse alignment (SAC-IA) --------------------------------------------
-  double feature_radius_m = 2.5;      ///< FPFH / PFH support radius on the coarse level [m]
+  double feature_radius_m = 2.0;      ///< FPFH / PFH support radius on the coarse level [m]
   int sac_ia_iterations = 200;        ///< SAC-IA iteration bound [-]
   int sac_ia_source_keypoints = 400;  ///< source keypoints (evenly thinned coarse points) that get
                                       ///< descriptors and score hypotheses; 0: all [-]

@@ -15,6 +15,7 @@ frame. Parameters are those of the C++ ``RegistrationOptions`` (see
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,7 +23,7 @@ import numpy as np
 from slslam import _core
 from slslam.errors import InputError
 
-__all__ = ["METHODS", "available", "make_options", "register", "register_full"]
+__all__ = ["METHODS", "available", "make_options", "read_points", "register", "register_full"]
 
 METHODS = ("fpfh_sac_ia_icp", "ndt", "pfh_sac_ia_icp", "icp")
 
@@ -59,6 +60,20 @@ def _points(array: Any, name: str) -> np.ndarray:
     if not np.isfinite(points).all():
         raise InputError(name, "contains NaN or infinite values")
     return points
+
+
+def read_points(path: str | Path) -> np.ndarray:
+    """A KITTI Velodyne .bin, PCD or PLY file as float32 (N, 4): x, y, z [m], intensity (0 when
+    the file has none). Non-finite points of organised clouds are dropped. A missing or malformed
+    file raises ``InputError`` naming it."""
+    _require_core()
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "point cloud file not found")
+    try:
+        return np.asarray(_core.read_point_cloud(str(path)))
+    except ValueError as exc:
+        raise InputError(path, str(exc)) from exc
 
 
 def register_full(source: Any, target: Any, method: str = "fpfh_sac_ia_icp", **options: Any) -> Any:
