@@ -83,7 +83,8 @@ class TrackingConfig:
     line_angle_weight: float = 10.0  # scale of the bounded angle term e3 [px]
     max_depth_baselines: float = 60.0  # stereo depths beyond this many baselines are unused
     point_sigma_px: float = 1.0  # keypoint measurement sigma [px]
-    line_sigma_px: float = 1.5  # line endpoint distance sigma [px]
+    line_sigma_px: float = 3.0  # line endpoint distance sigma [px] (both endpoints share the
+    # map line's error; 1.5 px over-weighted lines, see benchmarks/README.md)
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ struct LocalMapperOptions {
   bool triangulate = true;        ///< new points and lines from covisible keyframe pairs
   TriangulationOptions triangulation;
   double point_sigma_px = 1.0;    ///< [px]
-  double line_sigma_px = 1.5;     ///< [px]
+  double line_sigma_px = 3.0;     ///< [px]
   BundleAdjustmentOptions ba;
 };
 

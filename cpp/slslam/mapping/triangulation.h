@@ -30,7 +30,7 @@ struct TriangulationOptions {
   double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
   double chi2 = 5.991;               ///< reprojection bound in both views (2 dof, 95 %) [-]
   double sigma_px = 1.0;             ///< keypoint sigma [px]
-  double line_sigma_px = 1.5;        ///< line endpoint distance sigma [px]
+  double line_sigma_px = 3.0;        ///< line endpoint distance sigma [px]
   bool lines = true;                 ///< also triangulate lines
   float line_max_lbd = 60.0f;        ///< LBD bound for line pairs [bits]
   float line_ratio = 0.8f;           ///< best / second best LBD distance [-]

@@ -49,7 +49,9 @@ struct TrackerOptions {
                                        ///< ones): keyframe, as ORB-SLAM3's stereo rule [-]
   double close_depth_baselines = 40.0;  ///< "close" stereo points for the rule above [-]
   double point_sigma_px = 1.0;         ///< [px]
-  double line_sigma_px = 1.5;          ///< [px]
+  double line_sigma_px = 3.0;          ///< line endpoint distance sigma [px]: the two
+                                       ///< distances of one segment share the map line's error
+                                       ///< (benchmarks/README.md: 1.5 px over-weighted lines)
 
   void Check() const;
 };
