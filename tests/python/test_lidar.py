@@ -77,10 +77,10 @@ def test_bad_shapes_and_nan_raise_value_error():
 
 
 def test_read_points_reads_kitti_pcd_and_ply_and_names_bad_files(tmp_path):
-    from conftest import shared_path
-
     from slslam.errors import InputError
     from slslam.lidar import read_points
+
+    from conftest import shared_path
 
     kitti = shared_path("lidar", "kitti00_scancontext", "000094.bin")
     raw = np.fromfile(kitti, dtype=np.float32).reshape(-1, 4)
@@ -96,5 +96,5 @@ def test_read_points_reads_kitti_pcd_and_ply_and_names_bad_files(tmp_path):
         read_points(tmp_path / "missing.pcd")
     bad = tmp_path / "bad.bin"
     bad.write_bytes(b"123")  # not a multiple of 16 bytes
-    with pytest.raises(InputError, match="bad.bin"):
+    with pytest.raises(InputError, match=r"bad\.bin"):
         read_points(bad)

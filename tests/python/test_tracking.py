@@ -78,7 +78,7 @@ def test_sequential_mode_is_reproducible_bit_for_bit(sim_loop):
 
 def test_orb_points_only_on_the_real_euroc_excerpt(tmp_path):
     """The camera stands still in the excerpt (< 3.3 mm, 0.27 deg over the ground truth): the
-    estimate must stay within millimetres of it (measured ATE 3.7 mm; SuperPoint + lines under 1 mm)."""
+    estimate must stay within millimetres of it (measured ATE 3.7 mm)."""
     data = shared_path("euroc_v101_micro")
     gt = shared_path(*V101_GT)
     summary = run_sequence(
