@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import os
 import types
 import typing
@@ -26,6 +27,7 @@ import yaml
 from slslam.errors import InputError
 from slslam.features.orb import OrbOptions
 from slslam.features.superpoint import ENV_MODEL, SuperPointOptions
+from slslam.yaml_io import MAX_YAML_BYTES, read_yaml, short_repr
 
 log = logging.getLogger(__name__)
 
@@ -35,11 +37,70 @@ class ConfigError(InputError):
 
 
 @dataclass(frozen=True)
+class Range:
+    """The values a numeric option may take: a finite interval, each end closed or open.
+
+    Written in interval notation, ``Range.parse("(0, 1]")``; the bound of an integer option also
+    keeps it inside C++ ``int``, so no value reaches the core that it cannot hold.
+    """
+
+    low: float
+    high: float
+    low_open: bool = False
+    high_open: bool = False
+
+    @classmethod
+    def parse(cls, text: str) -> Range:
+        low, high = (float(part) for part in text.strip()[1:-1].split(","))
+        return cls(low, high, text.strip()[0] == "(", text.strip()[-1] == ")")
+
+    def __contains__(self, value: float) -> bool:
+        if not math.isfinite(value):
+            return False
+        above = value > self.low if self.low_open else value >= self.low
+        below = value < self.high if self.high_open else value <= self.high
+        return above and below
+
+    def __str__(self) -> str:
+        def show(x: float) -> str:
+            return str(int(x)) if x == int(x) and abs(x) < 1e6 else f"{x:g}"
+
+        left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
+        return f"{left}{show(self.low)}, {show(self.high)}{right}"
+
+
+def _option(default: float, interval: str) -> Any:
+    """A dataclass field with its default and its allowed range (interval notation)."""
+    return field(default=default, metadata={"range": Range.parse(interval)})
+
+
+#: Ranges of the options whose dataclasses live with their front end (slslam.features).
+FOREIGN_RANGES: dict[type, dict[str, Range]] = {
+    OrbOptions: {
+        "max_keypoints": Range.parse("[1, 100000]"),
+        "scale_factor": Range.parse("(1, 4]"),
+        "num_levels": Range.parse("[1, 32]"),
+        "fast_threshold": Range.parse("[1, 255]"),
+    },
+    SuperPointOptions: {
+        "detection_threshold": Range.parse("(0, 1)"),
+        "nms_radius": Range.parse("[0, 100]"),
+        "border_px": Range.parse("[0, 1000]"),
+        "max_keypoints": Range.parse("[1, 100000]"),
+        "intra_op_threads": Range.parse("[0, 1024]"),
+    },
+}
+#: Where an option declares no range: finite, and an integer must fit a C++ int.
+INT_FALLBACK = Range(-(2**31), 2**31 - 1)
+FLOAT_FALLBACK = Range(-math.inf, math.inf, True, True)
+
+
+@dataclass(frozen=True)
 class GridConfig:
     """Per-cell keypoint limit (SPEC A2); mirrors C++ ``GridLimitOptions``."""
 
-    cell_size_px: int = 32  # P: cell side [px]
-    max_per_cell: int = 8  # keypoints kept per cell
+    cell_size_px: int = _option(32, "[4, 4096]")  # P: cell side [px]
+    max_per_cell: int = _option(8, "[1, 10000]")  # keypoints kept per cell
 
 
 @dataclass(frozen=True)
@@ -47,10 +108,12 @@ class DynamicCellConfig:
     """Invalid-cell filter (SPEC A2); mirrors C++ ``DynamicCellOptions``."""
 
     enabled: bool = True
-    cell_size_px: int = 32  # cell side [px]
-    sigma_px: float = 3.0  # Gaussian width of G(d) [px]
-    alpha: float = 0.7  # weight of the current frame in the temporal smoothing
-    threshold: float = 0.5  # l: a cell below this weight is invalid (with its 8 neighbours)
+    cell_size_px: int = _option(32, "[4, 4096]")  # cell side [px]
+    sigma_px: float = _option(3.0, "(0, 1000]")  # Gaussian width of G(d) [px]
+    # weight of the current frame in the temporal smoothing
+    alpha: float = _option(0.7, "(0, 1]")
+    # l: a cell below this weight is invalid (with its 8 neighbours)
+    threshold: float = _option(0.5, "[0, 1]")
 
 
 @dataclass(frozen=True)
@@ -70,21 +133,31 @@ class TrackingConfig:
 
     use_lines: bool = True  # line features in tracking and mapping
     sequential: bool = True  # local mapping inline: exactly reproducible; false: own thread
-    min_init_points: int = 50  # stereo points a frame needs to start a map
-    min_inliers: int = 15  # fewer inliers after motion-only BA: the frame is LOST
-    search_radius_px: float = 15.0  # guided matching window [px] (doubled on a retry)
-    max_distance_binary: float = 50.0  # guided matching bound for ORB [Hamming bits]
-    max_distance_float: float = 0.8  # guided matching bound for SuperPoint [L2]
-    keyframe_max_frames: int = 20  # a keyframe at least this often [frames]
-    keyframe_track_ratio: float = 0.75  # tracked / reference keyframe points below: keyframe
-    keyframe_min_inliers: int = 100  # fewer tracked points: keyframe
-    local_keyframes: int = 10  # covisible keyframes in the local map and local BA
-    line_weight: float = 1.0  # weight of line terms against point terms in both BAs
-    line_angle_weight: float = 10.0  # scale of the bounded angle term e3 [px]
-    max_depth_baselines: float = 60.0  # stereo depths beyond this many baselines are unused
-    point_sigma_px: float = 1.0  # keypoint measurement sigma [px]
-    line_sigma_px: float = 3.0  # line endpoint distance sigma [px] (both endpoints share the
-    # map line's error; 1.5 px over-weighted lines, see benchmarks/README.md)
+    min_init_points: int = _option(50, "[3, 100000]")  # stereo points a frame needs to start a map
+    # fewer inliers after motion-only BA: the frame is LOST
+    min_inliers: int = _option(15, "[3, 100000]")
+    # guided matching window [px] (doubled on a retry)
+    search_radius_px: float = _option(15.0, "(0, 10000]")
+    # guided matching bound for ORB [Hamming bits]
+    max_distance_binary: float = _option(50.0, "(0, 256]")
+    # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
+    max_distance_float: float = _option(0.8, "(0, 2]")
+    keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
+    # tracked / reference keyframe points below: keyframe
+    keyframe_track_ratio: float = _option(0.75, "(0, 1]")
+    keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe
+    # covisible keyframes in the local map and local BA
+    local_keyframes: int = _option(10, "[1, 1000]")
+    # weight of line terms against point terms in both BAs
+    line_weight: float = _option(1.0, "[0, 1e6]")
+    # scale of the bounded angle term e3 [px] (0: endpoint distances only)
+    line_angle_weight: float = _option(10.0, "[0, 1e6]")
+    # stereo depths beyond this many baselines are unused
+    max_depth_baselines: float = _option(60.0, "(0, 1e6]")
+    point_sigma_px: float = _option(1.0, "(0, 1000]")  # keypoint measurement sigma [px]
+    # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
+    # over-weighted lines, see benchmarks/README.md)
+    line_sigma_px: float = _option(3.0, "(0, 1000]")
 
 
 @dataclass(frozen=True)
@@ -101,9 +174,10 @@ def _build(cls: type, data: Any, where: str, source: Path | None):
         raise ConfigError(source, f"'{where}' must be a mapping, got {type(data).__name__}")
     hints = typing.get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - names)
+    unknown = sorted(str(key) for key in set(data) - names)
     if unknown:
-        raise ConfigError(source, f"unknown key '{where}.{unknown[0]}' (known: {sorted(names)})")
+        key = short_repr(unknown[0], 40).strip("'")
+        raise ConfigError(source, f"unknown key '{where}.{key}' (known: {sorted(names)})")
     values = {}
     for key, value in data.items():
         values[key] = _convert(hints[key], value, f"{where}.{key}", source)
@@ -117,7 +191,8 @@ def _convert(hint: Any, value: Any, where: str, source: Path | None) -> Any:
     if origin is Literal:
         if value not in typing.get_args(hint):
             raise ConfigError(
-                source, f"'{where}' must be one of {typing.get_args(hint)}, got {value!r}"
+                source,
+                f"'{where}' must be one of {typing.get_args(hint)}, got {short_repr(value)}",
             )
         return value
     if origin in (typing.Union, types.UnionType):
@@ -134,30 +209,82 @@ def _convert(hint: Any, value: Any, where: str, source: Path | None) -> Any:
         raise ConfigError(source, errors[0] if errors else f"'{where}' has a wrong type")
     if origin is tuple:
         if not isinstance(value, (list, tuple)):
-            raise ConfigError(source, f"'{where}' must be a list, got {value!r}")
-        return tuple(value)
+            raise ConfigError(source, f"'{where}' must be a list, got {short_repr(value)}")
+        item = typing.get_args(hint)[0]
+        return tuple(_convert(item, v, f"{where}[{i}]", source) for i, v in enumerate(value))
     if hint is bool:
         if not isinstance(value, bool):
-            raise ConfigError(source, f"'{where}' must be true or false, got {value!r}")
+            raise ConfigError(source, f"'{where}' must be true or false, got {short_repr(value)}")
         return value
     if hint is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(source, f"'{where}' must be an integer, got {value!r}")
+            raise ConfigError(source, f"'{where}' must be an integer, got {short_repr(value)}")
         return value
     if hint is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(source, f"'{where}' must be a number, got {value!r}")
-        return float(value)
+            raise ConfigError(source, f"'{where}' must be a number, got {short_repr(value)}")
+        try:
+            return float(value)
+        except OverflowError:  # an integer beyond any float: out of every range
+            raise ConfigError(source, f"'{where}' is too large: {short_repr(value)}") from None
     if hint is str:
         if not isinstance(value, str):
-            raise ConfigError(source, f"'{where}' must be a string, got {value!r}")
+            raise ConfigError(source, f"'{where}' must be a string, got {short_repr(value)}")
         return value
     return value
 
 
+def option_range(cls: type, f: dataclasses.Field) -> Range | None:
+    """The declared range of numeric option ``f`` of dataclass ``cls`` (None: none declared)."""
+    return f.metadata.get("range") or FOREIGN_RANGES.get(cls, {}).get(f.name)
+
+
+def _numeric_kind(hint: Any) -> type | None:
+    """int or float when the option holds that number (possibly Optional), else None."""
+    if hint in (int, float):
+        return hint
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        kinds = [a for a in typing.get_args(hint) if a in (int, float)]
+        return kinds[0] if len(kinds) == 1 else None
+    return None
+
+
+def check_config(config: Any, source: Path | None = None, where: str = "config") -> None:
+    """Check every numeric option of ``config`` (a Config or any of its sections) against its
+    range: finite, inside the interval, an integer where one is meant. Raises ConfigError naming
+    the key. Also catches values set in code (``dataclasses.replace``) before they reach C++."""
+    hints = typing.get_type_hints(type(config))
+    for f in dataclasses.fields(config):
+        value, key = getattr(config, f.name), f"{where}.{f.name}"
+        if dataclasses.is_dataclass(value):
+            check_config(value, source, key)
+            continue
+        kind = _numeric_kind(hints[f.name])
+        if kind is None or value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(source, f"'{key}' must be a number, got {short_repr(value)}")
+        if kind is int and not isinstance(value, int):
+            raise ConfigError(source, f"'{key}' must be an integer, got {short_repr(value)}")
+        declared = option_range(type(config), f)
+        allowed = declared or (INT_FALLBACK if kind is int else FLOAT_FALLBACK)
+        try:
+            inside = value in allowed
+        except OverflowError:  # an integer too large to compare as a float
+            inside = False
+        if not inside:
+            raise ConfigError(
+                source,
+                f"'{key}' must be a finite number in {allowed}, got {short_repr(value)}"
+                if kind is float
+                else f"'{key}' must be an integer in {allowed}, got {short_repr(value)}",
+            )
+
+
 def config_from_dict(data: dict | None, source: Path | None = None) -> Config:
     """Build and check a :class:`Config` from a (partial) mapping."""
-    config = _build(Config, data or {}, "config", source)
+    config = _build(Config, {} if data is None else data, "config", source)
+    check_config(config, source)
     try:
         config.features.superpoint.check()
     except ValueError as exc:
@@ -172,10 +299,8 @@ def load_config(path: str | Path | None) -> Config:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(path, "config file not found")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(path, f"not valid YAML ({exc})") from None
+    # At most 1 MiB, no aliases, C loader: see slslam.yaml_io.
+    data = read_yaml(path, ConfigError, max_bytes=MAX_YAML_BYTES)
     return config_from_dict(data, path)
 
 

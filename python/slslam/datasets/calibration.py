@@ -14,26 +14,26 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from slslam.errors import CalibrationError
 from slslam.geometry import is_rigid_transform
+from slslam.yaml_io import read_yaml, short_repr
 
 SUPPORTED_DISTORTION_MODELS = ("radial-tangential",)
+# What can still be a camera: larger images, or radial-tangential coefficients beyond these
+# bounds (|k1|, |k2| <= 10, |p1|, |p2| <= 1; real lenses stay well under 1), are refused.
+MAX_RESOLUTION_PX = 20_000
+MAX_ABS_RADIAL = 10.0
+MAX_ABS_TANGENTIAL = 1.0
 
 
 def load_yaml(path: str | Path) -> dict[str, Any]:
-    """Read a YAML file, accepting OpenCV's ``%YAML:1.0`` header that PyYAML rejects."""
+    """Read a YAML file, accepting OpenCV's ``%YAML:1.0`` header that PyYAML rejects.
+
+    At most 1 MiB, no aliases, the C loader when available (see :mod:`slslam.yaml_io`).
+    """
     path = Path(path)
-    if not path.is_file():
-        raise CalibrationError(path, "file not found")
-    text = path.read_text(encoding="utf-8", errors="replace")
-    if text.startswith("%YAML:"):
-        text = text.split("\n", 1)[1] if "\n" in text else ""
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise CalibrationError(path, f"not valid YAML ({exc})") from None
+    data = read_yaml(path, CalibrationError, strip_opencv_header=True)
     if not isinstance(data, dict):
         raise CalibrationError(path, "expected a YAML mapping at the top level")
     return data
@@ -48,8 +48,10 @@ def _require(data: dict[str, Any], key: str, path: Path) -> Any:
 def _numbers(value: Any, count: int, key: str, path: Path) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise CalibrationError(path, f"'{key}' must be a list of numbers") from None
+    except (TypeError, ValueError, OverflowError):
+        raise CalibrationError(
+            path, f"'{key}' must be a list of numbers, got {short_repr(value)}"
+        ) from None
     if array.size != count:
         raise CalibrationError(path, f"'{key}' must have {count} numbers, got {array.size}")
     if not np.all(np.isfinite(array)):
@@ -100,11 +102,25 @@ class CameraCalibration:
         width, height = _numbers(_require(data, "resolution", path), 2, "resolution", path)
         if width <= 0 or height <= 0 or width != int(width) or height != int(height):
             raise CalibrationError(
-                path, f"'resolution' must be two positive integers, got {width} x {height}"
+                path, f"'resolution' must be two positive integers, got {width:g} x {height:g}"
+            )
+        if max(width, height) > MAX_RESOLUTION_PX:
+            raise CalibrationError(
+                path,
+                f"'resolution' {width:g} x {height:g} is not a camera image "
+                f"(at most {MAX_RESOLUTION_PX} px a side)",
             )
         fx, fy, cx, cy = _numbers(_require(data, "intrinsics", path), 4, "intrinsics", path)
         if fx <= 0 or fy <= 0:
-            raise CalibrationError(path, f"'intrinsics' focal lengths must be > 0, got {fx}, {fy}")
+            raise CalibrationError(
+                path, f"'intrinsics' focal lengths must be > 0, got {fx:g}, {fy:g}"
+            )
+        if not (-width < cx < 2 * width and -height < cy < 2 * height):
+            raise CalibrationError(
+                path,
+                f"'intrinsics' principal point ({cx:g}, {cy:g}) lies far outside the "
+                f"{width:g} x {height:g} image",
+            )
         model = _require(data, "distortion_model", path)
         if model not in SUPPORTED_DISTORTION_MODELS:
             raise CalibrationError(
@@ -115,7 +131,23 @@ class CameraCalibration:
         dist = _numbers(
             _require(data, "distortion_coefficients", path), 4, "distortion_coefficients", path
         )
+        for name, value, bound in zip(
+            ("k1", "k2", "p1", "p2"),
+            dist,
+            (MAX_ABS_RADIAL, MAX_ABS_RADIAL, MAX_ABS_TANGENTIAL, MAX_ABS_TANGENTIAL),
+            strict=True,
+        ):
+            if abs(value) > bound:
+                raise CalibrationError(
+                    path,
+                    f"'distortion_coefficients' {name} = {value:g} is beyond +-{bound:g}: "
+                    "not a radial-tangential lens model",
+                )
         rate = data.get("rate_hz")
+        if rate is not None:
+            (rate,) = _numbers(rate, 1, "rate_hz", path)
+            if rate <= 0:
+                raise CalibrationError(path, f"'rate_hz' must be > 0, got {rate:g}")
         return cls(
             path=path,
             T_body_cam=T,

@@ -33,11 +33,16 @@ from evo.core.trajectory import PoseTrajectory3D
 
 from slslam import _core
 from slslam.datasets.calibration import CameraCalibration
+from slslam.datasets.images import GrayImageReader
 from slslam.datasets.trajectory_io import read_trajectory
 from slslam.errors import DatasetError
 from slslam.geometry import invert_transform
+from slslam.yaml_io import short_repr
 
 log = logging.getLogger(__name__)
+
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+MIN_BASELINE_M = 1e-3  # a stereo pair closer than this has no usable disparity
 
 
 @dataclass(frozen=True)
@@ -105,11 +110,19 @@ def _read_image_index(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
             if len(row) < 2:
                 raise DatasetError(csv_path, f"row {row_number}: expected 'timestamp_ns,filename'")
             try:
-                stamps.append(int(row[0].strip()))
+                stamp = int(row[0].strip())
             except ValueError:
                 raise DatasetError(
-                    csv_path, f"row {row_number}: timestamp '{row[0]}' is not an integer"
+                    csv_path,
+                    f"row {row_number}: timestamp {short_repr(row[0])} is not an integer",
                 ) from None
+            if not INT64_MIN <= stamp <= INT64_MAX:
+                raise DatasetError(
+                    csv_path,
+                    f"row {row_number}: timestamp {short_repr(stamp)} does not fit int64 "
+                    "nanoseconds",
+                )
+            stamps.append(stamp)
             files.append(camera_dir / "data" / row[1].strip())
     if not stamps:
         raise DatasetError(csv_path, "no images listed")
@@ -219,6 +232,7 @@ class EurocSequence:
             [self._right_files[j] for j in right_idx], self.root / "cam1" / "data.csv"
         )
         self.timestamps_ns = t_left[left_idx]
+        self._read_image = GrayImageReader()  # 16-bit PNGs scaled by their real depth
         self._rectifier = self._build_rectifier()
 
     def _build_rectifier(self) -> _core.StereoRectifier:
@@ -230,6 +244,14 @@ class EurocSequence:
         T_left_right = (
             invert_transform(self.left_calibration.T_body_cam) @ self.right_calibration.T_body_cam
         )
+        t_right = T_left_right[:3, 3]  # cam1's centre in cam0's frame [m]
+        if np.linalg.norm(t_right) < MIN_BASELINE_M or t_right[0] <= 0:
+            raise DatasetError(
+                self.right_calibration.path,
+                f"'T_BS' puts cam1 at ({t_right[0]:.4g}, {t_right[1]:.4g}, {t_right[2]:.4g}) m "
+                "in cam0's frame: a stereo pair needs cam1 to the right of cam0 (x > 0) and a "
+                f"baseline of at least {MIN_BASELINE_M * 1000:g} mm (check both cameras' T_BS)",
+            )
         try:
             return _core.StereoRectifier(
                 radtan(self.left_calibration), radtan(self.right_calibration), T_left_right
@@ -265,7 +287,7 @@ class EurocSequence:
 
     def _load(self, path: Path) -> np.ndarray:
         try:
-            image = _core.read_gray_image(str(path))
+            image = self._read_image(path)
         except ValueError as exc:
             raise DatasetError(
                 path, str(exc).replace(f"{path}", "").strip(": ") or "unreadable image"
@@ -328,8 +350,8 @@ class EurocSequence:
             stamps = np.loadtxt(
                 path, delimiter=",", comments="#", usecols=0, dtype=np.int64, ndmin=1
             )
-        except ValueError as exc:
-            raise DatasetError(path, f"malformed IMU csv ({exc})") from None
+        except (ValueError, OverflowError) as exc:
+            raise DatasetError(path, f"malformed IMU csv ({short_repr(str(exc), 120)})") from None
         if table.shape[1] < 7:
             raise DatasetError(path, f"expected 7 columns (t, w_xyz, a_xyz), got {table.shape[1]}")
         return {"t_ns": stamps, "gyro": table[:, 1:4], "acc": table[:, 4:7]}

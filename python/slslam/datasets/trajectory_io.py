@@ -55,13 +55,31 @@ def detect_format(path: str | Path) -> str:
     )
 
 
+def _line_of_row(path: Path, row: int) -> int:
+    """The 1-based line number of data row ``row`` (0-based; comments and blanks skipped)."""
+    seen = -1
+    with path.open(encoding="utf-8", errors="replace") as handle:
+        for number, line in enumerate(handle, start=1):
+            stripped = line.strip()
+            if stripped and not stripped.startswith("#"):
+                seen += 1
+                if seen == row:
+                    return number
+    return 0
+
+
 def _validate(path: Path, traj: PosePath3D) -> None:
     if traj.num_poses == 0:
         raise TrajectoryFileError(path, "the trajectory file is empty (no pose rows)")
     bad = ~np.all(np.isfinite(traj.positions_xyz), axis=1)
     bad |= ~np.all(np.isfinite(traj.orientations_quat_wxyz), axis=1)
+    if isinstance(traj, PoseTrajectory3D):
+        bad |= ~np.isfinite(traj.timestamps)
     if np.any(bad):
-        raise TrajectoryFileError(path, f"pose {int(np.argmax(bad))} contains NaN or Inf")
+        row = int(np.argmax(bad))
+        raise TrajectoryFileError(
+            path, f"line {_line_of_row(path, row)}: pose {row} contains NaN or Inf"
+        )
     norms = np.linalg.norm(traj.orientations_quat_wxyz, axis=1)
     if np.any(norms < 1e-9):
         raise TrajectoryFileError(
@@ -111,7 +129,10 @@ def read_trajectory(
     except (file_interface.FileInterfaceException, ValueError, IndexError) as exc:
         raise TrajectoryFileError(path, f"not a valid {fmt.upper()} trajectory ({exc})") from None
     if fmt == "kitti" and kitti_times is not None:
-        times = np.loadtxt(kitti_times, ndmin=1, dtype=float)
+        try:
+            times = np.loadtxt(kitti_times, ndmin=1, dtype=float)
+        except (OSError, ValueError) as exc:
+            raise TrajectoryFileError(kitti_times, f"not a times file ({exc})") from None
         if times.shape[0] != traj.num_poses:
             raise TrajectoryFileError(
                 kitti_times, f"has {times.shape[0]} timestamps for {traj.num_poses} poses"
