@@ -16,7 +16,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from slslam._version import __version__
-from slslam.errors import SlslamError
+from slslam.errors import InputError, SlslamError
 
 app = typer.Typer(
     name="slslam",
@@ -29,6 +29,12 @@ app = typer.Typer(
 )
 console = Console(stderr=True)
 log = logging.getLogger("slslam")
+
+
+def _check_output_folder(out: Path | None) -> None:
+    """``--out`` must be a folder (or not exist yet): an existing file is a one-line error."""
+    if out is not None and out.exists() and not out.is_dir():
+        raise InputError(out, "--out names an existing file; give a folder (it is created)")
 
 
 def _stats_table(title: str, stats: dict[str, float]) -> Table:
@@ -77,22 +83,38 @@ def eval_command(
     ] = None,
     plot: Annotated[bool, typer.Option(help="Write ape.png into --out.")] = True,
 ) -> None:
-    """Score a trajectory against ground truth: APE (translation, metres) and RPE, via evo."""
-    from slslam.eval import evaluate
+    """Score a trajectory against ground truth: APE (translation, metres) and RPE, via evo.
 
-    result = evaluate(
-        estimate,
-        groundtruth,
-        out_dir=out,
-        align=align,  # type: ignore[arg-type]
-        max_diff_s=max_diff,
-        rpe_delta=None if no_rpe else rpe_delta,
-        rpe_unit=rpe_unit,
-        est_format=est_format,  # type: ignore[arg-type]
-        gt_format=gt_format,
-        gt_body_to_cam=gt_body_to_cam,
-        plot=plot,
-    )
+    When the evaluation itself fails (e.g. evo cannot align a stationary estimate), the reason is
+    printed as one line and, with --out, written to metrics.json as ``evaluation_error``.
+    """
+    from slslam.datasets.trajectory_io import read_trajectory
+    from slslam.eval import evaluate
+    from slslam.eval.report import load_groundtruth, write_json
+
+    _check_output_folder(out)
+    est = read_trajectory(estimate, est_format)  # type: ignore[arg-type]
+    gt = load_groundtruth(groundtruth, gt_format, gt_body_to_cam)  # type: ignore[arg-type]
+    try:
+        result = evaluate(
+            est,
+            gt,
+            out_dir=out,
+            align=align,  # type: ignore[arg-type]
+            max_diff_s=max_diff,
+            rpe_delta=None if no_rpe else rpe_delta,
+            rpe_unit=rpe_unit,  # type: ignore[arg-type]
+            plot=plot,
+        )
+    except Exception as exc:  # evo / numpy failures as well as slslam's own checks
+        message = " ".join(str(exc).split()) or type(exc).__name__
+        if out is not None:
+            record = {"estimate": str(estimate), "groundtruth": str(groundtruth)}
+            write_json(out / "metrics.json", {**record, "evaluation_error": message})
+        console.print(
+            f"[bold red]error:[/] {escape(message[:300])}", highlight=False, soft_wrap=True
+        )
+        raise typer.Exit(2) from None
     out_console = Console()
     out_console.print(
         _stats_table(
@@ -125,14 +147,26 @@ def info_command(
     out.print(f"  image size       {cam.width} x {cam.height}")
     out.print(f"  rectified camera fx={cam.fx:.3f} fy={cam.fy:.3f} cx={cam.cx:.3f} cy={cam.cy:.3f}")
     out.print(f"  baseline         {cam.baseline_m:.5f} m")
-    out.print(f"  ground truth     {seq.groundtruth_path or 'none'}")
+    out.print(f"  ground truth     {_groundtruth_status(seq)}")
+
+
+def _groundtruth_status(seq) -> str:
+    """'none', the path, or the path marked invalid with the reason (the file is read)."""
+    if seq.groundtruth_path is None:
+        return "none"
+    try:
+        poses = seq.groundtruth(frame="cam0").num_poses
+    except (SlslamError, ValueError) as exc:
+        problem = getattr(exc, "problem", str(exc))
+        return f"{seq.groundtruth_path} (INVALID: {escape(problem[:200])})"
+    return f"{seq.groundtruth_path} ({poses} poses)"
 
 
 @app.command("rectify")
 def rectify_command(
     dataset: Annotated[Path, typer.Argument(help="EuRoC ASL folder (holding mav0/, or mav0).")],
     out: Annotated[Path, typer.Option(help="Folder for left/ and right/ PNGs.")],
-    frames: Annotated[int, typer.Option(help="Number of pairs to write (0 = all).")] = 0,
+    frames: Annotated[int, typer.Option(min=0, help="Number of pairs to write (0 = all).")] = 0,
 ) -> None:
     """Write rectified stereo pairs as PNG, to check a calibration by eye."""
     from tqdm import tqdm
@@ -140,6 +174,7 @@ def rectify_command(
     from slslam import _core
     from slslam.datasets import EurocSequence
 
+    _check_output_folder(out)
     seq = EurocSequence(dataset)
     count = len(seq) if frames <= 0 else min(frames, len(seq))
     for side in ("left", "right"):
@@ -162,6 +197,7 @@ def demo_command(
     """
     from slslam.demo import run_demo
 
+    _check_output_folder(out)
     result = run_demo(out)
     Console().print(_stats_table("demo APE translation (m) (synthetic estimate)", result.ape.stats))
     Console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
@@ -206,6 +242,7 @@ def sim_command(
     """
     from slslam.sim import SimOptions, Simulator
 
+    _check_output_folder(out)
     options = SimOptions(
         preset=preset,
         frames=frames,
@@ -241,7 +278,9 @@ def run_command(
         Path | None,
         typer.Option(help="YAML config (keys as in configs/default.yaml); defaults otherwise."),
     ] = None,
-    max_frames: Annotated[int, typer.Option(help="Track only the first N frames (0 = all).")] = 0,
+    max_frames: Annotated[
+        int, typer.Option(min=0, help="Track only the first N frames (0 = all).")
+    ] = 0,
     groundtruth: Annotated[
         Path | None,
         typer.Option(
@@ -268,7 +307,9 @@ def run_command(
 
     from slslam.config import load_config
     from slslam.tracking import run_sequence
+    from slslam.tracking.run import RunInterrupted
 
+    _check_output_folder(out)
     cfg = load_config(config)
     if orb:
         cfg = dataclasses.replace(
@@ -276,14 +317,23 @@ def run_command(
         )
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
-    summary = run_sequence(
-        dataset,
-        out,
-        cfg,
-        max_frames=max_frames or None,
-        progress=progress,
-        groundtruth=groundtruth,
-    )
+    try:
+        summary = run_sequence(
+            dataset,
+            out,
+            cfg,
+            max_frames=max_frames or None,
+            progress=progress,
+            groundtruth=groundtruth,
+        )
+    except RunInterrupted as stop:
+        Console(stderr=True).print(
+            f"[bold red]stopped:[/] {stop}; the results so far are in {escape(str(out))} "
+            "(metrics.json says where the run stopped)",
+            highlight=False,
+            soft_wrap=True,
+        )
+        raise typer.Exit(128 + stop.signum) from None
     m = summary.metrics
     console = Console()
     console.print(
@@ -293,6 +343,8 @@ def run_command(
     )
     if "ape" in m:
         console.print(f"ATE RMSE (SE3, tracked frames): {m['ape']['rmse']:.4f} m")
+    elif "evaluation_error" in m:
+        console.print(f"no ATE: {escape(m['evaluation_error'])}", highlight=False)
     console.print(f"results in {out}")
 
 
@@ -364,8 +416,9 @@ def main(argv: list[str] | None = None) -> int:
         app(args=argv, prog_name="slslam")
     except SystemExit as exc:
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    except (SlslamError, ValueError, FileNotFoundError) as exc:
-        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False)
+    except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
+        # soft_wrap: one line whatever the width, so logs and scripts see one line per error
+        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         return 2
     return 0
 

@@ -41,7 +41,9 @@ class Range:
     """The values a numeric option may take: a finite interval, each end closed or open.
 
     Written in interval notation, ``Range.parse("(0, 1]")``; the bound of an integer option also
-    keeps it inside C++ ``int``, so no value reaches the core that it cannot hold.
+    keeps it inside C++ ``int``, so no value reaches the core that it cannot hold. Positive real
+    options take a practical lower bound (e.g. ``[0.01, 1000]`` px) rather than ``(0, ...]``: the
+    core stores many as ``float``, where 1e-300 is 0 and fails its own check.
     """
 
     low: float
@@ -78,9 +80,10 @@ def _option(default: float, interval: str) -> Any:
 FOREIGN_RANGES: dict[type, dict[str, Range]] = {
     OrbOptions: {
         "max_keypoints": Range.parse("[1, 100000]"),
-        "scale_factor": Range.parse("(1, 4]"),
+        "scale_factor": Range.parse("[1.01, 4]"),
         "num_levels": Range.parse("[1, 32]"),
-        "fast_threshold": Range.parse("[1, 255]"),
+        # not below the core's fallback threshold for weak cells (OrbOptions.min_fast_threshold, 7)
+        "fast_threshold": Range.parse("[7, 255]"),
     },
     SuperPointOptions: {
         "detection_threshold": Range.parse("(0, 1)"),
@@ -109,9 +112,9 @@ class DynamicCellConfig:
 
     enabled: bool = True
     cell_size_px: int = _option(32, "[4, 4096]")  # cell side [px]
-    sigma_px: float = _option(3.0, "(0, 1000]")  # Gaussian width of G(d) [px]
+    sigma_px: float = _option(3.0, "[0.1, 1000]")  # Gaussian width of G(d) [px]
     # weight of the current frame in the temporal smoothing
-    alpha: float = _option(0.7, "(0, 1]")
+    alpha: float = _option(0.7, "[0.01, 1]")
     # l: a cell below this weight is invalid (with its 8 neighbours)
     threshold: float = _option(0.5, "[0, 1]")
 
@@ -137,14 +140,14 @@ class TrackingConfig:
     # fewer inliers after motion-only BA: the frame is LOST
     min_inliers: int = _option(15, "[3, 100000]")
     # guided matching window [px] (doubled on a retry)
-    search_radius_px: float = _option(15.0, "(0, 10000]")
+    search_radius_px: float = _option(15.0, "[1, 10000]")
     # guided matching bound for ORB [Hamming bits]
-    max_distance_binary: float = _option(50.0, "(0, 256]")
+    max_distance_binary: float = _option(50.0, "[1, 256]")
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
-    max_distance_float: float = _option(0.8, "(0, 2]")
+    max_distance_float: float = _option(0.8, "[0.01, 2]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
     # tracked / reference keyframe points below: keyframe
-    keyframe_track_ratio: float = _option(0.75, "(0, 1]")
+    keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
     keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe
     # covisible keyframes in the local map and local BA
     local_keyframes: int = _option(10, "[1, 1000]")
@@ -153,11 +156,11 @@ class TrackingConfig:
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
     line_angle_weight: float = _option(10.0, "[0, 1e6]")
     # stereo depths beyond this many baselines are unused
-    max_depth_baselines: float = _option(60.0, "(0, 1e6]")
-    point_sigma_px: float = _option(1.0, "(0, 1000]")  # keypoint measurement sigma [px]
+    max_depth_baselines: float = _option(60.0, "[1, 1e6]")
+    point_sigma_px: float = _option(1.0, "[0.01, 1000]")  # keypoint measurement sigma [px]
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
-    line_sigma_px: float = _option(3.0, "(0, 1000]")
+    line_sigma_px: float = _option(3.0, "[0.01, 1000]")
 
 
 @dataclass(frozen=True)

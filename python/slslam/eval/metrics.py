@@ -82,6 +82,12 @@ def associate(
     return ref, est
 
 
+def _first_line(exc: BaseException, limit: int = 200) -> str:
+    """An exception's message on one line, at most ``limit`` characters."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _check_alignment(align: str) -> None:
     if align not in ALIGNMENTS:
         raise InputError(None, f"unknown alignment '{align}' (use one of {ALIGNMENTS})")
@@ -107,13 +113,20 @@ def compute_ape(
     """Absolute position error (translation part) after the chosen alignment."""
     _check_alignment(align)
     ref, est = associate(reference, estimate, max_diff_s)
-    result = main_ape.ape(
-        ref,
-        est,
-        PoseRelation.translation_part,
-        align=align != "none",
-        correct_scale=align == "sim3",
-    )
+    try:
+        result = main_ape.ape(
+            ref,
+            est,
+            PoseRelation.translation_part,
+            align=align != "none",
+            correct_scale=align == "sim3",
+        )
+    except Exception as exc:  # evo's own types, numpy's LinAlgError (e.g. a degenerate alignment)
+        raise InputError(
+            None,
+            f"APE cannot be computed ({type(exc).__name__}: {_first_line(exc)}); a stationary or "
+            "degenerate trajectory cannot be aligned",
+        ) from None
     return _collect(
         "ape",
         result,
@@ -156,7 +169,9 @@ def compute_rpe(
             correct_scale=align == "sim3",
         )
     except Exception as exc:  # evo raises its own types when no pose pair spans delta
-        raise InputError(None, f"RPE failed for delta {delta} {delta_unit}: {exc}") from None
+        raise InputError(
+            None, f"RPE failed for delta {delta} {delta_unit}: {_first_line(exc)}"
+        ) from None
     return _collect(
         "rpe",
         result,

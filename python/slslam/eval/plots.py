@@ -65,6 +65,12 @@ def plot_ape(ape: ErrorResult, path: str | Path, title: str = "") -> Path:
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    # A temporary name and a rename: an interrupted run never leaves a truncated ape.png.
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        fig.savefig(tmp, dpi=110, format="png")
+        tmp.replace(path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
     return path

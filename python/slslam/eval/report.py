@@ -73,8 +73,11 @@ def write_json(path: Path, data: dict) -> Path:
 
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".partial")
-    tmp.write_text(json.dumps(clean(data), indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(json.dumps(clean(data), indent=2) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    finally:  # an interrupted write leaves neither a partial file nor a truncated final one
+        tmp.unlink(missing_ok=True)
     return path
 
 

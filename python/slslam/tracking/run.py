@@ -6,16 +6,32 @@ Outputs in ``out_dir``:
     frames.csv       per frame: state, counts and stage times [ms], also written as it goes
     map.ply          map points (vertices) and map lines (edges between endpoint vertices)
     metrics.json     frames, tracked ratio, median stage times, and ATE/RPE (evo, SE3 alignment,
-                     over tracked frames) when the dataset has ground truth
+                     over tracked frames) when the dataset has ground truth; ``completed`` says
+                     whether the run finished, else ``stopped_in`` (tracking, map or scoring) and
+                     ``stopped_at_frame`` say where it stopped; a failed evaluation is reported
+                     as ``evaluation_error``, it never fails the run
     ape.png          the APE plot (with ground truth)
     config.yaml      the configuration used
+
+Interrupts: SIGINT (Ctrl-C) and SIGTERM (``kill``, ``timeout``, containers) stop the frame loop
+after the frame in progress; the map and the scores are still written. A further signal stops
+that too. Whatever the moment, trajectory.tum holds the frames tracked so far, map.ply is complete
+or absent, and metrics.json (written at the start, then replaced) says how far the run got: files
+are written under a temporary name and renamed.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import logging
+import os
+import signal
 import statistics
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,11 +40,12 @@ from evo.core.trajectory import PoseTrajectory3D
 from scipy.spatial.transform import Rotation
 from tqdm import tqdm
 
-from slslam.config import Config, dump_config
+from slslam.config import Config, check_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
 from slslam.errors import DatasetError, InputError
+from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
-from slslam.tracking.tracker import TRACKED_STATES, Tracker, TrackResult
+from slslam.tracking.tracker import TRACKED_STATES, MapData, Tracker, TrackResult
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +77,85 @@ class RunSummary:
     out_dir: Path
     metrics: dict
     results: list[TrackResult]
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """A run stopped by SIGINT or SIGTERM; ``signum`` says which (the CLI exits 128 + signum)."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+
+
+class _Signals:
+    """SIGINT and SIGTERM while a run lasts. The handler only counts a signal, unless ``armed()``
+    is active, where it raises :class:`RunInterrupted` at once. The frame loop polls with
+    :meth:`raise_if_requested` between frames (so the frame in progress is finished and written);
+    the map and scoring stages run armed (a signal cuts them short); everything else (closing the
+    tracker, writing metrics.json) is never cut: a signal there is noticed by the next check."""
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+        self._consumed = 0
+        self._armed = False
+
+    def _handler(self, signum: int, frame) -> None:
+        self.received.append(signum)
+        if self._armed:
+            self._consumed = len(self.received)
+            raise RunInterrupted(signum)
+
+    def raise_if_requested(self) -> None:
+        if len(self.received) > self._consumed:
+            self._consumed = len(self.received)
+            raise RunInterrupted(self.received[-1])
+
+    @contextmanager
+    def armed(self) -> Iterator[None]:
+        self._armed = True
+        try:
+            self.raise_if_requested()
+            yield
+        finally:
+            self._armed = False
+
+    @contextmanager
+    def installed(self) -> Iterator[_Signals]:
+        """Handle both signals for the duration; the previous handlers come back afterwards.
+        Outside the main thread (where Python cannot set handlers) nothing is installed."""
+        if threading.current_thread() is not threading.main_thread():
+            yield self
+            return
+        previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        for s in previous:
+            signal.signal(s, self._handler)
+        try:
+            yield self
+        finally:
+            for s, handler in previous.items():
+                signal.signal(s, handler)
+
+
+_SIGNALS = threading.local()
+
+
+def _with_signal_handling(run: Callable) -> Callable:
+    """Runs ``run`` with SIGINT and SIGTERM handled (see :class:`_Signals`)."""
+
+    @functools.wraps(run)
+    def wrapper(*args, **kwargs):
+        with _Signals().installed() as signals:
+            _SIGNALS.current = signals
+            try:
+                return run(*args, **kwargs)
+            finally:
+                _SIGNALS.current = None
+
+    return wrapper
+
+
+def _current_signals() -> _Signals:
+    return getattr(_SIGNALS, "current", None) or _Signals()
 
 
 def open_dataset(path: str | Path) -> EurocSequence:
@@ -97,6 +193,17 @@ def write_ply(path: Path, points: np.ndarray, lines: np.ndarray) -> Path:
         ]
     ).astype(int)
     tmp = path.with_name(path.name + ".partial")
+    try:
+        _write_ply_body(tmp, vertices, colours, n_points, n_lines)
+        tmp.replace(path)
+    finally:  # interrupted: no partial file left behind, and never one under the final name
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def _write_ply_body(
+    tmp: Path, vertices: np.ndarray, colours: np.ndarray, n_points: int, n_lines: int
+) -> None:
     with tmp.open("w", encoding="ascii") as f:
         f.write("ply\nformat ascii 1.0\ncomment slslam map: points, then line endpoints\n")
         f.write(f"element vertex {len(vertices)}\n")
@@ -108,8 +215,6 @@ def write_ply(path: Path, points: np.ndarray, lines: np.ndarray) -> Path:
         np.savetxt(f, rows, fmt=["%.5f", "%.5f", "%.5f", "%d", "%d", "%d"])
         first = n_points + 2 * np.arange(n_lines)
         np.savetxt(f, np.column_stack([first, first + 1]), fmt="%d")
-    tmp.replace(path)
-    return path
 
 
 def tracked_trajectory(results: list[TrackResult]) -> PoseTrajectory3D | None:
@@ -122,23 +227,68 @@ def tracked_trajectory(results: list[TrackResult]) -> PoseTrajectory3D | None:
     )
 
 
+def _one_line(exc: BaseException, limit: int = 300) -> str:
+    text = " ".join(f"{type(exc).__name__}: {exc}".split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _score(estimate: PoseTrajectory3D, gt, out: Path) -> dict:
     """APE (and RPE over 1 m) against ground truth, writing ape.png. A failed evaluation (no
-    timestamps in common, a trajectory shorter than the RPE delta) is logged and reported in the
-    metrics; it does not fail the run, whose trajectory is already written."""
+    timestamps in common, a trajectory shorter than the RPE delta, evo failing on a stationary or
+    degenerate estimate) is logged as one line and reported as ``evaluation_error``; it does not
+    fail the run, whose trajectory is already written. Only the caller writes metrics.json."""
     try:
-        evaluation = evaluate(estimate, gt, out_dir=out, align="se3", rpe_delta=1.0)
-    except InputError as exc:
-        log.warning("%s; scoring APE only", exc)
         try:
-            evaluation = evaluate(estimate, gt, out_dir=out, align="se3", rpe_delta=None)
-        except InputError as exc2:
-            log.warning("no ATE: %s", exc2)
-            return {"evaluation_error": str(exc2)}
+            evaluation = evaluate(estimate, gt, align="se3", rpe_delta=1.0, plot=False)
+        except InputError as exc:
+            log.warning("%s; scoring APE only", exc)
+            evaluation = evaluate(estimate, gt, align="se3", rpe_delta=None, plot=False)
+    except Exception as exc:  # anything evo or numpy raise: the run's outputs come first
+        log.warning("no ATE: %s", _one_line(exc))
+        return {"evaluation_error": _one_line(exc)}
     summary = evaluation.summary()
-    return {k: summary[k] for k in ("ape", "rpe") if k in summary}
+    scores = {k: summary[k] for k in ("ape", "rpe") if k in summary}
+    try:  # ATE as a share of the distance driven over the scored span (the drift measure)
+        t0, t1 = estimate.timestamps[0], estimate.timestamps[-1]
+        inside = (gt.timestamps >= t0) & (gt.timestamps <= t1)
+        path = float(np.linalg.norm(np.diff(gt.positions_xyz[inside], axis=0), axis=1).sum())
+        scores["path_length_m"] = path
+        if path > 0 and "ape" in scores:
+            scores["ape_rmse_percent_of_path"] = 100.0 * scores["ape"]["rmse"] / path
+    except Exception as exc:
+        log.warning("no path length: %s", _one_line(exc))
+    try:
+        plot_ape(evaluation.ape, out / "ape.png")
+    except Exception as exc:
+        log.warning("no APE plot: %s", _one_line(exc))
+        scores["plot_error"] = _one_line(exc)
+    return scores
 
 
+def _groundtruth(sequence: EurocSequence, groundtruth: str | Path | None):
+    """The ground truth to score against, read and checked before any frame is tracked."""
+    if groundtruth is not None:
+        if not Path(groundtruth).exists():
+            raise DatasetError(groundtruth, "ground-truth file not found")
+        # Rectification only rotates the camera: positions in the cam0 and rectified frames agree,
+        # so a cam0 ground truth serves the position error (APE translation part) unchanged.
+        return load_groundtruth(groundtruth)
+    if sequence.groundtruth_path is not None:
+        return sequence.groundtruth(frame="rectified")
+    return None
+
+
+def _map_metrics(map_data: MapData) -> dict:
+    return {
+        "keyframes": map_data.keyframes,
+        "maps": map_data.maps,
+        "map_points": len(map_data.points),
+        "map_lines": len(map_data.lines),
+        "local_mapping": map_data.stats,
+    }
+
+
+@_with_signal_handling
 def run_sequence(
     dataset: str | Path,
     out_dir: str | Path,
@@ -161,12 +311,22 @@ def run_sequence(
             used instead of the sequence's own, e.g. for an excerpt that ships none.
     """
     config = config or Config()
+    check_config(config)
     sequence = open_dataset(dataset)
-    if groundtruth is not None and not Path(groundtruth).is_file():
-        raise DatasetError(groundtruth, "ground-truth file not found")
+    gt = _groundtruth(sequence, groundtruth)  # a bad ground truth fails before any tracking
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "the output folder is an existing file")
     out.mkdir(parents=True, exist_ok=True)
     dump_config(config, out / "config.yaml")
+    signals = _current_signals()
+    for stale in ("map.ply", "ape.png"):  # left by an earlier run into this folder
+        (out / stale).unlink(missing_ok=True)
+    # Replaced at the end; until then (even after SIGKILL) it says the run did not complete.
+    write_json(
+        out / "metrics.json",
+        {"dataset": str(dataset), "completed": False, "stopped_in": "tracking"},
+    )
     n = len(sequence) if max_frames is None else min(max_frames, len(sequence))
     results: list[TrackResult] = []
     error: BaseException | None = None
@@ -187,6 +347,7 @@ def run_sequence(
             bar = tqdm(range(n), desc="tracking", unit="frame", disable=not progress)
             try:
                 for i in bar:
+                    signals.raise_if_requested()  # SIGINT / SIGTERM: stop between frames
                     frame = sequence[i]
                     result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
                     results.append(result)
@@ -210,11 +371,27 @@ def run_sequence(
                     len(results),
                     exc,
                 )
+    # After the frame loop: the map, then the scores. An error or a signal in one of them skips
+    # what is left; metrics.json is written in every case and says where the run stopped.
+    stops: list[tuple[str, BaseException]] = [] if error is None else [("tracking", error)]
+    map_data: MapData | None = None
+
+    def map_stage() -> None:
+        nonlocal map_data
         map_data = tracker.map()
-    write_ply(out / "map.ply", map_data.points, map_data.lines)
+        write_ply(out / "map.ply", map_data.points, map_data.lines)
+
+    _stage("map", map_stage, signals, stops, out)
+    estimate = tracked_trajectory(results)
+    scores: dict = {}
+    if estimate is not None and gt is not None:
+        _stage("scoring", lambda: scores.update(_score(estimate, gt, out)), signals, stops, out)
+    elif gt is not None:
+        scores["evaluation_error"] = "fewer than 2 tracked frames: nothing to score"
 
     tracked = sum(r.state in TRACKED_STATES for r in results)
     metrics: dict = {
+        "completed": not stops,
         "dataset": str(dataset),
         "frontend": tracker.frontend_name,
         "lines": config.tracking.use_lines,
@@ -224,30 +401,52 @@ def run_sequence(
         "states": {
             s: sum(r.state == s for r in results) for s in sorted({r.state for r in results})
         },
-        "keyframes": map_data.keyframes,
-        "maps": map_data.maps,
-        "map_points": len(map_data.points),
-        "map_lines": len(map_data.lines),
-        "local_mapping": map_data.stats,
         "median_ms": {
             s: statistics.median(r.timings_ms[s] for r in results) if results else None
             for s in STAGES
         },
     }
-    estimate = tracked_trajectory(results)
-    gt = None
-    if groundtruth is not None:
-        # Rectification only rotates the camera: positions in the cam0 and rectified frames agree,
-        # so a cam0 ground truth serves the position error (APE translation part) unchanged.
-        gt = load_groundtruth(groundtruth)
-    elif sequence.groundtruth_path is not None:
-        gt = sequence.groundtruth(frame="rectified")
-    if estimate is not None and gt is not None:
-        metrics.update(_score(estimate, gt, out))
-    if error is not None:
-        metrics["error"] = f"{type(error).__name__}: {error}"
+    if map_data is not None:
+        metrics.update(_map_metrics(map_data))
+    metrics.update(scores)
+    if stops:
+        metrics["stopped_in"], first = stops[0]
         metrics["stopped_at_frame"] = len(results)
+        metrics["error"] = _one_line(first)
+        if len(stops) > 1:  # a second signal (or error) while finishing
+            metrics["finishing_stopped_in"] = stops[1][0]
     write_json(out / "metrics.json", metrics)
-    if error is not None:
-        raise error
+    if stops:
+        raise stops[-1][1] if isinstance(stops[-1][1], KeyboardInterrupt) else stops[0][1]
     return RunSummary(out, metrics, results)
+
+
+#: Tests only: ``SLSLAM_TEST_PAUSE_IN=map`` (or ``scoring``) makes that stage write
+#: ``<out>/paused_in_<stage>`` and wait up to 60 s, so a test can signal the run at that moment.
+TEST_PAUSE_ENV = "SLSLAM_TEST_PAUSE_IN"
+
+
+def _pause_for_tests(stage: str, out: Path) -> None:
+    if os.environ.get(TEST_PAUSE_ENV) == stage:
+        (out / f"paused_in_{stage}").touch()
+        time.sleep(60)  # a signal ends the sleep: the handler raises
+
+
+def _stage(
+    name: str,
+    work: Callable[[], None],
+    signals: _Signals,
+    stops: list[tuple[str, BaseException]],
+    out: Path,
+) -> None:
+    """Runs one stage after the frame loop, armed for signals; an error or a signal is recorded
+    in ``stops``. Skipped when a stage before it (after the frame loop) was stopped."""
+    if any(stage != "tracking" for stage, _ in stops):
+        return
+    try:
+        with signals.armed():
+            _pause_for_tests(name, out)
+            work()
+    except (Exception, KeyboardInterrupt) as exc:
+        log.error("run stopped in the %s stage: %s", name, _one_line(exc))
+        stops.append((name, exc))
