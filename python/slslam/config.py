@@ -5,7 +5,7 @@ A config file holds only the keys it changes; everything else keeps the default 
 errors that name the file and the key, so a typo never passes silently.
 
     features:
-      point_frontend: superpoint      # superpoint | orb
+      point_frontend: superpoint      # superpoint | xfeat | orb
       superpoint:
         model_path: /models/superpoint_v1.onnx   # overrides $SLSLAM_SUPERPOINT_MODEL
 """
@@ -27,6 +27,7 @@ import yaml
 from slslam.errors import InputError
 from slslam.features.orb import OrbOptions
 from slslam.features.superpoint import ENV_MODEL, SuperPointOptions
+from slslam.features.xfeat import XFeatOptions
 from slslam.yaml_io import MAX_YAML_BYTES, read_yaml, short_repr
 
 log = logging.getLogger(__name__)
@@ -92,6 +93,13 @@ FOREIGN_RANGES: dict[type, dict[str, Range]] = {
         "max_keypoints": Range.parse("[1, 100000]"),
         "intra_op_threads": Range.parse("[0, 1024]"),
     },
+    XFeatOptions: {
+        "detection_threshold": Range.parse("(0, 1)"),
+        "nms_radius": Range.parse("[0, 100]"),
+        "border_px": Range.parse("[0, 1000]"),
+        "max_keypoints": Range.parse("[1, 100000]"),
+        "intra_op_threads": Range.parse("[0, 1024]"),
+    },
 }
 #: Where an option declares no range: finite, and an integer must fit a C++ int.
 INT_FALLBACK = Range(-(2**31), 2**31 - 1)
@@ -123,8 +131,9 @@ class DynamicCellConfig:
 class FeaturesConfig:
     """The point front end."""
 
-    point_frontend: Literal["superpoint", "orb"] = "superpoint"
+    point_frontend: Literal["superpoint", "xfeat", "orb"] = "superpoint"
     superpoint: SuperPointOptions = field(default_factory=SuperPointOptions)
+    xfeat: XFeatOptions = field(default_factory=XFeatOptions)  # weights shipped (Apache-2.0)
     orb: OrbOptions = field(default_factory=OrbOptions)
     grid: GridConfig = field(default_factory=GridConfig)
     dynamic_cells: DynamicCellConfig = field(default_factory=DynamicCellConfig)
@@ -292,6 +301,10 @@ def config_from_dict(data: dict | None, source: Path | None = None) -> Config:
         config.features.superpoint.check()
     except ValueError as exc:
         raise ConfigError(source, f"features.superpoint: {exc}") from None
+    try:
+        config.features.xfeat.check()
+    except ValueError as exc:
+        raise ConfigError(source, f"features.xfeat: {exc}") from None
     return config
 
 
@@ -326,10 +339,14 @@ def _plain(value: Any) -> Any:
 
 def make_point_frontend(config: FeaturesConfig):
     """The configured point front end. SuperPoint without weights (no model_path in the config
-    and no $SLSLAM_SUPERPOINT_MODEL) falls back to ORB with one warning line."""
+    and no $SLSLAM_SUPERPOINT_MODEL) falls back to ORB with one warning line; XFeat's weights
+    ship with slslam."""
     from slslam.features.orb import Orb
     from slslam.features.superpoint import SuperPoint
+    from slslam.features.xfeat import XFeat
 
+    if config.point_frontend == "xfeat":
+        return XFeat(config.xfeat)
     if config.point_frontend == "superpoint":
         if config.superpoint.model_path or os.environ.get(ENV_MODEL):
             return SuperPoint(config.superpoint)

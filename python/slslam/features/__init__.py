@@ -1,6 +1,6 @@
-"""Point front ends: SuperPoint (onnxruntime) and ORB (OpenCV) with one interface.
+"""Point front ends: XFeat and SuperPoint (onnxruntime) and ORB (OpenCV) with one interface.
 
-Both have ``detect(image: uint8 H x W) -> Keypoints`` (uv, scores, descriptors). The per-cell
+All have ``detect(image: uint8 H x W) -> Keypoints`` (uv, scores, descriptors). The per-cell
 limit, the dynamic-cell filter and the matchers are in the C++ core (``slslam._core``:
 ``grid_limit``, ``DynamicCellFilter``, ``match_descriptors``, ``guided_match``).
 """
@@ -13,6 +13,7 @@ from slslam.features.superpoint import (
     SuperPointOptions,
     resolve_model_path,
 )
+from slslam.features.xfeat import XFeat, XFeatOptions
 
 __all__ = [
     "ENV_MODEL",
@@ -20,5 +21,7 @@ __all__ = [
     "ModelError",
     "SuperPoint",
     "SuperPointOptions",
+    "XFeat",
+    "XFeatOptions",
     "resolve_model_path",
 ]

