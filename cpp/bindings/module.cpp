@@ -10,6 +10,7 @@ void BindSim(py::module_& m);
 void BindRayCaster(py::module_& m);
 void BindLines(py::module_& m);
 void BindTracking(py::module_& m);
+void BindPlace(py::module_& m);
 #ifdef SLSLAM_WITH_PCL
 void BindLidar(py::module_& m);
 #endif
@@ -24,6 +25,7 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindRayCaster(m);
   slslam::bindings::BindLines(m);
   slslam::bindings::BindTracking(m);
+  slslam::bindings::BindPlace(m);
 #ifdef SLSLAM_WITH_PCL
   slslam::bindings::BindLidar(m);
 #endif

@@ -404,6 +404,94 @@ def models_export_command(
         console.print(f"  {key}: {value}", highlight=False, markup=False)
 
 
+vocab_app = typer.Typer(
+    help="Bag-of-words vocabularies for place recognition: train one on images, describe one.",
+    no_args_is_help=True,
+)
+app.add_typer(vocab_app, name="vocab")
+
+
+@vocab_app.command("train")
+def vocab_train_command(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(help="Images (PNG/JPG) or folders searched recursively for them."),
+    ],
+    out: Annotated[Path, typer.Option(help="Vocabulary file to write (.slvoc).")],
+    frontend: Annotated[
+        str, typer.Option(help="Descriptors: orb (binary, 1000 per image) or superpoint (float).")
+    ] = "orb",
+    branching: Annotated[int, typer.Option(help="k of the k-means tree.")] = 10,
+    levels: Annotated[int, typer.Option(help="Depth L of the tree (at most k^L words).")] = 4,
+    max_images: Annotated[
+        int, typer.Option(help="Use at most N images, evenly spread (0 = all).")
+    ] = 0,
+    seed: Annotated[int, typer.Option(help="k-means++ seed; same seed, same vocabulary.")] = 0,
+    progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+) -> None:
+    """Train a vocabulary (hierarchical k-means, TF-IDF) on the descriptors of a set of images."""
+    from slslam.place import VocabularyOptions, evenly_spaced, find_images, train_from_images
+
+    options = VocabularyOptions(branching=branching, levels=levels, seed=seed)
+    options.to_core()  # bad k / L: one line naming the option, before any image is read
+    if frontend == "orb":
+        from slslam.features.orb import Orb, OrbOptions
+
+        orb = Orb(OrbOptions(max_keypoints=1000))
+
+        def detect(image):
+            return orb.detect(image).descriptors
+
+    elif frontend == "superpoint":
+        from slslam.features import SuperPoint, SuperPointOptions
+
+        superpoint = SuperPoint(SuperPointOptions(max_keypoints=1000))
+
+        def detect(image):
+            return superpoint.detect(image).descriptors
+
+    else:
+        raise typer.BadParameter(f"--frontend must be orb or superpoint, got {frontend!r}")
+    images = evenly_spaced(find_images(inputs), max_images)
+    summary = train_from_images(images, detect, options, progress=progress)
+    path = summary.vocabulary.save(out)
+    out_console = Console()
+    out_console.print(
+        f"{summary.descriptors} {frontend} descriptors from {summary.images} images "
+        f"({summary.extract_s:.1f} s), trained in {summary.train_s:.1f} s"
+    )
+    out_console.print(f"{summary.vocabulary!r}")
+    out_console.print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB)")
+
+
+@vocab_app.command("info")
+def vocab_info_command(
+    path: Annotated[Path, typer.Argument(help="A vocabulary file (.slvoc).")],
+) -> None:
+    """Describe a vocabulary file: descriptor kind and width, tree shape, words, weights."""
+    import numpy as np
+
+    from slslam.place import Vocabulary
+
+    vocabulary = Vocabulary.load(path)
+    weights = np.array([vocabulary.word_weight(w) for w in range(vocabulary.num_words)])
+    out = Console()
+    out.print(f"vocabulary {path} ({path.stat().st_size / 1024:.0f} KiB)")
+    out.print(
+        f"  descriptors  {vocabulary.descriptor_type}, {vocabulary.descriptor_cols} "
+        f"{'bytes' if vocabulary.descriptor_type == 'binary' else 'floats'}"
+    )
+    out.print(
+        f"  tree         k={vocabulary.branching}, L={vocabulary.levels}, "
+        f"{vocabulary.num_nodes} nodes"
+    )
+    out.print(f"  words        {vocabulary.num_words}")
+    out.print(
+        f"  IDF weights  min {weights.min():.3f}, median {np.median(weights):.3f}, "
+        f"max {weights.max():.3f}"
+    )
+
+
 @app.command("version")
 def version_command() -> None:
     """Print the slslam version and the C++ core it loads."""

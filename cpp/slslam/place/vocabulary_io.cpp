@@ -1,0 +1,308 @@
+// The vocabulary file: compact, little-endian, checksummed.
+//
+//   offset  size  field
+//   0       8     magic "SLSVOCAB"
+//   8       4     format version (uint32, kFormatVersion)
+//   12      4     descriptor kind (uint32): 1 binary (uint8, Hamming), 2 float32 (L2)
+//   16      4     descriptor cols (uint32): bytes (binary) or floats
+//   20      4     branching k (uint32)
+//   24      4     levels L (uint32)
+//   28      4     node count (uint32), node 0 is the root
+//   32      ...   per node: parent (int32, -1 for the root), word id (int32, -1 for inner nodes),
+//                 IDF weight (float64), descriptor (cols bytes, or cols float32)
+//   end-8   8     FNV-1a 64 of every byte before it
+//
+// Parents precede their children (parent < node index), which makes any accepted file a tree.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "slslam/core/check.h"
+#include "slslam/place/descriptor_space.h"
+#include "slslam/place/vocabulary.h"
+
+namespace slslam {
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'L', 'S', 'V', 'O', 'C', 'A', 'B'};
+constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kKindBinary = 1;
+constexpr uint32_t kKindFloat = 2;
+constexpr size_t kHeaderBytes = 32;
+constexpr size_t kChecksumBytes = 8;
+constexpr uint32_t kMaxCols = 1 << 16;  // far beyond any descriptor; guards the size arithmetic
+
+uint64_t Fnv1a64(const uint8_t* data, size_t size) {
+  uint64_t hash = 0xcbf29ce484222325ull;  // FNV offset basis
+  for (size_t i = 0; i < size; ++i) {
+    hash ^= data[i];
+    hash *= 0x100000001b3ull;  // FNV prime
+  }
+  return hash;
+}
+
+// Appends fixed-width little-endian values to a byte buffer, whatever the host's byte order.
+class Writer {
+ public:
+  void Bytes(const void* data, size_t size) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    buffer_.insert(buffer_.end(), p, p + size);
+  }
+  void U32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) buffer_.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  }
+  void U64(uint64_t v) {
+    for (int i = 0; i < 8; ++i) buffer_.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  }
+  void I32(int32_t v) { U32(static_cast<uint32_t>(v)); }
+  void F32(float v) {
+    uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    U32(bits);
+  }
+  void F64(double v) {
+    uint64_t bits;
+    std::memcpy(&bits, &v, 8);
+    U64(bits);
+  }
+  std::vector<uint8_t>& buffer() { return buffer_; }
+
+ private:
+  std::vector<uint8_t> buffer_;
+};
+
+// Reads little-endian values from a buffer whose length was checked beforehand.
+class Reader {
+ public:
+  explicit Reader(const uint8_t* data) : p_(data) {}
+  uint32_t U32() {
+    uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(p_[i]) << (8 * i);
+    p_ += 4;
+    return v;
+  }
+  uint64_t U64() {
+    uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= static_cast<uint64_t>(p_[i]) << (8 * i);
+    p_ += 8;
+    return v;
+  }
+  int32_t I32() { return static_cast<int32_t>(U32()); }
+  float F32() {
+    const uint32_t bits = U32();
+    float v;
+    std::memcpy(&v, &bits, 4);
+    return v;
+  }
+  double F64() {
+    const uint64_t bits = U64();
+    double v;
+    std::memcpy(&v, &bits, 8);
+    return v;
+  }
+  const uint8_t* Skip(size_t n) {
+    const uint8_t* at = p_;
+    p_ += n;
+    return at;
+  }
+
+ private:
+  const uint8_t* p_;
+};
+
+}  // namespace
+
+class VocabularyFile {
+ public:
+  static void Write(const Vocabulary& v, const std::string& path);
+  static Vocabulary Read(const std::string& path);
+
+ private:
+  static void CheckTree(const Vocabulary& v, const std::string& path);
+};
+
+void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
+  Require(!v.empty(), Message(path, ": cannot save an empty vocabulary"));
+  const bool binary = v.descriptor_type_ == CV_8U;
+  Writer out;
+  out.Bytes(kMagic, sizeof(kMagic));
+  out.U32(kFormatVersion);
+  out.U32(binary ? kKindBinary : kKindFloat);
+  out.U32(static_cast<uint32_t>(v.cols_));
+  out.U32(static_cast<uint32_t>(v.branching_));
+  out.U32(static_cast<uint32_t>(v.levels_));
+  out.U32(static_cast<uint32_t>(v.num_nodes()));
+  std::vector<uint8_t> bytes(v.cols_);
+  for (int n = 0; n < v.num_nodes(); ++n) {
+    out.I32(v.parent_[n]);
+    out.I32(v.word_of_node_[n]);
+    out.F64(v.weight_[n]);
+    if (binary) {
+      const int words = v.words_per_descriptor_;
+      place_detail::UnpackBinary(v.binary_.data() + static_cast<size_t>(n) * words, v.cols_,
+                                 bytes.data());
+      out.Bytes(bytes.data(), bytes.size());
+    } else {
+      for (int i = 0; i < v.cols_; ++i) out.F32(v.float_[static_cast<size_t>(n) * v.cols_ + i]);
+    }
+  }
+  out.U64(Fnv1a64(out.buffer().data(), out.buffer().size()));
+
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream file(partial, std::ios::binary | std::ios::trunc);
+    Require(file.is_open(), Message(path, ": cannot open ", partial, " for writing"));
+    file.write(reinterpret_cast<const char*>(out.buffer().data()),
+               static_cast<std::streamsize>(out.buffer().size()));
+    file.close();
+    if (!file) {
+      std::remove(partial.c_str());
+      throw std::invalid_argument(Message(path, ": writing ", partial, " failed (disk full?)"));
+    }
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0) {
+    std::remove(partial.c_str());
+    throw std::invalid_argument(Message(path, ": cannot rename ", partial, " to it"));
+  }
+}
+
+Vocabulary VocabularyFile::Read(const std::string& path) {
+  auto fail = [&path](const std::string& problem) {
+    throw std::invalid_argument(Message(path, ": ", problem));
+  };
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) fail("is a folder, not a vocabulary file");
+  std::ifstream file(path, std::ios::binary);
+  if (!file.is_open()) fail("cannot open the vocabulary file (missing or unreadable)");
+  const std::vector<uint8_t> data((std::istreambuf_iterator<char>(file)),
+                                  std::istreambuf_iterator<char>());
+  if (file.bad()) fail("read error");
+  if (data.size() < sizeof(kMagic) || std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) {
+    fail("not an slslam vocabulary (the file does not start with \"SLSVOCAB\")");
+  }
+  if (data.size() < kHeaderBytes + kChecksumBytes) {
+    fail(Message("truncated: ", data.size(), " bytes, shorter than the ",
+                 kHeaderBytes + kChecksumBytes, "-byte header and checksum"));
+  }
+  Reader in(data.data() + sizeof(kMagic));
+  const uint32_t version = in.U32();
+  if (version > kFormatVersion) {
+    fail(Message("format version ", version, " is newer than this slslam reads (", kFormatVersion,
+                 "); upgrade slslam"));
+  }
+  if (version == 0) fail("format version 0 is not a valid version");
+  const uint32_t kind = in.U32();
+  const uint32_t cols = in.U32();
+  const uint32_t branching = in.U32();
+  const uint32_t levels = in.U32();
+  const uint32_t nodes = in.U32();
+  if (kind != kKindBinary && kind != kKindFloat) {
+    fail(Message("unknown descriptor kind ", kind, " (1 binary, 2 float)"));
+  }
+  if (cols == 0 || cols > kMaxCols) fail(Message("descriptor width ", cols, " out of range"));
+  if (branching < 2 || levels < 1 || levels > 64) {
+    fail(Message("branching ", branching, " / levels ", levels, " out of range"));
+  }
+  if (nodes == 0) fail("no nodes");
+  const uint64_t descriptor_bytes = kind == kKindBinary ? cols : 4ull * cols;
+  const uint64_t expected =
+      kHeaderBytes + uint64_t{nodes} * (16 + descriptor_bytes) + kChecksumBytes;
+  if (data.size() != expected) {
+    fail(Message("file is ", data.size(), " bytes but its header (", nodes, " nodes of ",
+                 16 + descriptor_bytes, " bytes) needs ", expected,
+                 data.size() < expected ? " (truncated)" : " (trailing data)"));
+  }
+  const size_t payload = data.size() - kChecksumBytes;
+  const uint64_t stored = Reader(data.data() + payload).U64();
+  const uint64_t computed = Fnv1a64(data.data(), payload);
+  if (stored != computed) {
+    fail(Message("checksum mismatch (stored ", std::hex, stored, ", computed ", computed,
+                 "): the file is corrupt"));
+  }
+
+  Vocabulary v;
+  v.descriptor_type_ = kind == kKindBinary ? CV_8U : CV_32F;
+  v.cols_ = static_cast<int>(cols);
+  v.branching_ = static_cast<int>(branching);
+  v.levels_ = static_cast<int>(levels);
+  v.parent_.resize(nodes);
+  v.word_of_node_.resize(nodes);
+  v.weight_.resize(nodes);
+  if (kind == kKindBinary) {
+    v.words_per_descriptor_ = place_detail::WordsForBytes(v.cols_);
+    v.binary_.assign(static_cast<size_t>(nodes) * v.words_per_descriptor_, 0);
+  } else {
+    v.float_.resize(static_cast<size_t>(nodes) * cols);
+  }
+  Reader body(data.data() + kHeaderBytes);
+  for (uint32_t n = 0; n < nodes; ++n) {
+    v.parent_[n] = body.I32();
+    v.word_of_node_[n] = body.I32();
+    v.weight_[n] = body.F64();
+    if (kind == kKindBinary) {
+      const cv::Mat row(1, v.cols_, CV_8U, const_cast<uint8_t*>(body.Skip(cols)));
+      place_detail::PackBinaryRow(
+          row, 0, v.words_per_descriptor_,
+          v.binary_.data() + static_cast<size_t>(n) * v.words_per_descriptor_);
+    } else {
+      for (uint32_t i = 0; i < cols; ++i) v.float_[static_cast<size_t>(n) * cols + i] = body.F32();
+    }
+  }
+  CheckTree(v, path);
+  v.BuildIndex();
+  return v;
+}
+
+// The structure a checksum cannot vouch for (a file written by other code): a rooted tree no
+// deeper than L with at most k children per node, leaves and words in one-to-one correspondence.
+void VocabularyFile::CheckTree(const Vocabulary& v, const std::string& path) {
+  auto fail = [&path](const std::string& problem) {
+    throw std::invalid_argument(Message(path, ": ", problem));
+  };
+  const size_t n = v.parent_.size();
+  if (v.parent_[0] != -1) fail("node 0 (the root) must have parent -1");
+  std::vector<int> depth(n, 0), children(n, 0);
+  for (size_t i = 1; i < n; ++i) {
+    const int32_t p = v.parent_[i];
+    if (p < 0 || static_cast<size_t>(p) >= i) {
+      fail(Message("node ", i, " has parent ", p, ", not in [0, ", i, ")"));
+    }
+    depth[i] = depth[p] + 1;
+    if (depth[i] > v.levels_) fail(Message("node ", i, " is deeper than ", v.levels_, " levels"));
+    if (++children[p] > v.branching_) {
+      fail(Message("node ", p, " has more than ", v.branching_, " children"));
+    }
+  }
+  size_t leaves = 0;
+  for (size_t i = 0; i < n; ++i) leaves += children[i] == 0 ? 1 : 0;
+  std::vector<bool> seen(leaves, false);
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t w = v.word_of_node_[i];
+    const bool leaf = children[i] == 0;
+    if (!leaf && w != -1) fail(Message("inner node ", i, " has word id ", w, " (must be -1)"));
+    if (!leaf) continue;
+    if (w < 0 || static_cast<size_t>(w) >= leaves || seen[w]) {
+      fail(Message("leaf ", i, " has word id ", w, ": not unique in [0, ", leaves, ")"));
+    }
+    seen[w] = true;
+    if (!std::isfinite(v.weight_[i]) || v.weight_[i] < 0.0) {
+      fail(Message("word ", w, " has weight ", v.weight_[i], " (must be finite and >= 0)"));
+    }
+  }
+  for (const float value : v.float_) {
+    if (!std::isfinite(value)) fail("a float descriptor holds a non-finite value");
+  }
+}
+
+Vocabulary Vocabulary::Load(const std::string& path) { return VocabularyFile::Read(path); }
+
+void Vocabulary::Save(const std::string& path) const { VocabularyFile::Write(*this, path); }
+
+}  // namespace slslam

@@ -1,0 +1,270 @@
+"""Place recognition: a bag-of-words vocabulary and a keyframe database (C++ core, DBoW2-style).
+
+A :class:`Vocabulary` is a hierarchical k-means tree over binary (ORB, Hamming) or float
+(SuperPoint, L2) descriptors; ``transform`` gives an image's TF-IDF bag-of-words vector and
+``score`` compares two of them (1 identical, 0 nothing shared). :class:`KeyframeDatabase` finds the
+keyframes whose vectors share most words with a query. The vocabulary files (``.slvoc``) are a
+compact checksummed binary format; slslam ships one ORB vocabulary trained on simulated frames
+(:func:`default_vocabulary_path`).
+
+    >>> from slslam.place import Vocabulary, default_vocabulary_path
+    >>> vocabulary = Vocabulary.load(default_vocabulary_path())
+    >>> bow = vocabulary.transform(orb_descriptors)  # {word: weight}
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from slslam import _core
+from slslam.errors import InputError
+
+DescriptorKind = Literal["binary", "float"]
+BowVector = dict[int, float]
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp")
+DATA_DIR = Path(__file__).resolve().parent / "data"
+DEFAULT_VOCABULARIES: dict[str, str] = {"binary": "orb_vocabulary.slvoc"}
+
+KeyframeDatabase = _core.KeyframeDatabase
+PlaceCandidate = _core.PlaceCandidate
+
+
+class VocabularyError(InputError):
+    """A vocabulary file is missing, corrupt or of another format version."""
+
+
+@dataclass(frozen=True)
+class VocabularyOptions:
+    """Hierarchical k-means settings (the C++ ``VocabularyOptions``)."""
+
+    branching: int = 10  # k of the k-means tree [-]
+    levels: int = 4  # depth L of the tree; at most k^L words [-]
+    kmeans_iterations: int = 15  # Lloyd iterations per node [-]
+    seed: int = 0  # k-means++ seed; same seed and data, same vocabulary
+
+    def to_core(self) -> _core.VocabularyOptions:
+        core = _core.VocabularyOptions()
+        core.branching = self.branching
+        core.levels = self.levels
+        core.kmeans_iterations = self.kmeans_iterations
+        core.seed = self.seed
+        core.check()
+        return core
+
+
+def _as_descriptors(array: np.ndarray, what: str) -> np.ndarray:
+    array = np.asarray(array)
+    if array.ndim != 2:
+        raise InputError(None, f"{what} must be a 2-D (N, D) array, got shape {array.shape}")
+    if array.dtype not in (np.uint8, np.float32):
+        raise InputError(None, f"{what} must be uint8 (binary) or float32, got {array.dtype}")
+    return np.ascontiguousarray(array)
+
+
+def _strip_path(message: str, path: Path) -> str:
+    prefix = f"{path}: "
+    return message[len(prefix) :] if message.startswith(prefix) else message
+
+
+class Vocabulary:
+    """A trained or loaded bag-of-words vocabulary (immutable; safe to share between threads)."""
+
+    def __init__(self, core: _core.Vocabulary) -> None:
+        self._core = core
+
+    @classmethod
+    def train(
+        cls,
+        descriptors_per_image: Sequence[np.ndarray],
+        options: VocabularyOptions = VocabularyOptions(),
+    ) -> Vocabulary:
+        """Train on one (N, D) array per image: all uint8 (ORB) or all float32 (SuperPoint)."""
+        arrays = [
+            _as_descriptors(d, f"descriptors_per_image[{i}]")
+            for i, d in enumerate(descriptors_per_image)
+        ]
+        return cls(_core.Vocabulary.train(arrays, options.to_core()))
+
+    @classmethod
+    def load(cls, path: str | Path) -> Vocabulary:
+        """Read a ``.slvoc`` file; :class:`VocabularyError` names the file and the defect."""
+        path = Path(path)
+        try:
+            return cls(_core.Vocabulary.load(str(path)))
+        except ValueError as exc:
+            raise VocabularyError(path, _strip_path(str(exc), path)) from None
+
+    def save(self, path: str | Path) -> Path:
+        """Write a ``.slvoc`` file (atomically: a ``.partial`` file renamed into place)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self._core.save(str(path))
+        except ValueError as exc:
+            raise VocabularyError(path, _strip_path(str(exc), path)) from None
+        return path
+
+    @property
+    def core(self) -> _core.Vocabulary:
+        """The C++ object (for the tracker)."""
+        return self._core
+
+    @property
+    def num_words(self) -> int:
+        return self._core.num_words
+
+    @property
+    def num_nodes(self) -> int:
+        return self._core.num_nodes
+
+    @property
+    def branching(self) -> int:
+        return self._core.branching
+
+    @property
+    def levels(self) -> int:
+        return self._core.levels
+
+    @property
+    def descriptor_type(self) -> DescriptorKind:
+        """``"binary"`` (uint8, Hamming) or ``"float"`` (float32, L2)."""
+        return self._core.descriptor_type
+
+    @property
+    def descriptor_cols(self) -> int:
+        """Bytes (binary) or floats per descriptor."""
+        return self._core.descriptor_cols
+
+    def word_weight(self, word: int) -> float:
+        """IDF weight log(N / n) of a word."""
+        return self._core.word_weight(word)
+
+    def transform(self, descriptors: np.ndarray) -> BowVector:
+        """BoW vector ``{word: weight}`` of one image's descriptors (TF-IDF, weights sum to 1)."""
+        return self._core.transform(_as_descriptors(descriptors, "descriptors"))
+
+    def transform_with_features(
+        self, descriptors: np.ndarray, levels_up: int = 2
+    ) -> tuple[BowVector, dict[int, list[int]]]:
+        """BoW vector and direct index ``{node: [rows]}`` at ``levels_up`` above the leaves."""
+        return self._core.transform_with_features(
+            _as_descriptors(descriptors, "descriptors"), levels_up
+        )
+
+    @staticmethod
+    def score(a: BowVector, b: BowVector) -> float:
+        """L1 similarity 1 - 0.5 |a - b|_1 in [0, 1]."""
+        return _core.Vocabulary.score(a, b)
+
+    def __repr__(self) -> str:
+        return (
+            f"Vocabulary({self.descriptor_type} x {self.descriptor_cols}, {self.num_words} words, "
+            f"k={self.branching}, L={self.levels})"
+        )
+
+
+def default_vocabulary_path(descriptor: DescriptorKind = "binary") -> Path:
+    """The vocabulary shipped with slslam for a descriptor kind (``"binary"``: ORB).
+
+    No float (SuperPoint) vocabulary is shipped: SuperPoint's weights are not redistributable, so
+    train one with ``slslam vocab train --frontend superpoint``.
+    """
+    if descriptor not in ("binary", "float"):
+        raise InputError(None, f"descriptor must be 'binary' or 'float', got {descriptor!r}")
+    name = DEFAULT_VOCABULARIES.get(descriptor)
+    if name is None:
+        raise VocabularyError(
+            None,
+            f"slslam ships no {descriptor} vocabulary; train one with `slslam vocab train "
+            "--frontend superpoint`",
+        )
+    path = DATA_DIR / name
+    if not path.is_file():
+        raise VocabularyError(path, "the default vocabulary is missing from this installation")
+    return path
+
+
+def find_images(inputs: Iterable[str | Path]) -> list[Path]:
+    """Image files among ``inputs``: files as given, folders searched recursively (sorted)."""
+    images: list[Path] = []
+    for item in map(Path, inputs):
+        if item.is_dir():
+            found = sorted(p for p in item.rglob("*") if p.suffix.lower() in IMAGE_SUFFIXES)
+            if not found:
+                raise InputError(item, f"no images ({', '.join(IMAGE_SUFFIXES)}) in this folder")
+            images.extend(found)
+        elif item.is_file():
+            images.append(item)
+        else:
+            raise InputError(item, "no such file or folder")
+    return images
+
+
+def evenly_spaced(items: Sequence[Path], count: int | None) -> list[Path]:
+    """At most ``count`` items spread evenly over the sequence (all when count is None or 0)."""
+    if not count or count >= len(items):
+        return list(items)
+    index = np.linspace(0, len(items) - 1, count).round().astype(int)
+    return [items[i] for i in np.unique(index)]
+
+
+@dataclass(frozen=True)
+class TrainingSummary:
+    vocabulary: Vocabulary
+    images: int
+    descriptors: int
+    extract_s: float
+    train_s: float
+
+
+def train_from_images(
+    images: Sequence[Path],
+    detect: Callable[[np.ndarray], np.ndarray],
+    options: VocabularyOptions = VocabularyOptions(),
+    progress: bool = False,
+) -> TrainingSummary:
+    """Extract descriptors with ``detect(gray uint8 image) -> (N, D) array`` and train on them."""
+    from tqdm import tqdm
+
+    start = time.perf_counter()
+    descriptors = []
+    for path in tqdm(images, desc="descriptors", unit="image", disable=not progress):
+        try:
+            image = _core.read_gray_image(str(path))
+        except ValueError as exc:
+            raise InputError(path, _strip_path(str(exc), path)) from None
+        found = detect(image)
+        if len(found):
+            descriptors.append(found)
+    if not descriptors:
+        raise InputError(None, f"no descriptors found in {len(images)} images")
+    extracted = time.perf_counter()
+    vocabulary = Vocabulary.train(descriptors, options)
+    return TrainingSummary(
+        vocabulary=vocabulary,
+        images=len(descriptors),
+        descriptors=sum(len(d) for d in descriptors),
+        extract_s=extracted - start,
+        train_s=time.perf_counter() - extracted,
+    )
+
+
+__all__ = [
+    "BowVector",
+    "KeyframeDatabase",
+    "PlaceCandidate",
+    "TrainingSummary",
+    "Vocabulary",
+    "VocabularyError",
+    "VocabularyOptions",
+    "default_vocabulary_path",
+    "evenly_spaced",
+    "find_images",
+    "train_from_images",
+]
