@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -44,11 +45,14 @@ inline void UnpackBinary(const uint64_t* words, int bytes, uint8_t* out) {
   for (int j = 0; j < bytes; ++j) out[j] = static_cast<uint8_t>(words[j / 8] >> (8 * (j % 8)));
 }
 
-inline int Hamming(const uint64_t* a, const uint64_t* b, int words) {
-  int distance = 0;
-  for (int w = 0; w < words; ++w) distance += __builtin_popcountll(a[w] ^ b[w]);
-  return distance;
-}
+// Hamming distances; defined in descriptor_space.cpp, compiled with and without the POPCNT
+// instruction (baseline x86-64 lacks it) and picked at load time.
+int Hamming(const uint64_t* a, const uint64_t* b, int words);
+// Index in [0, count) of the centre (`words` each, contiguous) nearest to `query`; lowest on ties.
+int NearestBinaryCentre(const uint64_t* query, const uint64_t* centres, int count, int words);
+// The node among ids [first, last) whose centre (`words` each at centres + id * words) is nearest.
+uint32_t NearestBinaryNode(const uint64_t* query, const uint64_t* centres, int words,
+                           const uint32_t* first, const uint32_t* last);
 
 inline float SquaredL2(const float* a, const float* b, int dims) {
   // Four partial sums let the compiler use SIMD lanes without -ffast-math.
@@ -72,6 +76,9 @@ struct BinarySpace {
   int stride = 0;  // 64-bit words per descriptor
 
   double Distance(const Element* a, const Element* b) const { return Hamming(a, b, stride); }
+  int Nearest(const Element* d, const Element* centres, int count) const {
+    return NearestBinaryCentre(d, centres, count, stride);
+  }
   // k-means++ draws proportionally to D^2 (Arthur and Vassilvitskii 2007).
   static double SeedWeight(double distance) { return distance * distance; }
 
@@ -104,6 +111,15 @@ struct FloatSpace {
   int stride = 0;  // floats per descriptor
 
   double Distance(const Element* a, const Element* b) const { return SquaredL2(a, b, stride); }
+  int Nearest(const Element* d, const Element* centres, int count) const {
+    int best = 0;
+    float best_distance = std::numeric_limits<float>::infinity();
+    for (int c = 0; c < count; ++c) {
+      const float distance = SquaredL2(d, centres + static_cast<size_t>(c) * stride, stride);
+      if (distance < best_distance) best_distance = distance, best = c;
+    }
+    return best;
+  }
   static double SeedWeight(double squared_distance) { return squared_distance; }
 
   void Centre(const std::vector<int>& members, const Element* data, Element* out) const {

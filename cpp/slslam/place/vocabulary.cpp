@@ -12,7 +12,7 @@
 
 namespace slslam {
 
-using place_detail::Hamming;
+using place_detail::NearestBinaryNode;
 using place_detail::PackBinaryRow;
 using place_detail::SquaredL2;
 using place_detail::TypeName;
@@ -90,13 +90,8 @@ NodeId Vocabulary::Descend(const void* query, int depth, NodeId* node_at_depth) 
     const NodeId* last = children_.data() + child_begin_[node + 1];
     NodeId best = *first;
     if (descriptor_type_ == CV_8U) {
-      const auto* q = static_cast<const uint64_t*>(query);
-      const int words = words_per_descriptor_;
-      int best_distance = std::numeric_limits<int>::max();
-      for (const NodeId* c = first; c != last; ++c) {
-        const int d = Hamming(q, binary_.data() + static_cast<size_t>(*c) * words, words);
-        if (d < best_distance) best_distance = d, best = *c;
-      }
+      best = NearestBinaryNode(static_cast<const uint64_t*>(query), binary_.data(),
+                               words_per_descriptor_, first, last);
     } else {
       const auto* q = static_cast<const float*>(query);
       float best_distance = std::numeric_limits<float>::infinity();

@@ -101,13 +101,7 @@ class HierarchicalKMeans {
 
  private:
   int Nearest(const T* d, const std::vector<T>& centres, int num_centres) const {
-    int best = 0;
-    double best_distance = std::numeric_limits<double>::infinity();
-    for (int c = 0; c < num_centres; ++c) {
-      const double distance = space_.Distance(d, centres.data() + c * space_.stride);
-      if (distance < best_distance) best_distance = distance, best = c;
-    }
-    return best;
+    return space_.Nearest(d, centres.data(), num_centres);
   }
 
   // k-means++: the first centre uniformly, each next one with probability proportional to

