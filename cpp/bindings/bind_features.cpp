@@ -13,13 +13,16 @@ namespace py = pybind11;
 
 namespace slslam::bindings {
 void BindFeatures(py::module_& m) {
-  py::class_<OrbOptions>(m, "OrbOptions", "ORB extractor options (OpenCV ORB).")
+  py::class_<OrbOptions>(m, "OrbOptions", "ORB extractor options (per-cell adaptive FAST, OpenCV descriptors).")
       .def(py::init<>())
       .def_readwrite("max_features", &OrbOptions::max_features)
       .def_readwrite("scale_factor", &OrbOptions::scale_factor)
       .def_readwrite("num_levels", &OrbOptions::num_levels)
       .def_readwrite("fast_threshold", &OrbOptions::fast_threshold)
       .def_readwrite("edge_threshold", &OrbOptions::edge_threshold)
+      .def_readwrite("adaptive", &OrbOptions::adaptive)
+      .def_readwrite("min_fast_threshold", &OrbOptions::min_fast_threshold)
+      .def_readwrite("cell_size_px", &OrbOptions::cell_size_px)
       .def("check", &OrbOptions::Check);
 
   py::class_<MatchOptions>(m, "MatchOptions", "Brute-force matcher options.")
@@ -58,6 +61,9 @@ void BindFeatures(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("cell_size_px", &GridLimitOptions::cell_size_px, "cell side P [px]")
       .def_readwrite("max_per_cell", &GridLimitOptions::max_per_cell, "keypoints kept per cell")
+      .def_readwrite("strong_score", &GridLimitOptions::strong_score,
+                     "cells with a keypoint at this score keep only such keypoints; "
+                     "-inf: off")
       .def("check", &GridLimitOptions::Check);
   m.def(
       "grid_limit",

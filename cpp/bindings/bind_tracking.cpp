@@ -96,6 +96,8 @@ class TrackerSession {
     out["inlier_lines"] = r.inlier_lines;
     out["lines"] = num_lines;
     out["keyframe"] = r.keyframe;
+    out["weighted_inliers"] = r.weighted_inliers;
+    out["relocalisation_ms"] = r.relocalisation_ms;
     out["line_extraction_ms"] = line_ms;
     out["stereo_matching_ms"] = stereo_ms;
     out["matching_ms"] = r.matching_ms;
@@ -108,6 +110,7 @@ class TrackerSession {
     MapExport m;
     LocalMappingStats s;
     int maps = 0;
+    TrackingStats t;
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);
@@ -115,6 +118,7 @@ class TrackerSession {
       m = tracker_.ExportMap();
       s = tracker_.mapping_stats();
       maps = tracker_.num_maps();
+      t = tracker_.stats();
     }
     py::dict out;
     out["points"] = m.points;
@@ -130,6 +134,9 @@ class TrackerSession {
     out["points_triangulated"] = s.points_triangulated;
     out["lines_triangulated"] = s.lines_triangulated;
     out["local_mapping_ms"] = s.total_ba_ms;
+    out["relocalisations"] = t.relocalisations;
+    out["relocalisation_attempts"] = t.relocalisation_attempts;
+    out["maps_started"] = t.maps_started;
     return out;
   }
 
@@ -192,6 +199,19 @@ void BindTracking(py::module_& m) {
       .def_readwrite("subpixel_window", &StereoMatchOptions::subpixel_window)
       .def_readwrite("subpixel_search", &StereoMatchOptions::subpixel_search);
 
+  py::class_<RelocalisationOptions>(m, "RelocalisationOptions",
+                                    "Relocalisation by bag of words, PnP RANSAC and the local map.")
+      .def(py::init<>())
+      .def_readwrite("candidates", &RelocalisationOptions::candidates)
+      .def_readwrite("min_matches", &RelocalisationOptions::min_matches)
+      .def_readwrite("match_ratio", &RelocalisationOptions::match_ratio)
+      .def_readwrite("ransac_error_px", &RelocalisationOptions::ransac_error_px)
+      .def_readwrite("ransac_iterations", &RelocalisationOptions::ransac_iterations)
+      .def_readwrite("min_pnp_inliers", &RelocalisationOptions::min_pnp_inliers)
+      .def_readwrite("min_inliers", &RelocalisationOptions::min_inliers)
+      .def_readwrite("vocabulary_levels_up", &RelocalisationOptions::vocabulary_levels_up)
+      .def("check", &RelocalisationOptions::Check);
+
   py::class_<TrackerOptions>(m, "TrackerOptions", "Tracking, mapping and front-end thresholds.")
       .def(py::init<>())
       .def_readwrite("rig", &TrackerOptions::rig)
@@ -216,6 +236,14 @@ void BindTracking(py::module_& m) {
       .def_readwrite("keyframe_min_inliers", &TrackerOptions::keyframe_min_inliers)
       .def_readwrite("point_sigma_px", &TrackerOptions::point_sigma_px)
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
+      .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
+      .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
+      .def_readwrite("lost_velocity_decay", &TrackerOptions::lost_velocity_decay)
+      .def_readwrite("lost_search_scale", &TrackerOptions::lost_search_scale)
+      .def_readwrite("weak_keyframe_inliers", &TrackerOptions::weak_keyframe_inliers)
+      .def_readwrite("weak_keyframe_frames", &TrackerOptions::weak_keyframe_frames)
+      .def_readwrite("vocabulary_path", &TrackerOptions::vocabulary_path)
+      .def_readwrite("relocalisation", &TrackerOptions::relocalisation)
       .def("check", &TrackerOptions::Check);
 
   py::class_<TrackerSession>(m, "TrackerCore",

@@ -137,6 +137,10 @@ class FeaturesConfig:
     orb: OrbOptions = field(default_factory=OrbOptions)
     grid: GridConfig = field(default_factory=GridConfig)
     dynamic_cells: DynamicCellConfig = field(default_factory=DynamicCellConfig)
+    # cells with no keypoint at the detector's threshold keep weaker ones (ORB: FAST 20 -> 7 per
+    # cell, as ORB-SLAM; learned detectors: detection_threshold * low_texture_ratio)
+    low_texture_fallback: bool = True
+    low_texture_ratio: float = _option(0.2, "(0, 1]")
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,23 @@ class TrackingConfig:
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _option(3.0, "[0.01, 1000]")
+    # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
+    # (0: points only)
+    line_inlier_weight: float = _option(1.0, "[0, 100]")
+    # frames of RECENTLY_LOST (wider window, decaying velocity, relocalisation into the active
+    # map) before LOST, where the pose is frozen [frames]
+    recently_lost_frames: int = _option(10, "[0, 100000]")
+    # per-frame factor on the predicted motion while recently lost
+    lost_velocity_decay: float = _option(0.6, "[0, 1]")
+    # guided-matching window factor while recently lost
+    lost_search_scale: float = _option(2.0, "[1, 100]")
+    # weighted inliers below this: a keyframe every weak_keyframe_frames (thin tracking)
+    weak_keyframe_inliers: int = _option(60, "[0, 100000]")
+    weak_keyframe_frames: int = _option(3, "[1, 100000]")  # [frames]
+    relocalisation: bool = True  # bag-of-words relocalisation when lost (needs a vocabulary)
+    # BoW vocabulary file; null: the one shipped for ORB (learned descriptors need their own,
+    # made with `slslam vocab train`)
+    vocabulary_path: str | None = None
 
 
 @dataclass(frozen=True)
@@ -355,4 +376,4 @@ def make_point_frontend(config: FeaturesConfig):
             "using the ORB front end",
             ENV_MODEL,
         )
-    return Orb(config.orb)
+    return Orb(config.orb, adaptive=config.low_texture_fallback)

@@ -11,6 +11,7 @@ namespace slslam {
 void GridLimitOptions::Check() const {
   Require(cell_size_px >= 4, Message("grid.cell_size_px must be >= 4, got ", cell_size_px));
   Require(max_per_cell >= 1, Message("grid.max_per_cell must be >= 1, got ", max_per_cell));
+  Require(!std::isnan(strong_score), "grid.strong_score must not be NaN");
 }
 
 std::vector<int> GridLimit(const PixelArray& uv, const Eigen::VectorXf& score, int width,
@@ -36,13 +37,17 @@ std::vector<int> GridLimit(const PixelArray& uv, const Eigen::VectorXf& score, i
     if (score(a) != score(b)) return score(a) > score(b);
     return a < b;
   });
+  // Sorted by cell, then score: a cell's first keypoint tells whether it has a strong one.
   std::vector<int> kept;
   int current_cell = -1, taken = 0;
+  bool cell_has_strong = false;
   for (int i : order) {
     if (cell[i] != current_cell) {
       current_cell = cell[i];
       taken = 0;
+      cell_has_strong = score(i) >= options.strong_score;
     }
+    if (cell_has_strong && score(i) < options.strong_score) continue;
     if (taken++ < options.max_per_cell) kept.push_back(i);
   }
   std::sort(kept.begin(), kept.end());

@@ -1,30 +1,24 @@
 #include "slslam/features/orb_extractor.h"
 
+#include <algorithm>
+#include <cmath>
+#include <numeric>
 #include <vector>
 
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "slslam/core/check.h"
 
 namespace slslam {
 
-void OrbOptions::Check() const {
-  Require(max_features > 0, Message("orb.max_features must be > 0, got ", max_features));
-  Require(scale_factor > 1.0f, Message("orb.scale_factor must be > 1, got ", scale_factor));
-  Require(num_levels >= 1, Message("orb.num_levels must be >= 1, got ", num_levels));
-  Require(fast_threshold > 0, Message("orb.fast_threshold must be > 0, got ", fast_threshold));
-  Require(edge_threshold >= 0, Message("orb.edge_threshold must be >= 0, got ", edge_threshold));
-}
+namespace {
 
-Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
-  options.Check();
-  Require(!image.empty() && image.type() == CV_8UC1, "ORB needs a non-empty 8-bit gray image");
-  auto orb = cv::ORB::create(options.max_features, options.scale_factor, options.num_levels,
-                             options.edge_threshold, 0, 2, cv::ORB::HARRIS_SCORE,
-                             /*patchSize=*/31, options.fast_threshold);
-  std::vector<cv::KeyPoint> cv_keypoints;
+constexpr int kPatchSize = 31;  // rotated BRIEF patch at level 0 [px], OpenCV's and ORB-SLAM's
+constexpr int kHalfPatch = kPatchSize / 2;
+
+Keypoints ToKeypoints(const std::vector<cv::KeyPoint>& cv_keypoints, cv::Mat descriptors) {
   Keypoints out;
-  orb->detectAndCompute(image, cv::noArray(), cv_keypoints, out.descriptors);
   const int n = static_cast<int>(cv_keypoints.size());
   out.uv.resize(n, 2);
   out.score.resize(n);
@@ -35,8 +29,193 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
     out.score(i) = cv_keypoints[i].response;
     out.octave(i) = cv_keypoints[i].octave;
   }
-  if (n == 0) out.descriptors = cv::Mat(0, 32, CV_8U);
+  out.descriptors = n == 0 ? cv::Mat(0, 32, CV_8U) : descriptors;
   return out;
+}
+
+cv::Ptr<cv::ORB> MakeOrb(const OrbOptions& options) {
+  return cv::ORB::create(options.max_features, options.scale_factor, options.num_levels,
+                         options.edge_threshold, 0, 2, cv::ORB::HARRIS_SCORE, kPatchSize,
+                         options.fast_threshold);
+}
+
+// Keypoints per level: a geometric series over the levels, as ORB-SLAM (area shrinks by scale^2
+// per level, the series uses 1 / scale so coarse levels keep a useful share).
+std::vector<int> LevelBudgets(const OrbOptions& options) {
+  const double factor = 1.0 / options.scale_factor;
+  const int levels = options.num_levels;
+  std::vector<int> budget(levels, 0);
+  double per_level =
+      options.max_features * (1.0 - factor) / (1.0 - std::pow(factor, static_cast<double>(levels)));
+  int total = 0;
+  for (int l = 0; l + 1 < levels; ++l) {
+    budget[l] = static_cast<int>(std::lround(per_level));
+    total += budget[l];
+    per_level *= factor;
+  }
+  budget[levels - 1] = std::max(options.max_features - total, 0);
+  return budget;
+}
+
+// FAST corners of one level with the per-cell threshold fallback, spread round-robin over the
+// cells. Positions are in the level's pixels.
+std::vector<cv::KeyPoint> DetectLevel(const cv::Mat& level, int border, int budget,
+                                      const OrbOptions& options) {
+  std::vector<cv::KeyPoint> out;
+  if (budget <= 0 || level.cols <= 2 * border || level.rows <= 2 * border) return out;
+  const cv::Rect inner(border, border, level.cols - 2 * border, level.rows - 2 * border);
+  std::vector<cv::KeyPoint> corners;
+  cv::FAST(level(inner), corners, options.min_fast_threshold, /*nonmaxSuppression=*/true);
+  if (corners.empty()) return out;
+  const int cell = options.cell_size_px;
+  const int cells_x = (inner.width + cell - 1) / cell;
+  const int cells_y = (inner.height + cell - 1) / cell;
+  std::vector<std::vector<int>> per_cell(static_cast<size_t>(cells_x) * cells_y);
+  for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
+    const int cx = std::min(static_cast<int>(corners[i].pt.x) / cell, cells_x - 1);
+    const int cy = std::min(static_cast<int>(corners[i].pt.y) / cell, cells_y - 1);
+    per_cell[static_cast<size_t>(cy) * cells_x + cx].push_back(i);
+  }
+  const auto stronger = [&](int a, int b) {
+    if (corners[a].response != corners[b].response)
+      return corners[a].response > corners[b].response;
+    return a < b;
+  };
+  for (auto& ids : per_cell) {
+    // A cell that has corners at the normal threshold keeps only those.
+    const bool has_strong = std::any_of(ids.begin(), ids.end(), [&](int i) {
+      return corners[i].response >= options.fast_threshold;
+    });
+    if (has_strong) {
+      ids.erase(std::remove_if(ids.begin(), ids.end(),
+                               [&](int i) { return corners[i].response < options.fast_threshold; }),
+                ids.end());
+    }
+    std::sort(ids.begin(), ids.end(), stronger);
+  }
+  // Round-robin: every cell's best, then every cell's second best, ... (within a round the
+  // stronger corners first, so a budget that ends mid-round keeps the strongest).
+  std::vector<int> round;
+  for (size_t rank = 0; static_cast<int>(out.size()) < budget; ++rank) {
+    round.clear();
+    for (const auto& ids : per_cell) {
+      if (rank < ids.size()) round.push_back(ids[rank]);
+    }
+    if (round.empty()) break;
+    std::sort(round.begin(), round.end(), stronger);
+    for (int i : round) {
+      if (static_cast<int>(out.size()) >= budget) break;
+      cv::KeyPoint kp = corners[i];
+      kp.pt.x += border;
+      kp.pt.y += border;
+      out.push_back(kp);
+    }
+  }
+  return out;
+}
+
+Keypoints ExtractPlain(const cv::Mat& image, const OrbOptions& options) {
+  std::vector<cv::KeyPoint> cv_keypoints;
+  cv::Mat descriptors;
+  MakeOrb(options)->detectAndCompute(image, cv::noArray(), cv_keypoints, descriptors);
+  return ToKeypoints(cv_keypoints, descriptors);
+}
+
+}  // namespace
+
+void OrbOptions::Check() const {
+  Require(max_features > 0, Message("orb.max_features must be > 0, got ", max_features));
+  Require(scale_factor > 1.0f, Message("orb.scale_factor must be > 1, got ", scale_factor));
+  Require(num_levels >= 1, Message("orb.num_levels must be >= 1, got ", num_levels));
+  Require(fast_threshold > 0, Message("orb.fast_threshold must be > 0, got ", fast_threshold));
+  Require(edge_threshold >= 0, Message("orb.edge_threshold must be >= 0, got ", edge_threshold));
+  Require(
+      min_fast_threshold > 0 && min_fast_threshold <= fast_threshold,
+      Message("orb.min_fast_threshold must be in [1, fast_threshold], got ", min_fast_threshold));
+  Require(cell_size_px >= 8, Message("orb.cell_size_px must be >= 8, got ", cell_size_px));
+}
+
+std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
+                                           const std::vector<cv::Point2f>& points, int radius_px) {
+  Require(!image.empty() && image.type() == CV_8UC1, "angles need an 8-bit gray image");
+  Require(radius_px >= 1, "angle radius must be >= 1");
+  cv::Mat padded;
+  cv::copyMakeBorder(image, padded, radius_px + 1, radius_px + 1, radius_px + 1, radius_px + 1,
+                     cv::BORDER_REFLECT_101);
+  // Half-widths of the disc per row offset.
+  std::vector<int> half_width(radius_px + 1);
+  for (int v = 0; v <= radius_px; ++v) {
+    half_width[v] = static_cast<int>(std::floor(std::sqrt(radius_px * radius_px - v * v + 0.5)));
+  }
+  std::vector<float> angles(points.size(), 0.0f);
+  for (size_t k = 0; k < points.size(); ++k) {
+    const int u0 = static_cast<int>(std::lround(points[k].x)) + radius_px + 1;
+    const int v0 = static_cast<int>(std::lround(points[k].y)) + radius_px + 1;
+    if (u0 < radius_px || v0 < radius_px || u0 >= padded.cols - radius_px ||
+        v0 >= padded.rows - radius_px) {
+      continue;
+    }
+    long m01 = 0, m10 = 0;
+    for (int v = -radius_px; v <= radius_px; ++v) {
+      const uchar* row = padded.ptr<uchar>(v0 + v);
+      const int w = half_width[std::abs(v)];
+      long sum = 0;
+      for (int u = -w; u <= w; ++u) {
+        const int value = row[u0 + u];
+        m10 += static_cast<long>(u) * value;
+        sum += value;
+      }
+      m01 += static_cast<long>(v) * sum;
+    }
+    float angle = static_cast<float>(
+        std::atan2(static_cast<double>(m01), static_cast<double>(m10)) * 180.0 / CV_PI);
+    if (angle < 0.0f) angle += 360.0f;
+    angles[k] = angle;
+  }
+  return angles;
+}
+
+Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
+  options.Check();
+  Require(!image.empty() && image.type() == CV_8UC1, "ORB needs a non-empty 8-bit gray image");
+  if (!options.adaptive) return ExtractPlain(image, options);
+
+  const std::vector<int> budget = LevelBudgets(options);
+  // FAST needs 3 px around a corner; the descriptor patch is handled by OpenCV's padded levels.
+  const int border = std::max(options.edge_threshold, 3);
+  std::vector<cv::KeyPoint> all;
+  cv::Mat level = image;
+  double scale = 1.0;  // level-0 pixels per level pixel
+  for (int l = 0; l < options.num_levels; ++l) {
+    if (l > 0) {
+      scale *= options.scale_factor;
+      const cv::Size size(static_cast<int>(std::lround(image.cols / scale)),
+                          static_cast<int>(std::lround(image.rows / scale)));
+      if (size.width <= 2 * border || size.height <= 2 * border) break;
+      cv::resize(image, level, size, 0, 0, cv::INTER_LINEAR);
+    }
+    std::vector<cv::KeyPoint> found = DetectLevel(level, border, budget[l], options);
+    std::vector<cv::Point2f> at(found.size());
+    for (size_t i = 0; i < found.size(); ++i) at[i] = found[i].pt;
+    const std::vector<float> angles = IntensityCentroidAngles(level, at, kHalfPatch);
+    for (size_t i = 0; i < found.size(); ++i) {
+      cv::KeyPoint kp = found[i];
+      kp.pt.x = static_cast<float>(kp.pt.x * scale);
+      kp.pt.y = static_cast<float>(kp.pt.y * scale);
+      kp.octave = l;
+      kp.size = static_cast<float>(kPatchSize * scale);
+      kp.angle = angles[i];
+      all.push_back(kp);
+    }
+  }
+  cv::Mat descriptors;
+  if (!all.empty()) {
+    // With provided keypoints OpenCV keeps their angle and octave and only computes descriptors
+    // (it may drop keypoints too close to the border, so the returned list is used).
+    MakeOrb(options)->detectAndCompute(image, cv::noArray(), all, descriptors,
+                                       /*useProvidedKeypoints=*/true);
+  }
+  return ToKeypoints(all, descriptors);
 }
 
 }  // namespace slslam

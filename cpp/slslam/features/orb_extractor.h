@@ -1,5 +1,14 @@
-// ORB keypoints and descriptors (OpenCV): the baseline point front end of every comparison.
+// ORB keypoints and descriptors: the baseline point front end of every comparison.
+//
+// Detection adapts to low texture as ORB-SLAM's extractor does: FAST runs once per pyramid level
+// at the low threshold, and each cell of the level keeps its corners that reach the normal
+// threshold, or, when it has none, its weaker ones. The level's budget is then spread over the
+// cells round-robin (each cell's best first), so a dark or smooth stretch still yields keypoints
+// everywhere a corner exists instead of a few hundred in the one bright patch. Orientation is the
+// intensity centroid; descriptors are OpenCV's rotated BRIEF (cv::ORB::compute) on our keypoints.
 #pragma once
+
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -8,17 +17,29 @@
 namespace slslam {
 
 struct OrbOptions {
-  int max_features = 1000;    ///< keypoints kept per image [-]
-  float scale_factor = 1.2f;  ///< pyramid scale between levels [-], > 1
-  int num_levels = 8;         ///< pyramid levels [-]
-  int fast_threshold = 20;    ///< FAST intensity threshold [gray levels]
-  int edge_threshold = 19;    ///< border without keypoints [px]
+  int max_features = 1000;     ///< keypoints kept per image [-]
+  float scale_factor = 1.2f;   ///< pyramid scale between levels [-], > 1
+  int num_levels = 8;          ///< pyramid levels [-]
+  int fast_threshold = 20;     ///< FAST intensity threshold [gray levels]
+  int edge_threshold = 19;     ///< border without keypoints [px]
+  bool adaptive = true;        ///< per-cell threshold fallback; false: plain cv::ORB detection
+  int min_fast_threshold = 7;  ///< FAST threshold in cells with no corner at fast_threshold
+                               ///< (ORB-SLAM's 20 -> 7) [gray levels]
+  int cell_size_px = 32;       ///< side of the adaptive cells, in each level's pixels [px]
 
   void Check() const;
 };
 
-// Detects ORB keypoints on an 8-bit gray image. Descriptors are 32-byte rows (CV_8U).
-// An image without texture yields zero keypoints, not an error.
+// Detects ORB keypoints on an 8-bit gray image. Descriptors are 32-byte rows (CV_8U); scores are
+// FAST scores (adaptive) or Harris responses (plain). An image without texture yields zero
+// keypoints, not an error.
 Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options = {});
+
+// Orientation [deg, 0..360) of each keypoint by the intensity centroid of the disc of radius
+// `radius_px` around it (Rosin's measure, as ORB). `points` are pixel positions in `image`;
+// points closer than `radius_px` to the edge use the reflected image.
+std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
+                                           const std::vector<cv::Point2f>& points,
+                                           int radius_px = 15);
 
 }  // namespace slslam

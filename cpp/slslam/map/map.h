@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 
 #include "slslam/geometry/plucker_line.h"
+#include "slslam/place/vocabulary.h"
 #include "slslam/tracking/stereo_frame.h"
 
 namespace slslam {
@@ -51,6 +52,8 @@ struct KeyFrame {
   std::vector<int> line_ids;   ///< per segment: map line id or -1
   std::map<int, int> covisibility;  ///< other keyframe id -> shared map points
   int parent = -1;                  ///< spanning tree parent (-1: root)
+  BowVector bow;                    ///< bag of words of the left keypoints (with a vocabulary)
+  FeatureVector bow_features;       ///< vocabulary node -> keypoint indices (direct index)
   bool bad = false;
 
   Eigen::Vector3d Center() const { return -R_cw.transpose() * t_cw; }

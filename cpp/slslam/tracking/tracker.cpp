@@ -3,8 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <set>
 #include <tuple>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
 
 #include "slslam/core/check.h"
 #include "slslam/features/line_segment.h"
@@ -36,13 +41,32 @@ const char* TrackingStateName(TrackingState state) {
       return "LOST";
     case TrackingState::kNewMap:
       return "NEW_MAP";
+    case TrackingState::kRecentlyLost:
+      return "RECENTLY_LOST";
+    case TrackingState::kRelocalised:
+      return "RELOCALISED";
   }
   return "UNKNOWN";
+}
+
+void RelocalisationOptions::Check() const {
+  Require(candidates >= 1, "tracking.relocalisation.candidates must be >= 1");
+  Require(min_matches >= 6, "tracking.relocalisation.min_matches must be >= 6");
+  Require(match_ratio > 0.0f && match_ratio <= 1.0f,
+          "tracking.relocalisation.match_ratio must be in (0, 1]");
+  Require(ransac_error_px > 0.0 && std::isfinite(ransac_error_px),
+          "tracking.relocalisation.ransac_error_px must be > 0");
+  Require(ransac_iterations >= 1, "tracking.relocalisation.ransac_iterations must be >= 1");
+  Require(min_pnp_inliers >= 4, "tracking.relocalisation.min_pnp_inliers must be >= 4");
+  Require(min_inliers > 0.0 && std::isfinite(min_inliers),
+          "tracking.relocalisation.min_inliers must be > 0");
+  Require(vocabulary_levels_up >= 0, "tracking.relocalisation.vocabulary_levels_up must be >= 0");
 }
 
 void TrackerOptions::Check() const {
   rig.Check();
   stereo.Check();
+  relocalisation.Check();
   Require(min_init_points >= 3, "tracker.min_init_points must be >= 3");
   Require(min_inliers >= 3, "tracker.min_inliers must be >= 3");
   Require(search_radius_px > 0.0f, "tracker.search_radius_px must be > 0");
@@ -56,10 +80,22 @@ void TrackerOptions::Check() const {
           "tracker.keyframe_track_ratio must be in (0, 1]");
   Require(close_depth_baselines > 0.0, "tracker.close_depth_baselines must be > 0");
   Require(point_sigma_px > 0.0 && line_sigma_px > 0.0, "measurement sigmas must be > 0");
+  Require(line_inlier_weight >= 0.0 && std::isfinite(line_inlier_weight),
+          "tracker.line_inlier_weight must be finite and >= 0");
+  Require(recently_lost_frames >= 0, "tracker.recently_lost_frames must be >= 0");
+  Require(lost_velocity_decay >= 0.0 && lost_velocity_decay <= 1.0,
+          "tracker.lost_velocity_decay must be in [0, 1]");
+  Require(lost_search_scale >= 1.0f && std::isfinite(lost_search_scale),
+          "tracker.lost_search_scale must be >= 1");
+  Require(weak_keyframe_inliers >= 0, "tracker.weak_keyframe_inliers must be >= 0");
+  Require(weak_keyframe_frames >= 1, "tracker.weak_keyframe_frames must be >= 1");
 }
 
 Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   options_.Check();
+  if (!options_.vocabulary_path.empty()) {
+    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::Load(options_.vocabulary_path));
+  }
   LocalMapperOptions mapping = options_.mapping;
   mapping.point_sigma_px = options_.point_sigma_px;
   mapping.line_sigma_px = options_.line_sigma_px;
@@ -78,12 +114,45 @@ Tracker::~Tracker() {
 
 void Tracker::Flush() { mapper_->Flush(); }
 
+void Tracker::Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const {
+  *R_pred = last_R_;
+  *t_pred = last_t_;
+  if (have_pose_) {
+    *R_pred = velocity_R_ * last_R_;
+    *t_pred = velocity_R_ * last_t_ + velocity_t_;
+  }
+}
+
+void Tracker::SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
+                      bool update_velocity) {
+  if (update_velocity && have_pose_) {
+    velocity_R_ = R_cw * last_R_.transpose();
+    velocity_t_ = t_cw - velocity_R_ * last_t_;
+  } else if (!update_velocity) {
+    velocity_R_.setIdentity();
+    velocity_t_.setZero();
+  }
+  last_R_ = R_cw;
+  last_t_ = t_cw;
+  have_pose_ = true;
+}
+
 bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
                        const Eigen::Vector3d& t_cw) {
-  int stereo_points = 0;
+  int stereo_points = 0, stereo_lines = 0;
   for (double d : frame->depth) stereo_points += d > 0.0;
-  if (stereo_points < options_.min_init_points) return false;
+  if (options_.use_lines) {
+    for (bool has : frame->line_has_depth) stereo_lines += has;
+  }
+  // A map needs some points: lines alone leave the first keyframe's pose weakly constrained.
+  if (stereo_points < std::min(options_.min_init_points, 15) ||
+      Weighted(stereo_points, stereo_lines) < options_.min_init_points) {
+    return false;
+  }
   maps_.push_back(std::make_unique<Map>());
+  databases_.push_back(std::make_unique<KeyframeDatabase>());
+  active_ = static_cast<int>(maps_.size()) - 1;
+  ++stats_.maps_started;
   InsertKeyFrame(frame, R_cw, t_cw, std::vector<int>(frame->NumKeypoints(), -1),
                  std::vector<int>(frame->NumLines(), -1));
   return true;
@@ -93,24 +162,29 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
                              const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
                              const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches) {
-  Map& map = *maps_.back();
+  Map& map = *maps_[active_];
+  BowVector bow;
+  FeatureVector bow_features;
+  if (vocabulary_ && frame->NumKeypoints() > 0) {
+    vocabulary_->Transform(frame->keypoints.descriptors, &bow, &bow_features,
+                           options_.relocalisation.vocabulary_levels_up);
+  }
   int kf_id = -1;
   {
     std::lock_guard<std::mutex> lock(map.mutex());
     auto kf = map.AddKeyFrame(R_cw, t_cw, frame);
     kf_id = kf->id;
+    kf->bow = bow;
+    kf->bow_features = std::move(bow_features);
     const Eigen::Matrix3d R_wc = R_cw.transpose();
     const Eigen::Vector3d t_wc = -R_wc * t_cw;
-    int points = 0;
     for (int i = 0; i < frame->NumKeypoints(); ++i) {
       if (point_matches[i] >= 0 && map.point(point_matches[i])) {
         map.AddPointObservation(point_matches[i], kf_id, i);
-        ++points;
       } else if (frame->depth[i] > 0.0) {
         const Eigen::Vector3d p_w = R_wc * frame->Backproject(options_.rig.camera, i) + t_wc;
         auto p = map.AddPoint(p_w, frame->keypoints.descriptors.row(i), kf_id);
         map.AddPointObservation(p->id, kf_id, i);
-        ++points;
       }
     }
     if (options_.use_lines) {
@@ -121,260 +195,433 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
           const Eigen::Vector3d s = R_wc * frame->line_endpoints[j][0] + t_wc;
           const Eigen::Vector3d e = R_wc * frame->line_endpoints[j][1] + t_wc;
           if ((e - s).norm() < 1e-3) continue;
-          auto l = map.AddLine(PluckerLine::FromPoints(s, e), s, e,
-                               frame->line_descriptors.row(j), kf_id);
+          auto l = map.AddLine(PluckerLine::FromPoints(s, e), s, e, frame->line_descriptors.row(j),
+                               kf_id);
           map.AddLineObservation(l->id, kf_id, j);
         }
       }
     }
     map.UpdateConnections(kf_id);
   }
+  if (!bow.empty()) databases_[active_]->Add(kf_id, bow);
   last_keyframe_ = kf_id;
   last_keyframe_frame_ = frame->index;
   first_tracked_ = 0;
   mapper_->Insert(&map, kf_id);
 }
 
+Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
+                                              const Eigen::Matrix3d& R_pred,
+                                              const Eigen::Vector3d& t_pred,
+                                              float radius_scale) const {
+  const PinholeCamera& camera = options_.rig.camera;
+  LocalTracking out;
+  const auto match_start = Clock::now();
+  // Local map: the reference keyframe and its covisible keyframes.
+  std::vector<int> local = {reference_kf};
+  if (!map.keyframe(reference_kf)) local.clear();
+  for (int id : map.BestCovisible(reference_kf, options_.mapping.local_keyframes)) {
+    local.push_back(id);
+  }
+  if (local.empty() && !map.keyframes().empty()) local.push_back(map.keyframes().rbegin()->first);
+  std::set<int> point_ids, line_ids;
+  for (int id : local) {
+    auto kf = map.keyframe(id);
+    if (!kf) continue;
+    for (int pid : kf->point_ids) {
+      if (pid >= 0) point_ids.insert(pid);
+    }
+    for (int lid : kf->line_ids) {
+      if (lid >= 0) line_ids.insert(lid);
+    }
+  }
+
+  // Points: project with the prediction, match in a window around it.
+  std::vector<std::shared_ptr<MapPoint>> candidates;
+  std::vector<Eigen::Vector2f> predicted;
+  for (int pid : point_ids) {
+    auto p = map.point(pid);
+    if (!p || p->bad) continue;
+    const Eigen::Vector3d x_c = R_pred * p->position + t_pred;
+    if (x_c.z() <= 0.05) continue;
+    const Eigen::Vector2d uv = camera.Project(x_c);
+    if (!InImage(camera, uv)) continue;
+    candidates.push_back(p);
+    predicted.push_back(uv.cast<float>());
+    p->visible += 1;
+  }
+  const cv::Mat& frame_desc = frame.keypoints.descriptors;
+  if (!candidates.empty() && frame.NumKeypoints() > 0) {
+    Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> pred(candidates.size(), 2);
+    cv::Mat query(static_cast<int>(candidates.size()), frame_desc.cols, frame_desc.type());
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      pred.row(i) = predicted[i].transpose();
+      candidates[i]->descriptor.copyTo(query.row(static_cast<int>(i)));
+    }
+    GuidedMatchOptions guided;
+    guided.radius_px = options_.search_radius_px * radius_scale;
+    guided.max_distance =
+        frame_desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+    guided.ratio = options_.match_ratio;
+    Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, frame_desc, guided);
+    if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
+      guided.radius_px *= 2.0f;
+      m = GuidedMatch(pred, query, frame.keypoints.uv, frame_desc, guided);
+    }
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      if (m(i) < 0) continue;
+      out.point_ids.push_back(candidates[i]->id);
+      out.keypoints.push_back(m(i));
+    }
+  }
+
+  // Lines: projected map segments against frame segments (angle, distance, LBD).
+  if (options_.use_lines && frame.NumLines() > 0) {
+    const float line_search = options_.line_search_px * radius_scale;
+    std::vector<std::tuple<float, int, int>> pairs;  // (LBD distance, map line, segment)
+    for (int lid : line_ids) {
+      auto l = map.line(lid);
+      if (!l || l->bad) continue;
+      const Eigen::Vector3d s_c = R_pred * l->start + t_pred;
+      const Eigen::Vector3d e_c = R_pred * l->end + t_pred;
+      if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
+      LineSegment proj;
+      proj.start = camera.Project(s_c).cast<float>();
+      proj.end = camera.Project(e_c).cast<float>();
+      const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
+      if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
+      l->visible += 1;
+      for (int j = 0; j < frame.NumLines(); ++j) {
+        const LineSegment& seg = frame.lines[j];
+        if (AngleDifference(seg.Angle(), proj.Angle()) > options_.line_max_angle_rad) continue;
+        const Eigen::Vector2f seg_mid = 0.5f * (seg.start + seg.end);
+        if (proj.DistanceToLine(seg_mid) > line_search) continue;
+        if ((seg_mid - mid).norm() > 0.5f * (proj.Length() + seg.Length()) + line_search) {
+          continue;
+        }
+        const float d = DescriptorDistance(l->descriptor, 0, frame.line_descriptors, j);
+        if (d <= options_.line_max_lbd) pairs.emplace_back(d, lid, j);
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    std::set<int> used_lines, used_segments;
+    for (const auto& [d, lid, j] : pairs) {
+      (void)d;
+      if (used_lines.count(lid) || used_segments.count(j)) continue;
+      used_lines.insert(lid);
+      used_segments.insert(j);
+      out.line_ids.push_back(lid);
+      out.segments.push_back(j);
+    }
+  }
+  out.matching_ms = Ms(match_start);
+
+  // Motion-only BA.
+  const auto opt_start = Clock::now();
+  std::vector<PointObservation> points(out.point_ids.size());
+  for (size_t i = 0; i < out.point_ids.size(); ++i) {
+    const int k = out.keypoints[i];
+    points[i].point_w = map.point(out.point_ids[i])->position;
+    points[i].stereo = frame.u_right[k] >= 0.0;
+    points[i].observed << frame.keypoints.uv(k, 0), frame.keypoints.uv(k, 1), frame.u_right[k];
+    points[i].sigma_px = options_.point_sigma_px;
+  }
+  std::vector<LineObservation> lines(out.line_ids.size());
+  for (size_t i = 0; i < out.line_ids.size(); ++i) {
+    lines[i].line_w = map.line(out.line_ids[i])->line;
+    lines[i].start_px = frame.lines[out.segments[i]].start.cast<double>();
+    lines[i].end_px = frame.lines[out.segments[i]].end.cast<double>();
+    lines[i].sigma_px = options_.line_sigma_px;
+  }
+  out.pose = OptimizePose(options_.rig, R_pred, t_pred, points, lines, options_.pose);
+  out.optimisation_ms = Ms(opt_start);
+  out.weighted_inliers =
+      out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
+  return out;
+}
+
+bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
+                             std::vector<int>* point_match, std::vector<int>* line_match) {
+  const PoseOptimizerResult& pose = tracking.pose;
+  // The map lock was released after matching: local mapping (threaded) may have culled a
+  // landmark since, so each is looked up again.
+  for (size_t i = 0; i < tracking.point_ids.size(); ++i) {
+    if (!pose.point_inlier[i]) continue;
+    auto p = map.point(tracking.point_ids[i]);
+    if (!p || p->bad) continue;
+    p->found += 1;
+    (*point_match)[tracking.keypoints[i]] = tracking.point_ids[i];
+  }
+  for (size_t i = 0; i < tracking.line_ids.size(); ++i) {
+    if (!pose.line_inlier[i]) continue;
+    auto l = map.line(tracking.line_ids[i]);
+    if (!l || l->bad) continue;
+    l->found += 1;
+    (*line_match)[tracking.segments[i]] = tracking.line_ids[i];
+  }
+  // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, with local mapping idle: it is
+  // in sequential mode, and in threaded mode the queue absorbs the keyframe). Reference: the
+  // reference keyframe's map points seen by at least min_obs keyframes.
+  const int frames_since = frame.index - last_keyframe_frame_;
+  int reference = 0;
+  if (auto kf = map.keyframe(last_keyframe_)) {
+    const int min_obs = map.keyframes().size() <= 2 ? 2 : 3;
+    for (int pid : kf->point_ids) {
+      auto p = pid >= 0 ? map.point(pid) : nullptr;
+      if (p && !p->bad && static_cast<int>(p->observations.size()) >= min_obs) ++reference;
+    }
+  }
+  // Close stereo points (depth < close_depth_baselines): tracked vs not yet in the map.
+  const double close_depth = options_.close_depth_baselines * options_.rig.baseline_m;
+  int close_tracked = 0, close_untracked = 0;
+  for (int i = 0; i < frame.NumKeypoints(); ++i) {
+    if (!(frame.depth[i] > 0.0 && frame.depth[i] < close_depth)) continue;
+    if ((*point_match)[i] >= 0) {
+      ++close_tracked;
+    } else {
+      ++close_untracked;
+    }
+  }
+  const bool need_close = close_tracked < options_.keyframe_min_inliers && close_untracked > 70;
+  const int tracked = pose.point_inliers;
+  // A young map has few points seen by three keyframes; the inliers of the first frame tracked
+  // after the keyframe stand in for the reference then (how many of its points can be tracked).
+  if (first_tracked_ == 0 && frames_since >= 1) first_tracked_ = tracked;
+  reference = std::max(reference, first_tracked_);
+  const bool c1 = frames_since >= options_.keyframe_max_frames ||
+                  frames_since >= options_.keyframe_min_frames || tracked < 0.25 * reference ||
+                  need_close;
+  const bool c2 = (tracked < options_.keyframe_track_ratio * reference || need_close) &&
+                  tracking.weighted_inliers > options_.min_inliers;
+  // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
+  const bool weak = tracking.weighted_inliers < options_.weak_keyframe_inliers &&
+                    frames_since >= options_.weak_keyframe_frames;
+  return frames_since >= 1 && ((c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
+}
+
+bool Tracker::RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTracking* tracking,
+                              int* keyframe_id) {
+  if (!vocabulary_ || frame.NumKeypoints() < options_.relocalisation.min_matches) return false;
+  const RelocalisationOptions& ro = options_.relocalisation;
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  if (desc.type() != vocabulary_->descriptor_type() ||
+      desc.cols != vocabulary_->descriptor_cols()) {
+    return false;
+  }
+  BowVector bow;
+  FeatureVector features;
+  vocabulary_->Transform(desc, &bow, &features, ro.vocabulary_levels_up);
+  Map& map = *maps_[map_index];
+  std::lock_guard<std::mutex> lock(map.mutex());
+  const auto candidates = databases_[map_index]->Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
+    auto kf = map.keyframe(id);
+    return kf && !kf->bad;
+  });
+  const PinholeCamera& camera = options_.rig.camera;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
+                     0.0, 0.0, 1.0);
+  const float max_distance =
+      desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+  for (const auto& candidate : candidates) {
+    auto kf = map.keyframe(candidate.keyframe_id);
+    if (!kf) continue;
+    // Frame keypoint -> map point, within the vocabulary nodes both share (one-to-one: a map
+    // point keeps the keypoint with the smaller distance).
+    std::map<int, std::pair<float, int>> owner;  // map point -> (distance, keypoint)
+    for (const auto& [node, frame_ids] : features) {
+      auto it = kf->bow_features.find(node);
+      if (it == kf->bow_features.end()) continue;
+      for (int i : frame_ids) {
+        float best = std::numeric_limits<float>::max(), second = best;
+        int best_point = -1;
+        for (int j : it->second) {
+          const int pid = j < static_cast<int>(kf->point_ids.size()) ? kf->point_ids[j] : -1;
+          if (pid < 0) continue;
+          auto p = map.point(pid);
+          if (!p || p->bad) continue;
+          const float d = DescriptorDistance(desc, i, p->descriptor, 0);
+          if (d < best) {
+            second = best;
+            best = d;
+            best_point = pid;
+          } else if (d < second) {
+            second = d;
+          }
+        }
+        if (best_point < 0 || best > max_distance) continue;
+        if (second < std::numeric_limits<float>::max() && best >= ro.match_ratio * second) {
+          continue;
+        }
+        auto [pos, inserted] = owner.emplace(best_point, std::make_pair(best, i));
+        if (!inserted && best < pos->second.first) pos->second = {best, i};
+      }
+    }
+    if (static_cast<int>(owner.size()) < ro.min_matches) continue;
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    for (const auto& [pid, match] : owner) {
+      const Eigen::Vector3d& x = map.point(pid)->position;
+      object.emplace_back(x.x(), x.y(), x.z());
+      image.emplace_back(frame.keypoints.uv(match.second, 0), frame.keypoints.uv(match.second, 1));
+    }
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    const bool solved = cv::solvePnPRansac(
+        object, image, K, cv::noArray(), rvec, tvec, false, ro.ransac_iterations,
+        static_cast<float>(ro.ransac_error_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
+    if (!solved || static_cast<int>(inliers.size()) < ro.min_pnp_inliers) continue;
+    cv::Mat R_cv;
+    cv::Rodrigues(rvec, R_cv);
+    Eigen::Matrix3d R_cw;
+    Eigen::Vector3d t_cw;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R_cw(r, c) = R_cv.at<double>(r, c);
+      t_cw(r) = tvec.at<double>(r);
+    }
+    if (!R_cw.allFinite() || !t_cw.allFinite()) continue;
+    LocalTracking local = TrackLocalMap(frame, map, kf->id, R_cw, t_cw, 1.0f);
+
+    if (!local.pose.success || local.weighted_inliers < ro.min_inliers) continue;
+    *tracking = std::move(local);
+    *keyframe_id = kf->id;
+    return true;
+  }
+  return false;
+}
+
+bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order,
+                         TrackResult* result, LocalTracking* tracking) {
+  if (!vocabulary_) return false;
+  const auto start = Clock::now();
+  ++stats_.relocalisation_attempts;
+  for (int m : order) {
+    int keyframe_id = -1;
+    if (!RelocaliseInMap(frame, m, tracking, &keyframe_id)) continue;
+    active_ = m;
+    last_keyframe_ = keyframe_id;
+    last_keyframe_frame_ = frame.index;
+    first_tracked_ = 0;
+    ++stats_.relocalisations;
+    result->relocalisation_ms = Ms(start);
+    return true;
+  }
+  result->relocalisation_ms = Ms(start);
+  return false;
+}
+
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   Require(frame != nullptr, "Track needs a frame");
   TrackResult result;
-  const PinholeCamera& camera = options_.rig.camera;
+  Eigen::Matrix3d R_pred;
+  Eigen::Vector3d t_pred;
+  Predict(&R_pred, &t_pred);
 
-  // Constant-velocity prediction.
-  Eigen::Matrix3d R_pred = last_R_;
-  Eigen::Vector3d t_pred = last_t_;
-  if (have_pose_) {
-    R_pred = velocity_R_ * last_R_;
-    t_pred = velocity_R_ * last_t_ + velocity_t_;
-  }
-
-  if (lost_ || maps_.empty()) {
+  if (maps_.empty()) {  // not initialised yet
     const auto start = Clock::now();
-    const bool had_map = !maps_.empty();
     if (StartMap(frame, R_pred, t_pred)) {
-      result.state = had_map ? TrackingState::kNewMap : TrackingState::kOk;
-      lost_ = false;
-      velocity_R_.setIdentity();
-      velocity_t_.setZero();
+      result.state = TrackingState::kOk;
       result.keyframe = true;
+      mode_ = Mode::kTracking;
+      SetPose(R_pred, t_pred, /*update_velocity=*/false);
     } else {
-      result.state = had_map ? TrackingState::kLost : TrackingState::kNotInitialized;
+      result.state = TrackingState::kNotInitialized;
     }
     result.R_cw = R_pred;
     result.t_cw = t_pred;
-    result.map_index = static_cast<int>(maps_.size()) - 1;
+    result.map_index = active_;
     result.mapping_ms = Ms(start);
-    if (had_map || result.state != TrackingState::kNotInitialized) {
-      last_R_ = R_pred;
-      last_t_ = t_pred;
-      have_pose_ = true;
+    return result;
+  }
+
+  LocalTracking tracking;
+  bool tracked = false, relocalised = false;
+  if (mode_ != Mode::kLost) {
+    Map& map = *maps_[active_];
+    std::lock_guard<std::mutex> lock(map.mutex());
+    const float scale = mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f;
+    tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale);
+    tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
+  }
+  if (!tracked && mode_ != Mode::kTracking) {
+    // Recently lost: the active map only; lost: every map, the active one first, then the newest.
+    std::vector<int> order = {active_};
+    if (mode_ == Mode::kLost) {
+      for (int m = static_cast<int>(maps_.size()) - 1; m >= 0; --m) {
+        if (m != active_) order.push_back(m);
+      }
+    }
+    relocalised = Relocalise(*frame, order, &result, &tracking);
+  }
+  result.matched_points = static_cast<int>(tracking.point_ids.size());
+  result.matched_lines = static_cast<int>(tracking.line_ids.size());
+  result.inlier_points = tracking.pose.point_inliers;
+  result.inlier_lines = tracking.pose.line_inliers;
+  result.weighted_inliers = tracking.weighted_inliers;
+  result.matching_ms = tracking.matching_ms;
+  result.optimisation_ms = tracking.optimisation_ms;
+
+  if (tracked || relocalised) {
+    Map& map = *maps_[active_];
+    std::vector<int> point_match(frame->NumKeypoints(), -1);
+    std::vector<int> line_match(frame->NumLines(), -1);
+    bool make_keyframe = false;
+    {
+      std::lock_guard<std::mutex> lock(map.mutex());
+      make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
+    }
+    result.state = relocalised ? TrackingState::kRelocalised : TrackingState::kOk;
+    result.R_cw = tracking.pose.R_cw;
+    result.t_cw = tracking.pose.t_cw;
+    result.map_index = active_;
+    // After a loss the velocity is unknown: start again from rest.
+    SetPose(tracking.pose.R_cw, tracking.pose.t_cw, /*update_velocity=*/mode_ == Mode::kTracking);
+    mode_ = Mode::kTracking;
+    lost_count_ = 0;
+    if (make_keyframe) {
+      const auto start = Clock::now();
+      InsertKeyFrame(frame, tracking.pose.R_cw, tracking.pose.t_cw, point_match, line_match);
+      result.keyframe = true;
+      result.mapping_ms = Ms(start);
     }
     return result;
   }
 
-  Map& map = *maps_.back();
-  result.map_index = static_cast<int>(maps_.size()) - 1;
-  std::vector<int> point_match(frame->NumKeypoints(), -1);
-  std::vector<int> line_match(frame->NumLines(), -1);
-  PoseOptimizerResult pose;
-  std::vector<int> obs_point_ids, obs_keypoints, obs_line_ids, obs_segments;
-  bool make_keyframe = false;
-  {
-    std::lock_guard<std::mutex> lock(map.mutex());
-    const auto match_start = Clock::now();
-    // Local map: the reference keyframe and its covisible keyframes.
-    std::vector<int> local = {last_keyframe_};
-    if (!map.keyframe(last_keyframe_)) local.clear();
-    for (int id : map.BestCovisible(last_keyframe_, options_.mapping.local_keyframes)) {
-      local.push_back(id);
-    }
-    if (local.empty() && !map.keyframes().empty()) local.push_back(map.keyframes().rbegin()->first);
-    std::set<int> point_ids, line_ids;
-    for (int id : local) {
-      auto kf = map.keyframe(id);
-      if (!kf) continue;
-      for (int pid : kf->point_ids) {
-        if (pid >= 0) point_ids.insert(pid);
-      }
-      for (int lid : kf->line_ids) {
-        if (lid >= 0) line_ids.insert(lid);
-      }
-    }
-
-    // Points: project with the prediction, match in a window around it.
-    std::vector<std::shared_ptr<MapPoint>> candidates;
-    std::vector<Eigen::Vector2f> predicted;
-    for (int pid : point_ids) {
-      auto p = map.point(pid);
-      if (!p || p->bad) continue;
-      const Eigen::Vector3d x_c = R_pred * p->position + t_pred;
-      if (x_c.z() <= 0.05) continue;
-      const Eigen::Vector2d uv = camera.Project(x_c);
-      if (!InImage(camera, uv)) continue;
-      candidates.push_back(p);
-      predicted.push_back(uv.cast<float>());
-      p->visible += 1;
-    }
-    const cv::Mat& frame_desc = frame->keypoints.descriptors;
-    if (!candidates.empty() && frame->NumKeypoints() > 0) {
-      Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> pred(candidates.size(), 2);
-      cv::Mat query(static_cast<int>(candidates.size()), frame_desc.cols, frame_desc.type());
-      for (size_t i = 0; i < candidates.size(); ++i) {
-        pred.row(i) = predicted[i].transpose();
-        candidates[i]->descriptor.copyTo(query.row(static_cast<int>(i)));
-      }
-      GuidedMatchOptions guided;
-      guided.radius_px = options_.search_radius_px;
-      guided.max_distance = frame_desc.type() == CV_8U ? options_.max_distance_binary
-                                                        : options_.max_distance_float;
-      guided.ratio = options_.match_ratio;
-      Eigen::VectorXi m = GuidedMatch(pred, query, frame->keypoints.uv, frame_desc, guided);
-      if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
-        guided.radius_px *= 2.0f;
-        m = GuidedMatch(pred, query, frame->keypoints.uv, frame_desc, guided);
-      }
-      for (size_t i = 0; i < candidates.size(); ++i) {
-        if (m(i) < 0) continue;
-        obs_point_ids.push_back(candidates[i]->id);
-        obs_keypoints.push_back(m(i));
-      }
-    }
-
-    // Lines: projected map segments against frame segments (angle, distance, LBD).
-    if (options_.use_lines && frame->NumLines() > 0) {
-      std::vector<std::tuple<float, int, int>> pairs;  // (LBD distance, map line, segment)
-      for (int lid : line_ids) {
-        auto l = map.line(lid);
-        if (!l || l->bad) continue;
-        const Eigen::Vector3d s_c = R_pred * l->start + t_pred;
-        const Eigen::Vector3d e_c = R_pred * l->end + t_pred;
-        if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
-        LineSegment proj;
-        proj.start = camera.Project(s_c).cast<float>();
-        proj.end = camera.Project(e_c).cast<float>();
-        const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
-        if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
-        l->visible += 1;
-        for (int j = 0; j < frame->NumLines(); ++j) {
-          const LineSegment& seg = frame->lines[j];
-          if (AngleDifference(seg.Angle(), proj.Angle()) > options_.line_max_angle_rad) continue;
-          const Eigen::Vector2f seg_mid = 0.5f * (seg.start + seg.end);
-          if (proj.DistanceToLine(seg_mid) > options_.line_search_px) continue;
-          if ((seg_mid - mid).norm() > 0.5f * (proj.Length() + seg.Length()) + options_.line_search_px) {
-            continue;
-          }
-          const float d = DescriptorDistance(l->descriptor, 0, frame->line_descriptors, j);
-          if (d <= options_.line_max_lbd) pairs.emplace_back(d, lid, j);
-        }
-      }
-      std::sort(pairs.begin(), pairs.end());
-      std::set<int> used_lines, used_segments;
-      for (const auto& [d, lid, j] : pairs) {
-        (void)d;
-        if (used_lines.count(lid) || used_segments.count(j)) continue;
-        used_lines.insert(lid);
-        used_segments.insert(j);
-        obs_line_ids.push_back(lid);
-        obs_segments.push_back(j);
-      }
-    }
-    result.matched_points = static_cast<int>(obs_point_ids.size());
-    result.matched_lines = static_cast<int>(obs_line_ids.size());
-    result.matching_ms = Ms(match_start);
-
-    // Motion-only BA.
-    const auto opt_start = Clock::now();
-    std::vector<PointObservation> points(obs_point_ids.size());
-    for (size_t i = 0; i < obs_point_ids.size(); ++i) {
-      const int k = obs_keypoints[i];
-      points[i].point_w = map.point(obs_point_ids[i])->position;
-      points[i].stereo = frame->u_right[k] >= 0.0;
-      points[i].observed << frame->keypoints.uv(k, 0), frame->keypoints.uv(k, 1), frame->u_right[k];
-      points[i].sigma_px = options_.point_sigma_px;
-    }
-    std::vector<LineObservation> lines(obs_line_ids.size());
-    for (size_t i = 0; i < obs_line_ids.size(); ++i) {
-      lines[i].line_w = map.line(obs_line_ids[i])->line;
-      lines[i].start_px = frame->lines[obs_segments[i]].start.cast<double>();
-      lines[i].end_px = frame->lines[obs_segments[i]].end.cast<double>();
-      lines[i].sigma_px = options_.line_sigma_px;
-    }
-    pose = OptimizePose(options_.rig, R_pred, t_pred, points, lines, options_.pose);
-    result.optimisation_ms = Ms(opt_start);
-    result.inlier_points = pose.point_inliers;
-    result.inlier_lines = pose.line_inliers;
-
-    if (!pose.success || pose.point_inliers + pose.line_inliers < options_.min_inliers) {
-      result.state = TrackingState::kLost;
-      result.R_cw = R_pred;
-      result.t_cw = t_pred;
-      lost_ = true;
-      last_R_ = R_pred;
-      last_t_ = t_pred;
-      return result;
-    }
-    for (size_t i = 0; i < obs_point_ids.size(); ++i) {
-      if (!pose.point_inlier[i]) continue;
-      map.point(obs_point_ids[i])->found += 1;
-      point_match[obs_keypoints[i]] = obs_point_ids[i];
-    }
-    for (size_t i = 0; i < obs_line_ids.size(); ++i) {
-      if (!pose.line_inlier[i]) continue;
-      map.line(obs_line_ids[i])->found += 1;
-      line_match[obs_segments[i]] = obs_line_ids[i];
-    }
-    // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, with local mapping idle: it is
-    // in sequential mode, and in threaded mode the queue absorbs the keyframe). Reference: the
-    // reference keyframe's map points seen by at least min_obs keyframes.
-    const int frames_since = frame->index - last_keyframe_frame_;
-    int reference = 0;
-    if (auto kf = map.keyframe(last_keyframe_)) {
-      const int min_obs = map.keyframes().size() <= 2 ? 2 : 3;
-      for (int pid : kf->point_ids) {
-        auto p = pid >= 0 ? map.point(pid) : nullptr;
-        if (p && !p->bad && static_cast<int>(p->observations.size()) >= min_obs) ++reference;
-      }
-    }
-    // Close stereo points (depth < close_depth_baselines): tracked vs not yet in the map.
-    const double close_depth = options_.close_depth_baselines * options_.rig.baseline_m;
-    int close_tracked = 0, close_untracked = 0;
-    for (int i = 0; i < frame->NumKeypoints(); ++i) {
-      if (!(frame->depth[i] > 0.0 && frame->depth[i] < close_depth)) continue;
-      if (point_match[i] >= 0) {
-        ++close_tracked;
-      } else {
-        ++close_untracked;
-      }
-    }
-    const bool need_close = close_tracked < options_.keyframe_min_inliers && close_untracked > 70;
-    const int tracked = pose.point_inliers;
-    // A young map has few points seen by three keyframes; the inliers of the first frame tracked
-    // after the keyframe stand in for the reference then (how many of its points can be tracked).
-    if (first_tracked_ == 0 && frames_since >= 1) first_tracked_ = tracked;
-    reference = std::max(reference, first_tracked_);
-    const bool c1 = frames_since >= options_.keyframe_max_frames ||
-                    frames_since >= options_.keyframe_min_frames ||
-                    tracked < 0.25 * reference || need_close;
-    const bool c2 = (tracked < options_.keyframe_track_ratio * reference || need_close) &&
-                    tracked > options_.min_inliers;
-    make_keyframe = frames_since >= 1 &&
-                    ((c1 && c2) || frames_since >= options_.keyframe_max_frames);
+  // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
+  ++lost_count_;
+  if (lost_count_ > options_.recently_lost_frames)
+    mode_ = Mode::kLost;
+  else
+    mode_ = Mode::kRecentlyLost;
+  if (mode_ == Mode::kRecentlyLost) {
+    ++stats_.recently_lost_frames;
+    result.state = TrackingState::kRecentlyLost;
+    last_R_ = R_pred;
+    last_t_ = t_pred;
+    const double decay = options_.lost_velocity_decay;
+    const Eigen::AngleAxisd rotation(velocity_R_);
+    velocity_R_ = Eigen::AngleAxisd(decay * rotation.angle(), rotation.axis()).toRotationMatrix();
+    velocity_t_ *= decay;
+    result.R_cw = R_pred;
+    result.t_cw = t_pred;
+    result.map_index = active_;
+    return result;
   }
-
-  result.state = TrackingState::kOk;
-  result.R_cw = pose.R_cw;
-  result.t_cw = pose.t_cw;
-  velocity_R_ = pose.R_cw * last_R_.transpose();
-  velocity_t_ = pose.t_cw - velocity_R_ * last_t_;
-  last_R_ = pose.R_cw;
-  last_t_ = pose.t_cw;
-  have_pose_ = true;
-  if (make_keyframe) {
-    const auto start = Clock::now();
-    InsertKeyFrame(frame, pose.R_cw, pose.t_cw, point_match, line_match);
+  velocity_R_.setIdentity();
+  velocity_t_.setZero();
+  result.R_cw = last_R_;
+  result.t_cw = last_t_;
+  const auto start = Clock::now();
+  if (StartMap(frame, last_R_, last_t_)) {
+    result.state = TrackingState::kNewMap;
     result.keyframe = true;
-    result.mapping_ms = Ms(start);
+    mode_ = Mode::kTracking;
+    lost_count_ = 0;
+  } else {
+    ++stats_.lost_frames;
+    result.state = TrackingState::kLost;
   }
+  result.mapping_ms = Ms(start);
+  result.map_index = active_;
   return result;
 }
 

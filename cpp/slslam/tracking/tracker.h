@@ -2,13 +2,18 @@
 // guided matching of the local map's points and lines into the frame, motion-only bundle
 // adjustment on the unified cost, keyframe decision and insertion, hand-off to local mapping.
 //
-// Tracking loss is a state, not an error: a lost frame reports LOST with the predicted pose, and
-// the next frame with enough stereo points starts a new map (state NEW_MAP) anchored at the last
-// known pose, so the trajectory stays continuous. Relocalisation into an old map needs place
-// recognition (the loop-closing issue) and is not done yet.
+// Tracking loss is a state, not an error. A frame that cannot be tracked enters RECENTLY_LOST:
+// for a few frames the tracker retries with a wider window around a prediction whose velocity
+// decays frame by frame, and tries to relocalise (bag of words against the keyframe database,
+// PnP RANSAC, then the local map) into the active map. After that the pose is frozen (LOST) and
+// every frame tries relocalisation into every map; a frame with enough stereo points and lines
+// starts a new map of the atlas (NEW_MAP) anchored at the frozen pose. Point and line inliers
+// both count (a line inlier weighs `line_inlier_weight` points) in the decisions to go lost, to
+// make a keyframe and to start a map, so lines carry the low-texture stretches.
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -17,11 +22,47 @@
 #include "slslam/map/map.h"
 #include "slslam/mapping/local_mapper.h"
 #include "slslam/optimization/pose_optimizer.h"
+#include "slslam/place/keyframe_database.h"
+#include "slslam/place/vocabulary.h"
 #include "slslam/tracking/stereo_frame.h"
 
 namespace slslam {
 
-enum class TrackingState { kNotInitialized = 0, kOk = 1, kLost = 2, kNewMap = 3 };
+// OK, NEW_MAP and RELOCALISED frames carry an estimated pose; RECENTLY_LOST frames a prediction
+// (decaying velocity), LOST frames the frozen last prediction.
+enum class TrackingState {
+  kNotInitialized = 0,
+  kOk = 1,
+  kLost = 2,
+  kNewMap = 3,
+  kRecentlyLost = 4,
+  kRelocalised = 5,
+};
+
+// Relocalisation (ORB-SLAM's): keyframe candidates by bag of words, frame keypoints matched to
+// each candidate's map points within the vocabulary nodes they share, PnP RANSAC, then the local
+// map around the candidate tracked from that pose as in normal tracking.
+struct RelocalisationOptions {
+  int candidates = 5;            ///< best keyframes by BoW score tried per frame [-]
+  int min_matches = 15;          ///< descriptor matches a candidate needs for PnP [-]
+  float match_ratio = 0.75f;     ///< best / second best within a vocabulary node [-]
+  double ransac_error_px = 3.0;  ///< PnP RANSAC inlier bound [px]
+  int ransac_iterations = 300;   ///< [-]
+  int min_pnp_inliers = 12;      ///< [-]
+  double min_inliers = 40.0;     ///< weighted inliers after tracking the local map [-]
+  int vocabulary_levels_up = 2;  ///< direct-index level for matching (levels above the leaves)
+
+  void Check() const;
+};
+
+// Counts of the loss / recovery machinery since the tracker started.
+struct TrackingStats {
+  int relocalisations = 0;
+  int relocalisation_attempts = 0;
+  int recently_lost_frames = 0;
+  int lost_frames = 0;
+  int maps_started = 0;
+};
 
 const char* TrackingStateName(TrackingState state);
 
@@ -30,28 +71,40 @@ struct TrackerOptions {
   StereoMatchOptions stereo;
   PoseOptimizerOptions pose;
   LocalMapperOptions mapping;
-  bool use_lines = true;           ///< lines in tracking and mapping
-  bool sequential = true;          ///< local mapping inline (reproducible) or on its own thread
-  int min_init_points = 50;        ///< stereo points a frame needs to start a map [-]
-  int min_inliers = 15;            ///< fewer inliers after motion-only BA: LOST [-]
-  float search_radius_px = 15.0f;  ///< guided matching window [px]; doubled on a retry
-  float max_distance_binary = 50.0f;  ///< guided matching, ORB (Hamming) [bits]
-  float max_distance_float = 0.8f;    ///< guided matching, SuperPoint (L2) [-]
-  float match_ratio = 0.9f;           ///< ratio test inside the window [-]
-  float line_search_px = 20.0f;       ///< frame segment midpoint to predicted line [px]
-  float line_max_angle_rad = 0.2f;    ///< [rad]
-  float line_max_lbd = 80.0f;         ///< [bits]
-  int keyframe_max_frames = 20;       ///< a keyframe at least this often [frames]
-  int keyframe_min_frames = 0;        ///< no keyframe sooner than this after the last [frames]
+  bool use_lines = true;               ///< lines in tracking and mapping
+  bool sequential = true;              ///< local mapping inline (reproducible) or on its own thread
+  int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
+  int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
+  float search_radius_px = 15.0f;      ///< guided matching window [px]; doubled on a retry
+  float max_distance_binary = 50.0f;   ///< guided matching, ORB (Hamming) [bits]
+  float max_distance_float = 0.8f;     ///< guided matching, SuperPoint (L2) [-]
+  float match_ratio = 0.9f;            ///< ratio test inside the window [-]
+  float line_search_px = 20.0f;        ///< frame segment midpoint to predicted line [px]
+  float line_max_angle_rad = 0.2f;     ///< [rad]
+  float line_max_lbd = 80.0f;          ///< [bits]
+  int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
+  int keyframe_min_frames = 0;         ///< no keyframe sooner than this after the last [frames]
   double keyframe_track_ratio = 0.75;  ///< tracked / reference-keyframe points (those seen by
                                        ///< >= 3 keyframes) below this: keyframe [-]
   int keyframe_min_inliers = 100;      ///< fewer tracked close points (and > 70 untracked
                                        ///< ones): keyframe, as ORB-SLAM3's stereo rule [-]
   double close_depth_baselines = 40.0;  ///< "close" stereo points for the rule above [-]
-  double point_sigma_px = 1.0;         ///< [px]
-  double line_sigma_px = 3.0;          ///< line endpoint distance sigma [px]: the two
-                                       ///< distances of one segment share the map line's error
-                                       ///< (benchmarks/README.md: 1.5 px over-weighted lines)
+  double point_sigma_px = 1.0;          ///< [px]
+  double line_sigma_px = 3.0;           ///< line endpoint distance sigma [px]: the two
+                                        ///< distances of one segment share the map line's error
+                                        ///< (benchmarks/README.md: 1.5 px over-weighted lines)
+  double line_inlier_weight = 1.0;      ///< a line inlier counts as this many point inliers when
+                                        ///< deciding LOST, keyframes and a new map [-]
+  int recently_lost_frames = 10;        ///< frames of RECENTLY_LOST before LOST [frames]
+  double lost_velocity_decay = 0.6;     ///< per-frame factor on the predicted motion while
+                                        ///< recently lost (rotation angle and translation) [-]
+  float lost_search_scale = 2.0f;       ///< guided-matching window factor while recently lost [-]
+  int weak_keyframe_inliers = 60;       ///< weighted inliers below this: a keyframe every
+                                        ///< `weak_keyframe_frames`, to keep a thin map alive [-]
+  int weak_keyframe_frames = 3;         ///< [frames]
+  std::string vocabulary_path;          ///< bag-of-words vocabulary for relocalisation; empty:
+                                        ///< no relocalisation
+  RelocalisationOptions relocalisation;
 
   void Check() const;
 };
@@ -60,21 +113,23 @@ struct TrackResult {
   TrackingState state = TrackingState::kNotInitialized;
   Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
   Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
-  int map_index = -1;        ///< which map of the atlas the pose belongs to
-  int matched_points = 0;    ///< guided matches before optimisation
+  int map_index = -1;      ///< which map of the atlas the pose belongs to
+  int matched_points = 0;  ///< guided matches before optimisation
   int inlier_points = 0;
   int matched_lines = 0;
   int inlier_lines = 0;
-  bool keyframe = false;     ///< a keyframe was made from this frame
-  double matching_ms = 0.0;  ///< local map projection and guided matching [ms]
-  double optimisation_ms = 0.0;  ///< motion-only BA [ms]
-  double mapping_ms = 0.0;   ///< keyframe insertion (+ local mapping in sequential mode) [ms]
+  bool keyframe = false;           ///< a keyframe was made from this frame
+  double weighted_inliers = 0.0;   ///< point inliers + line_inlier_weight * line inliers [-]
+  double relocalisation_ms = 0.0;  ///< BoW query, PnP and local-map tracking when lost [ms]
+  double matching_ms = 0.0;        ///< local map projection and guided matching [ms]
+  double optimisation_ms = 0.0;    ///< motion-only BA [ms]
+  double mapping_ms = 0.0;         ///< keyframe insertion (+ local mapping in sequential mode) [ms]
 };
 
 struct MapExport {
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> points;  ///< world [m]
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> lines;   ///< start, end world [m]
-  Eigen::VectorXi point_map;  ///< map index per point
+  Eigen::VectorXi point_map;                                         ///< map index per point
   Eigen::VectorXi line_map;
   int keyframes = 0;
 };
@@ -91,19 +146,55 @@ class Tracker {
   void Flush();
   MapExport ExportMap() const;
   LocalMappingStats mapping_stats() const { return mapper_->stats(); }
+  TrackingStats stats() const { return stats_; }
   int num_maps() const { return static_cast<int>(maps_.size()); }
+  int active_map() const { return active_; }
+  bool has_vocabulary() const { return vocabulary_ != nullptr; }
 
  private:
+  // Matches of the local map around `reference_kf` in a frame, and the motion-only BA on them.
+  struct LocalTracking {
+    PoseOptimizerResult pose;
+    std::vector<int> point_ids, keypoints, line_ids, segments;  ///< matched pairs
+    double weighted_inliers = 0.0;
+    double matching_ms = 0.0;
+    double optimisation_ms = 0.0;
+  };
+  enum class Mode { kTracking, kRecentlyLost, kLost };
+
+  double Weighted(int points, int lines) const {
+    return points + options_.line_inlier_weight * lines;
+  }
   bool StartMap(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
                 const Eigen::Vector3d& t_cw);
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
                       const Eigen::Vector3d& t_cw, const std::vector<int>& point_matches,
                       const std::vector<int>& line_matches);
+  // Caller holds map.mutex().
+  LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
+                              const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
+                              float radius_scale) const;
+  // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
+  // map.mutex().
+  bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
+                      std::vector<int>* point_match, std::vector<int>* line_match);
+  // Tries the maps in `order`; on success switches to that map and fills the pose and tracking.
+  bool Relocalise(const StereoFrame& frame, const std::vector<int>& order, TrackResult* result,
+                  LocalTracking* tracking);
+  bool RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTracking* tracking,
+                       int* keyframe_id);
+  // The pose predicted for the next frame from the current motion model.
+  void Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const;
+  void SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, bool update_velocity);
 
   TrackerOptions options_;
   std::vector<std::unique_ptr<Map>> maps_;
+  std::vector<std::unique_ptr<KeyframeDatabase>> databases_;  ///< one per map
+  std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
-  bool lost_ = true;
+  int active_ = -1;  ///< index of the map being tracked in
+  Mode mode_ = Mode::kLost;
+  int lost_count_ = 0;  ///< frames since tracking failed
   bool have_pose_ = false;
   Eigen::Matrix3d last_R_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d last_t_ = Eigen::Vector3d::Zero();
@@ -112,6 +203,7 @@ class Tracker {
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   int first_tracked_ = 0;  ///< inliers of the first frame after the last keyframe
+  TrackingStats stats_;
 };
 
 }  // namespace slslam

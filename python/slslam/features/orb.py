@@ -23,13 +23,19 @@ class OrbOptions:
 class Orb:
     """``detect(image)`` returns :class:`Keypoints` with uint8 (N, 32) descriptors."""
 
-    def __init__(self, options: OrbOptions = OrbOptions()):
+    def __init__(self, options: OrbOptions = OrbOptions(), adaptive: bool = True):
+        """``adaptive``: per-cell FAST threshold fallback (20 -> 7 in cells without a corner at
+        the normal threshold, as ORB-SLAM); False: OpenCV's plain ORB detection."""
         self.options = options
         self._core_options = _core.OrbOptions()
         self._core_options.max_features = options.max_keypoints
         self._core_options.scale_factor = options.scale_factor
         self._core_options.num_levels = options.num_levels
         self._core_options.fast_threshold = options.fast_threshold
+        self._core_options.adaptive = adaptive
+        self._core_options.min_fast_threshold = min(
+            self._core_options.min_fast_threshold, options.fast_threshold
+        )
         self._core_options.check()
 
     def detect(self, image: np.ndarray) -> Keypoints:

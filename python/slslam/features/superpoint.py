@@ -209,15 +209,23 @@ class SuperPoint:
         semi, desc = self.session.run(["semi", "desc"], {"image": padded[None, None]})
         return semi[0], desc[0]
 
-    def detect(self, image: np.ndarray) -> Keypoints:
-        """Keypoints of one uint8 gray image."""
-        return self._postprocess(image, *self.infer(image))
+    def detect(self, image: np.ndarray, threshold: float | None = None) -> Keypoints:
+        """Keypoints of one uint8 gray image; ``threshold`` overrides the options' detection
+        threshold (the tracker's low-texture fallback detects at a lower one)."""
+        return self._postprocess(image, *self.infer(image), threshold=threshold)
 
-    def _postprocess(self, image: np.ndarray, semi: np.ndarray, coarse: np.ndarray) -> Keypoints:
+    def _postprocess(
+        self,
+        image: np.ndarray,
+        semi: np.ndarray,
+        coarse: np.ndarray,
+        threshold: float | None = None,
+    ) -> Keypoints:
         h, w = image.shape
         heat = heatmap_from_logits(semi)[:h, :w]
         o = self.options
-        uv = nms_keypoints(heat, o.detection_threshold, o.nms_radius, o.border_px)
+        threshold = o.detection_threshold if threshold is None else threshold
+        uv = nms_keypoints(heat, threshold, o.nms_radius, o.border_px)
         if o.max_keypoints is not None:
             uv = uv[: o.max_keypoints]
         scores = heat[uv[:, 1], uv[:, 0]].astype(np.float32)

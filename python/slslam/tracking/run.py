@@ -1,8 +1,11 @@
 """``slslam run``: the tracker over a whole sequence, with every result written as a file.
 
 Outputs in ``out_dir``:
-    trajectory.tum   every input frame (TUM: t x y z qx qy qz qw, left camera in the map frame),
-                     written and flushed frame by frame, so a run that fails midway keeps them
+    trajectory.tum   every frame with an estimated pose (states OK, RELOCALISED, NEW_MAP; TUM:
+                     t x y z qx qy qz qw, left camera in the map frame), written and flushed
+                     frame by frame, so a run that fails midway keeps them
+    lost_predictions.tum  the other frames (RECENTLY_LOST: decaying-velocity prediction; LOST:
+                     frozen pose): not estimates, kept apart so no tool scores them by accident
     frames.csv       per frame: state, counts and stage times [ms], also written as it goes
     map.ply          map points (vertices) and map lines (edges between endpoint vertices)
     metrics.json     frames, tracked ratio, median stage times, and ATE/RPE (evo, SE3 alignment,
@@ -56,6 +59,7 @@ STAGES = (
     "matching",
     "optimisation",
     "mapping",
+    "relocalisation",
     "total",
 )
 COUNTS = (
@@ -67,6 +71,7 @@ COUNTS = (
     "inlier_lines",
     "keyframe",
     "map",
+    "weighted_inliers",
 )
 
 
@@ -340,6 +345,7 @@ def run_sequence(
         )
         with (
             (out / "trajectory.tum").open("w", encoding="ascii") as traj_file,
+            (out / "lost_predictions.tum").open("w", encoding="ascii") as lost_file,
             (out / "frames.csv").open("w", newline="", encoding="ascii") as frames_file,
         ):
             writer = csv.writer(frames_file)
@@ -351,8 +357,9 @@ def run_sequence(
                     frame = sequence[i]
                     result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
                     results.append(result)
-                    traj_file.write(_tum_line(result))
-                    traj_file.flush()
+                    pose_file = traj_file if result.state in TRACKED_STATES else lost_file
+                    pose_file.write(_tum_line(result))
+                    pose_file.flush()
                     writer.writerow(
                         [
                             result.index,
@@ -401,6 +408,7 @@ def run_sequence(
         "states": {
             s: sum(r.state == s for r in results) for s in sorted({r.state for r in results})
         },
+        **_loss_metrics(results),
         "median_ms": {
             s: statistics.median(r.timings_ms[s] for r in results) if results else None
             for s in STAGES
@@ -419,6 +427,29 @@ def run_sequence(
     if stops:
         raise stops[-1][1] if isinstance(stops[-1][1], KeyboardInterrupt) else stops[0][1]
     return RunSummary(out, metrics, results)
+
+
+def _loss_metrics(results: list[TrackResult]) -> dict:
+    """Losses and recoveries: frames posed after the first initialisation, relocalisations, maps
+    started after a loss, frames and seconds spent without an estimate."""
+    first = next((i for i, r in enumerate(results) if r.state != "NOT_INITIALIZED"), None)
+    if first is None:
+        return {"posed_ratio_after_init": 0.0, "relocalisations": 0, "lost_frames": 0}
+    after = results[first:]
+    unposed = [r for r in after if r.state not in TRACKED_STATES]
+    # A frame without an estimate lasts until the next frame's timestamp (the median step at the
+    # end of the run).
+    steps = np.diff([r.timestamp for r in results])
+    step = float(np.median(steps)) if len(steps) else 0.0
+    stamps = {r.index: r.timestamp for r in results}
+    lost_s = sum(stamps.get(r.index + 1, r.timestamp + step) - r.timestamp for r in unposed)
+    return {
+        "posed_ratio_after_init": sum(r.state in TRACKED_STATES for r in after) / len(after),
+        "relocalisations": sum(r.state == "RELOCALISED" for r in after),
+        "new_maps_after_loss": sum(r.state == "NEW_MAP" for r in after),
+        "lost_frames": len(unposed),
+        "lost_s": round(lost_s, 6),
+    }
 
 
 #: Tests only: ``SLSLAM_TEST_PAUSE_IN=map`` (or ``scoring``) makes that stage write

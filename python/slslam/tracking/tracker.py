@@ -13,25 +13,29 @@ with the GIL released.
 
 from __future__ import annotations
 
+import inspect
 import logging
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from slslam import _core
 from slslam.config import Config, make_point_frontend
 from slslam.datasets.euroc import RectifiedStereoCamera
-from slslam.errors import InputError
+from slslam.errors import InputError, SlslamError
 from slslam.features.keypoints import Keypoints, check_gray_image
 
 log = logging.getLogger(__name__)
 
-#: Per-frame states: OK (tracked), LOST (pose is the constant-velocity prediction), NEW_MAP (a
-#: new map started after a loss, anchored at the predicted pose), NOT_INITIALIZED (no map yet).
-STATES = ("NOT_INITIALIZED", "OK", "LOST", "NEW_MAP")
-TRACKED_STATES = ("OK", "NEW_MAP")
+#: Per-frame states. Estimated poses: OK (tracked), RELOCALISED (found again in a map by bag of
+#: words after a loss), NEW_MAP (a new map started after a loss, anchored at the frozen pose).
+#: No estimate: RECENTLY_LOST (the pose is a prediction with a decaying velocity), LOST (the pose
+#: is frozen at the last prediction), NOT_INITIALIZED (no map yet).
+STATES = ("NOT_INITIALIZED", "OK", "LOST", "NEW_MAP", "RECENTLY_LOST", "RELOCALISED")
+TRACKED_STATES = ("OK", "NEW_MAP", "RELOCALISED")
 
 
 @dataclass
@@ -71,7 +75,9 @@ class MapData:
     stats: dict[str, float] = field(default_factory=dict)
 
 
-def _core_options(camera: RectifiedStereoCamera, config: Config) -> _core.TrackerOptions:
+def _core_options(
+    camera: RectifiedStereoCamera, config: Config, vocabulary: Path | None = None
+) -> _core.TrackerOptions:
     t = config.tracking
     pinhole = _core.PinholeCamera(
         camera.fx, camera.fy, camera.cx, camera.cy, camera.width, camera.height
@@ -91,8 +97,16 @@ def _core_options(camera: RectifiedStereoCamera, config: Config) -> _core.Tracke
         "keyframe_min_inliers",
         "point_sigma_px",
         "line_sigma_px",
+        "line_inlier_weight",
+        "recently_lost_frames",
+        "lost_velocity_decay",
+        "lost_search_scale",
+        "weak_keyframe_inliers",
+        "weak_keyframe_frames",
     ):
         setattr(options, name, getattr(t, name))
+    if vocabulary is not None:
+        options.vocabulary_path = str(vocabulary)
     options.stereo.max_depth_baselines = t.max_depth_baselines
     options.mapping.local_keyframes = t.local_keyframes
     options.pose.line_weight = t.line_weight
@@ -104,6 +118,33 @@ def _core_options(camera: RectifiedStereoCamera, config: Config) -> _core.Tracke
     except ValueError as exc:
         raise InputError("tracking config", str(exc)) from exc
     return options
+
+
+def _vocabulary_for(config: Config, frontend) -> Path | None:
+    """The vocabulary relocalisation uses: the configured file, else the shipped one when the
+    front end's descriptors are binary (ORB); None (no relocalisation) otherwise."""
+    t = config.tracking
+    if not t.relocalisation:
+        return None
+    if t.vocabulary_path:
+        path = Path(t.vocabulary_path).expanduser()
+        if not path.is_file():
+            raise InputError(path, "tracking.vocabulary_path: vocabulary file not found")
+        return path
+    from slslam.place import default_vocabulary_path
+
+    if type(frontend).__name__ != "Orb":
+        log.warning(
+            "no bag-of-words vocabulary for %s descriptors (tracking.vocabulary_path; "
+            "`slslam vocab train`): relocalisation is off",
+            type(frontend).__name__,
+        )
+        return None
+    try:
+        return default_vocabulary_path("binary")
+    except SlslamError as exc:  # an installation without package data: track without it
+        log.warning("%s: relocalisation is off", exc)
+        return None
 
 
 class Tracker:
@@ -132,15 +173,28 @@ class Tracker:
         self._grid = _core.GridLimitOptions()
         self._grid.cell_size_px = grid.cell_size_px
         self._grid.max_per_cell = grid.max_per_cell
+        # Low-texture fallback for learned detectors: detect at a lower threshold and let the
+        # grid keep the weak keypoints only in cells without a strong one (ORB does it inside).
+        self._weak_threshold: float | None = None
+        features = self.config.features
+        threshold = getattr(getattr(self.frontend, "options", None), "detection_threshold", None)
+        accepts = "threshold" in inspect.signature(self.frontend.detect).parameters
+        if features.low_texture_fallback and threshold is not None and accepts:
+            self._weak_threshold = threshold * features.low_texture_ratio
+            self._grid.strong_score = threshold
+        self.vocabulary = _vocabulary_for(self.config, self.frontend)
         self._core = _core.TrackerCore(
-            _core_options(camera, self.config), _core.LinePreprocessOptions()
+            _core_options(camera, self.config, self.vocabulary), _core.LinePreprocessOptions()
         )
         self._results: list[TrackResult] = []
         self._closed = False
 
     # -- per frame -----------------------------------------------------------------------------
     def _detect(self, image: np.ndarray) -> Keypoints:
-        keypoints = self.frontend.detect(image)
+        if self._weak_threshold is not None:
+            keypoints = self.frontend.detect(image, threshold=self._weak_threshold)
+        else:
+            keypoints = self.frontend.detect(image)
         if len(keypoints) == 0:
             return keypoints
         keep = _core.grid_limit(
@@ -209,6 +263,7 @@ class Tracker:
             "matching": out["matching_ms"],
             "optimisation": out["optimisation_ms"],
             "mapping": out["mapping_ms"],
+            "relocalisation": out["relocalisation_ms"],
         }
         timings["total"] = (time.perf_counter() - start) * 1e3
         counts = {
@@ -220,6 +275,7 @@ class Tracker:
             "inlier_lines": out["inlier_lines"],
             "keyframe": int(out["keyframe"]),
             "map": out["map_index"],
+            "weighted_inliers": round(float(out["weighted_inliers"]), 3),
         }
         result = TrackResult(index, float(timestamp), out["state"], T_wc, timings, counts)
         self._results.append(result)
@@ -232,7 +288,8 @@ class Tracker:
         return list(self._results)
 
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
-        """(timestamps (N,), poses T_wc (N, 4, 4), states) for every tracked frame so far."""
+        """(timestamps (N,), poses T_wc (N, 4, 4), states) for every frame so far; the poses of
+        frames whose state is not in ``TRACKED_STATES`` are predictions, not estimates."""
         stamps = np.array([r.timestamp for r in self._results])
         poses = np.array([r.T_wc for r in self._results]).reshape(-1, 4, 4)
         return stamps, poses, [r.state for r in self._results]
@@ -255,6 +312,9 @@ class Tracker:
                     "points_culled",
                     "lines_culled",
                     "local_mapping_ms",
+                    "relocalisations",
+                    "relocalisation_attempts",
+                    "maps_started",
                 )
             },
         )

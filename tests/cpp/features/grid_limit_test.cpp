@@ -61,6 +61,20 @@ TEST(GridLimit, SmallCaseByHand) {
   EXPECT_EQ(kept, (std::vector<int>{1, 2, 3}));
 }
 
+TEST(GridLimit, WeakKeypointsFillOnlyCellsWithoutAStrongOne) {
+  PixelArray uv(6, 2);
+  // Cell 0: one strong (0.9) and two weak; cell 1: only weak ones (0.2, 0.1, 0.05).
+  uv << 1, 1, 2, 2, 3, 3, 40, 1, 41, 2, 42, 3;
+  Eigen::VectorXf score(6);
+  score << 0.9f, 0.3f, 0.2f, 0.2f, 0.1f, 0.05f;
+  GridLimitOptions options;
+  options.max_per_cell = 2;
+  options.strong_score = 0.5f;
+  EXPECT_EQ(GridLimit(uv, score, 64, 32, options), (std::vector<int>{0, 3, 4}));
+  options.strong_score = -std::numeric_limits<float>::infinity();  // off: the plain limit
+  EXPECT_EQ(GridLimit(uv, score, 64, 32, options), (std::vector<int>{0, 1, 3, 4}));
+}
+
 TEST(GridLimit, RejectsBadInput) {
   PixelArray uv(2, 2);
   uv.setZero();

@@ -1,0 +1,113 @@
+#include "slslam/features/orb_extractor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "slslam/features/descriptor_matcher.h"
+
+namespace slslam {
+namespace {
+
+// Random blobs: strong texture with `contrast` gray levels of amplitude around `mean`.
+cv::Mat Texture(int width, int height, double mean, double contrast, uint64_t seed) {
+  cv::RNG rng(seed);
+  cv::Mat noise(height / 4, width / 4, CV_32F);
+  rng.fill(noise, cv::RNG::UNIFORM, -1.0, 1.0);
+  cv::Mat big;
+  cv::resize(noise, big, cv::Size(width, height), 0, 0, cv::INTER_CUBIC);
+  cv::Mat out;
+  big.convertTo(out, CV_8U, contrast, mean);
+  return out;
+}
+
+int CountIn(const Keypoints& k, const cv::Rect& region) {
+  int n = 0;
+  for (int i = 0; i < k.size(); ++i) n += region.contains(cv::Point(k.uv(i, 0), k.uv(i, 1)));
+  return n;
+}
+
+TEST(OrbExtractor, LowContrastHalfStillGetsKeypoints) {
+  // Left half textured (contrast 120), right half nearly flat (contrast 12: few FAST corners at
+  // threshold 20, many at 7), as a lit wall next to a dark, smooth one.
+  cv::Mat image = Texture(752, 480, 128, 120, 1);
+  Texture(376, 480, 40, 12, 2).copyTo(image(cv::Rect(376, 0, 376, 480)));
+  const cv::Rect dark(376 + 32, 0, 376 - 32, 480);
+  OrbOptions plain;
+  plain.adaptive = false;
+  const Keypoints before = ExtractOrb(image, plain);
+  const Keypoints after = ExtractOrb(image, OrbOptions{});
+  EXPECT_LE(after.size(), OrbOptions{}.max_features);
+  EXPECT_EQ(after.descriptors.rows, after.size());
+  EXPECT_EQ(after.descriptors.type(), CV_8U);
+  const int dark_before = CountIn(before, dark), dark_after = CountIn(after, dark);
+  EXPECT_LT(dark_before, 60) << "the dark half is meant to starve plain ORB";
+  EXPECT_GT(dark_after, 4 * std::max(dark_before, 25));
+  // The bright half keeps a fair share too.
+  EXPECT_GT(CountIn(after, cv::Rect(0, 0, 376, 480)), 250);
+}
+
+TEST(OrbExtractor, FlatImageGivesNoKeypoints) {
+  const cv::Mat flat(480, 752, CV_8U, cv::Scalar(90));
+  const Keypoints k = ExtractOrb(flat);
+  EXPECT_EQ(k.size(), 0);
+  EXPECT_EQ(k.descriptors.cols, 32);
+}
+
+TEST(OrbExtractor, MatchesAcrossAShiftAreConsistent) {
+  const cv::Mat image = Texture(800, 520, 100, 60, 7);
+  const cv::Mat a = image(cv::Rect(0, 0, 752, 480)).clone();
+  const cv::Mat b = image(cv::Rect(9, 5, 752, 480)).clone();  // b(u, v) = a(u + 9, v + 5)
+  const Keypoints ka = ExtractOrb(a), kb = ExtractOrb(b);
+  ASSERT_GT(ka.size(), 500);
+  MatchOptions options;
+  options.max_distance = 50.0f;
+  const auto pairs = MatchDescriptors(ka.descriptors, kb.descriptors, options);
+  int matches = 0, consistent = 0;
+  for (Eigen::Index r = 0; r < pairs.rows(); ++r) {
+    const int i = pairs(r, 0), j = pairs(r, 1);
+    ++matches;
+    const float du = ka.uv(i, 0) - 9.0f - kb.uv(j, 0);
+    const float dv = ka.uv(i, 1) - 5.0f - kb.uv(j, 1);
+    consistent += std::hypot(du, dv) < 3.0f;
+  }
+  ASSERT_GT(matches, 200);
+  EXPECT_GT(consistent, 0.9 * matches);
+}
+
+TEST(OrbExtractor, AnglesAgreeWithOpenCv) {
+  const cv::Mat image = Texture(752, 480, 120, 100, 11);
+  auto orb = cv::ORB::create(500, 1.2f, 1, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
+  std::vector<cv::KeyPoint> keypoints;
+  orb->detect(image, keypoints);
+  ASSERT_GT(keypoints.size(), 100u);
+  std::vector<cv::Point2f> points;
+  for (const auto& kp : keypoints) points.push_back(kp.pt);
+  const std::vector<float> angles = IntensityCentroidAngles(image, points, 15);
+  // The disc's rim pixels differ slightly from OpenCV's, and where the centroid is near the
+  // centre (smooth blobs) that moves the angle: compare the bulk, not every keypoint.
+  std::vector<float> diff;
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const float d = std::fabs(angles[i] - keypoints[i].angle);
+    diff.push_back(std::min(d, 360.0f - d));
+  }
+  std::sort(diff.begin(), diff.end());
+  EXPECT_LT(diff[diff.size() / 2], 5.0f);
+  EXPECT_LT(diff[diff.size() * 8 / 10], 20.0f);
+}
+
+TEST(OrbExtractor, BadOptionsThrow) {
+  OrbOptions options;
+  options.min_fast_threshold = 30;  // above fast_threshold
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = OrbOptions{};
+  options.cell_size_px = 2;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam
