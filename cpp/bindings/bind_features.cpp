@@ -13,7 +13,8 @@ namespace py = pybind11;
 
 namespace slslam::bindings {
 void BindFeatures(py::module_& m) {
-  py::class_<OrbOptions>(m, "OrbOptions", "ORB extractor options (per-cell adaptive FAST, OpenCV descriptors).")
+  py::class_<OrbOptions>(m, "OrbOptions",
+                         "ORB extractor options (per-cell adaptive FAST, OpenCV descriptors).")
       .def(py::init<>())
       .def_readwrite("max_features", &OrbOptions::max_features)
       .def_readwrite("scale_factor", &OrbOptions::scale_factor)
@@ -23,6 +24,7 @@ void BindFeatures(py::module_& m) {
       .def_readwrite("adaptive", &OrbOptions::adaptive)
       .def_readwrite("min_fast_threshold", &OrbOptions::min_fast_threshold)
       .def_readwrite("cell_size_px", &OrbOptions::cell_size_px)
+      .def_readwrite("denoise_above_noise", &OrbOptions::denoise_above_noise)
       .def("check", &OrbOptions::Check);
 
   py::class_<MatchOptions>(m, "MatchOptions", "Brute-force matcher options.")

@@ -133,6 +133,18 @@ void OrbOptions::Check() const {
       min_fast_threshold > 0 && min_fast_threshold <= fast_threshold,
       Message("orb.min_fast_threshold must be in [1, fast_threshold], got ", min_fast_threshold));
   Require(cell_size_px >= 8, Message("orb.cell_size_px must be >= 8, got ", cell_size_px));
+  Require(std::isfinite(denoise_above_noise), "orb.denoise_above_noise must be finite");
+}
+
+double EstimateNoiseSigma(const cv::Mat& image) {
+  Require(!image.empty() && image.type() == CV_8UC1, "noise estimation needs an 8-bit gray image");
+  if (image.rows < 3 || image.cols < 3) return 0.0;
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(image, response, CV_32F, mask, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT_101);
+  const cv::Mat inner = response(cv::Rect(1, 1, image.cols - 2, image.rows - 2));
+  const double sum_abs = cv::norm(inner, cv::NORM_L1);
+  return std::sqrt(CV_PI / 2.0) * sum_abs / (6.0 * inner.total());
 }
 
 std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
@@ -181,10 +193,19 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
   if (!options.adaptive) return ExtractPlain(image, options);
 
   const std::vector<int> budget = LevelBudgets(options);
+  // Detection image: smoothed when the frame is noisy (dark, high gain).
+  cv::Mat detect_image = image;
+  if (options.denoise_above_noise > 0.0) {
+    const double noise = EstimateNoiseSigma(image);
+    if (noise > options.denoise_above_noise) {
+      const double sigma = std::clamp(noise / 7.0, 0.5, 2.5);
+      cv::GaussianBlur(image, detect_image, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
+    }
+  }
   // FAST needs 3 px around a corner; the descriptor patch is handled by OpenCV's padded levels.
   const int border = std::max(options.edge_threshold, 3);
   std::vector<cv::KeyPoint> all;
-  cv::Mat level = image;
+  cv::Mat level = detect_image;
   double scale = 1.0;  // level-0 pixels per level pixel
   for (int l = 0; l < options.num_levels; ++l) {
     if (l > 0) {
@@ -192,7 +213,7 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
       const cv::Size size(static_cast<int>(std::lround(image.cols / scale)),
                           static_cast<int>(std::lround(image.rows / scale)));
       if (size.width <= 2 * border || size.height <= 2 * border) break;
-      cv::resize(image, level, size, 0, 0, cv::INTER_LINEAR);
+      cv::resize(detect_image, level, size, 0, 0, cv::INTER_LINEAR);
     }
     std::vector<cv::KeyPoint> found = DetectLevel(level, border, budget[l], options);
     std::vector<cv::Point2f> at(found.size());

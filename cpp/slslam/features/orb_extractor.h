@@ -26,6 +26,11 @@ struct OrbOptions {
   int min_fast_threshold = 7;  ///< FAST threshold in cells with no corner at fast_threshold
                                ///< (ORB-SLAM's 20 -> 7) [gray levels]
   int cell_size_px = 32;       ///< side of the adaptive cells, in each level's pixels [px]
+  /// Dark frames are noisy (gain): above this estimated noise (Immerkaer's estimator) detection
+  /// runs on a Gaussian-smoothed image, sigma = noise / 7 px (residual noise about 2 gray
+  /// levels), so FAST fires on structure, not on noise. Descriptors are unaffected (OpenCV
+  /// smooths before BRIEF anyway). <= 0: never [gray levels]
+  double denoise_above_noise = 6.0;
 
   void Check() const;
 };
@@ -34,6 +39,11 @@ struct OrbOptions {
 // FAST scores (adaptive) or Harris responses (plain). An image without texture yields zero
 // keypoints, not an error.
 Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options = {});
+
+// Standard deviation of white noise in an 8-bit gray image [gray levels], by Immerkaer's
+// method ("Fast noise variance estimation", 1996): the image convolved with a mask that cancels
+// smooth intensity up to second order; texture makes it an overestimate.
+double EstimateNoiseSigma(const cv::Mat& image);
 
 // Orientation [deg, 0..360) of each keypoint by the intensity centroid of the disc of radius
 // `radius_px` around it (Rosin's measure, as ORB). `points` are pixel positions in `image`;

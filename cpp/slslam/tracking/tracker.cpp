@@ -535,11 +535,13 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
 
   LocalTracking tracking;
   bool tracked = false, relocalised = false;
-  if (mode_ != Mode::kLost) {
+  auto track_local_map = [&](float scale) {
     Map& map = *maps_[active_];
     std::lock_guard<std::mutex> lock(map.mutex());
-    const float scale = mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f;
     tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale);
+  };
+  if (mode_ != Mode::kLost) {
+    track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
     tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
   }
   if (!tracked && mode_ != Mode::kTracking) {
@@ -551,6 +553,12 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       }
     }
     relocalised = Relocalise(*frame, order, &result, &tracking);
+  }
+  if (!tracked && !relocalised && mode_ == Mode::kLost) {
+    // The frozen pose may still be close (a blackout while the robot crept on): the local map is
+    // tried from it with a window twice as wide, accepted only on twice the inliers.
+    track_local_map(2.0f * options_.lost_search_scale);
+    tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
   result.matched_lines = static_cast<int>(tracking.line_ids.size());

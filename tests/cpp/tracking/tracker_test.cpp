@@ -276,12 +276,13 @@ TEST(TrackerTest, AShortBlackoutIsRecentlyLostThenTrackingResumesInTheSameMap) {
 }
 
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
-  const Scene scene;
+  // After the blackout the camera sees another place (other landmarks): nothing to recover.
+  const Scene scene, elsewhere(99);
   Tracker tracker(Options(true, /*lines=*/false));
   std::vector<TrackResult> results;
   for (int k = 0; k < 50; ++k) {
     const bool blind = k >= 15 && k < 40;
-    results.push_back(tracker.Track(Render(scene, k, 0.5, blind)));
+    results.push_back(tracker.Track(Render(k < 40 ? scene : elsewhere, k, 0.5, blind)));
   }
   const int recently = TrackerOptions{}.recently_lost_frames;
   for (int k = 15; k < 15 + recently; ++k) {
@@ -298,6 +299,24 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   EXPECT_EQ(results[40].t_cw, results[39].t_cw);
   for (int k = 41; k < 50; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
   EXPECT_EQ(tracker.num_maps(), 2);
+}
+
+TEST(TrackerTest, ALongBlackoutRecoversFromTheFrozenPoseWithoutAVocabulary) {
+  // 1.25 m driven in the dark; the frozen pose is behind, but the wide window from it still finds
+  // the old map's landmarks: tracking resumes in map 1 without a vocabulary.
+  const Scene scene;
+  Tracker tracker(Options(true, /*lines=*/false));
+  std::vector<TrackResult> results;
+  for (int k = 0; k < 50; ++k) {
+    const bool blind = k >= 15 && k < 40;
+    results.push_back(tracker.Track(Render(scene, k, 0.5, blind)));
+  }
+  EXPECT_EQ(results[39].state, TrackingState::kLost);
+  for (int k = 40; k < 50; ++k) {
+    EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+    EXPECT_LT(CenterError(results[k], k), 0.08) << k;
+  }
+  EXPECT_EQ(tracker.num_maps(), 1);
 }
 
 // A vocabulary trained on the scene's own descriptors, written to a temporary file.
