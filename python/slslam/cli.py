@@ -228,7 +228,26 @@ def sim_command(
     roof_lamps: Annotated[
         bool, typer.Option("--roof-lamps", help="A roof lamp every 20 m.")
     ] = False,
-    speed: Annotated[float, typer.Option(help="Robot cruise speed [m/s].")] = 0.8,
+    speed: Annotated[float, typer.Option(help="Robot cruise speed in m/s.")] = 0.8,
+    spin_at: Annotated[
+        float | None,
+        typer.Option(
+            "--spin-at",
+            metavar="SECONDS",
+            help="Turn on the spot: the robot slows to rest at this time (>= 4 s), turns "
+            "--spin-deg in place facing the walls, then drives on. Off by default.",
+        ),
+    ] = None,
+    spin_deg: Annotated[
+        float,
+        typer.Option(
+            help="Yaw turned on the spot in degrees, > 0 = left. Kept afterwards: 180 drives "
+            "on looking backwards."
+        ),
+    ] = 360.0,
+    spin_duration: Annotated[
+        float, typer.Option(help="Duration of the turn on the spot in seconds.")
+    ] = 6.0,
     no_lidar: Annotated[bool, typer.Option("--no-lidar", help="Skip the LiDAR scans.")] = False,
     no_noise: Annotated[
         bool, typer.Option("--no-noise", help="Exact measurements (no image, IMU or range noise).")
@@ -253,6 +272,9 @@ def sim_command(
         movers=movers,
         roof_lamps=roof_lamps,
         speed_mps=speed,
+        spin_at_s=spin_at,
+        spin_deg=spin_deg,
+        spin_duration_s=spin_duration,
         lidar=not no_lidar,
         noise=not no_noise,
         seed=seed,

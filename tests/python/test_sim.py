@@ -10,6 +10,7 @@ import pytest
 
 from slslam.cli import main
 from slslam.datasets import EurocSequence, read_trajectory
+from slslam.errors import InputError
 from slslam.sim import SimOptions, Simulator
 from slslam.sim.roadway import Material
 from slslam.sim.sensors import StereoCamera
@@ -240,3 +241,46 @@ def test_bad_options_are_rejected(kwargs, message):
 def test_cli_sim_writes_and_reports_bad_input(tmp_path, capsys):
     assert main(["sim", "--out", str(tmp_path / "x"), "--preset", "cave", "--frames", "2"]) == 2
     assert "unknown preset 'cave'" in capsys.readouterr().err
+
+
+def test_spin_options_reach_the_trajectory_and_the_manifest(tmp_path):
+    sim = Simulator(_small(preset="straight", frames=240, spin_at_s=4.0, spin_deg=-90.0))
+    assert sim.trajectory.options.spin_at_s == 4.0
+    t = np.linspace(4.0, 10.0, 61)  # the turn: rest at the same place, 90 deg to the right
+    T = sim.trajectory.pose(t)
+    assert np.abs(T[:, :3, 3] - T[0, :3, 3]).max() < 1e-9
+    turned = T[0, :3, :3].T @ T[-1, :3, :3]
+    np.testing.assert_allclose(
+        turned, [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], atol=1e-9
+    )
+    # options travel with the sequence; a spin after the last frame is allowed and recorded
+    out = tmp_path / "seq"
+    Simulator(_small(preset="straight", frames=2, spin_at_s=4.0, lidar=False)).write(
+        out, progress=False
+    )
+    options = json.loads((out / "manifest.json").read_text())["options"]
+    assert (options["spin_at_s"], options["spin_deg"], options["spin_duration_s"]) == (
+        4.0,
+        360.0,
+        6.0,
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"spin_at_s": 1.0}, "spin_at_s must be >= 2"),
+        ({"spin_at_s": 8.0, "spin_duration_s": 0.0}, "spin_duration_s must be > 0"),
+        ({"spin_at_s": 8.0, "spin_deg": float("nan")}, "spin_deg must be finite"),
+    ],
+)
+def test_bad_spin_options_are_rejected(kwargs, message):
+    with pytest.raises(InputError, match=message):
+        SimOptions(**kwargs).check()
+
+
+def test_cli_sim_spin_at_reports_bad_input(tmp_path, capsys):
+    args = ["sim", "--out", str(tmp_path / "x"), "--frames", "2", "--spin-at", "1"]
+    assert main(args) == 2
+    assert "spin_at_s must be >= 2 * accel_time_s" in capsys.readouterr().err
+    assert not (tmp_path / "x" / "mav0").exists()

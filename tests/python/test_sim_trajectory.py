@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from slslam.errors import InputError
 from slslam.sim.trajectory import (
     GRAVITY_WORLD,
     ImuNoise,
@@ -246,3 +248,175 @@ def test_imu_noise_statistics_match_the_densities() -> None:
             np.diff(bias, axis=0).std(axis=0), walk / np.sqrt(rate), rtol=0.1
         )
         assert np.all(bias[0] == 0.0)
+
+
+# --- turn on the spot ----------------------------------------------------------------------------
+
+SPIN_AT, SPIN_S, RAMP_S = 10.0, 6.0, 2.0
+
+
+def spin_options(spin_deg: float = 360.0, **kwargs) -> TrajectoryOptions:
+    return TrajectoryOptions(spin_at_s=SPIN_AT, spin_deg=spin_deg, spin_duration_s=SPIN_S, **kwargs)
+
+
+def spin_junctions() -> np.ndarray:
+    """Times [s] where the speed profile changes piece: stop ramp, rest, go ramp, cruise."""
+    return np.array([SPIN_AT - RAMP_S, SPIN_AT, SPIN_AT + SPIN_S, SPIN_AT + SPIN_S + RAMP_S])
+
+
+SPIN_CASES = {
+    "loop_360": (rounded_rectangle, spin_options()),
+    "straight_left_90": (straight, spin_options(90.0, speed_mps=1.2)),
+    "sloped_offset_right_180": (
+        sloped_s_curve,
+        spin_options(-180.0, lateral_offset_m=0.5, body_height_m=0.3, seed=3),
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(SPIN_CASES))
+def test_spin_holds_position_and_turns_about_body_z(name: str) -> None:
+    make, options = SPIN_CASES[name]
+    traj = RobotTrajectory(make(), options=options)
+    t = np.linspace(SPIN_AT, SPIN_AT + SPIN_S, 3001)
+    p = traj.position(t)
+    assert np.abs(p - p[0]).max() < 1e-9  # at rest: no motion, and vibration is frozen in s
+    np.testing.assert_array_equal(traj.velocity(t), 0.0)
+    # body angular velocity: about body z only, with the smoothstep rate of the turn
+    turn = np.deg2rad(options.spin_deg)
+    x = (t - SPIN_AT) / SPIN_S
+    w = traj.angular_velocity_body(t)
+    np.testing.assert_allclose(w[:, :2], 0.0, atol=1e-12)
+    np.testing.assert_allclose(w[:, 2], turn / SPIN_S * 30.0 * x**2 * (1.0 - x) ** 2, atol=1e-12)
+    assert w[1500, 2] == pytest.approx(1.875 * turn / SPIN_S)  # peak rate, half-way
+    # the attitude turns about the body's own z axis by the yaw integrated so far
+    R = traj.rotation(t)
+    rel = Rotation.from_matrix(np.einsum("ji,njk->nik", R[0], R)).as_rotvec()
+    psi = turn * x**3 * (x * (6.0 * x - 15.0) + 10.0)
+    wrapped = np.angle(np.exp(1j * psi))
+    np.testing.assert_allclose(rel[:, :2], 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (rel[:, 2] - wrapped))), 0.0, atol=1e-9)
+    # the gyro integrates to the full turn (a 360 deg turn is not the identity here)
+    yaw_turned = np.trapezoid(w[:, 2], t)
+    assert np.rad2deg(yaw_turned) == pytest.approx(options.spin_deg, abs=1e-4)
+
+
+def test_spin_yaw_offset_is_kept_for_the_rest_of_the_run() -> None:
+    make, options = SPIN_CASES["straight_left_90"]
+    traj = RobotTrajectory(make(), options=options)
+    t = np.linspace(SPIN_AT + SPIN_S + RAMP_S, traj.duration_s, 50)
+    v_xy = traj.velocity(t)[:, :2]
+    forward = np.column_stack([v_xy / np.linalg.norm(v_xy, axis=1, keepdims=True), np.zeros(50)])
+    R = traj.rotation(t)
+    np.testing.assert_allclose(forward[:, :2], np.tile([1.0, 0.0], (50, 1)), atol=1e-9)
+    # turned 90 deg left: body y (left) points backwards along the motion, body x to the left
+    np.testing.assert_allclose(np.einsum("ni,ni->n", R[:, :, 1], forward), -1.0, atol=0.01)
+    assert np.all(R[:, 1, 0] > 0.99)
+
+
+def test_spin_before_and_after_matches_the_run_without_it() -> None:
+    """Before the stop ramp the run is the plain one; the pause costs spin + ramp time."""
+    plain = RobotTrajectory(straight(), options=QUIET)
+    spin = RobotTrajectory(
+        straight(),
+        options=dataclasses.replace(QUIET, spin_at_s=SPIN_AT, spin_duration_s=SPIN_S),
+    )
+    assert spin.duration_s == pytest.approx(plain.duration_s + SPIN_S + RAMP_S)
+    t = np.linspace(0.0, SPIN_AT - RAMP_S, 200)
+    np.testing.assert_allclose(spin.pose(t), plain.pose(t), atol=1e-12)
+    np.testing.assert_allclose(spin.position(spin.duration_s), plain.position(plain.duration_s))
+    t_after = np.linspace(SPIN_AT + SPIN_S + RAMP_S, spin.duration_s, 200)
+    np.testing.assert_allclose(np.linalg.norm(spin.velocity(t_after), axis=1), 0.8, atol=1e-9)
+    # the stop: speed falls monotonically to exactly zero at spin_at_s
+    t_stop = np.linspace(SPIN_AT - RAMP_S, SPIN_AT, 400)
+    speed = np.linalg.norm(spin.velocity(t_stop), axis=1)
+    assert np.all(np.diff(speed) <= 1e-12) and speed[-1] == 0.0
+
+
+@pytest.mark.parametrize("name", list(SPIN_CASES))
+def test_spin_profile_is_continuous_at_its_junctions(name: str) -> None:
+    make, options = SPIN_CASES[name]
+    traj = RobotTrajectory(make(), options=options)
+    h = 1e-7
+    for tj in spin_junctions():
+        before, after = tj - h, tj + h
+        v0, v1 = traj.velocity(before)[0], traj.velocity(after)[0]
+        a0, a1 = traj.acceleration(before)[0], traj.acceleration(after)[0]
+        w0, w1 = traj.angular_velocity_body(before)[0], traj.angular_velocity_body(after)[0]
+        assert np.abs(v1 - v0).max() < 1e-5, f"velocity jumps at {tj} s"
+        assert np.abs(a1 - a0).max() < 1e-4, f"acceleration jumps at {tj} s"
+        assert np.abs(w1 - w0).max() < 1e-5, f"angular velocity jumps at {tj} s"
+    # analytic derivatives across the whole spin agree with finite differences
+    t = np.linspace(SPIN_AT - RAMP_S - 0.5, SPIN_AT + SPIN_S + RAMP_S + 0.5, 1201)
+    dt = 1e-4
+    dp = (traj.position(t + dt) - traj.position(t - dt)) / (2 * dt)
+    np.testing.assert_allclose(traj.velocity(t), dp, atol=1e-5)
+    dv = (traj.velocity(t + dt) - traj.velocity(t - dt)) / (2 * dt)
+    np.testing.assert_allclose(traj.acceleration(t), dv, atol=1e-4)
+    R0, R1 = traj.rotation(t), traj.rotation(t + dt)
+    w_num = Rotation.from_matrix(np.einsum("nji,njk->nik", R0, R1)).as_rotvec() / dt
+    np.testing.assert_allclose(traj.angular_velocity_body(t + dt / 2), w_num, atol=1e-6)
+    # the yaw offset's second derivative matches its first (smooth angular acceleration)
+    psi, psi_d, psi_dd = traj._spin_yaw(t)
+    num_dd = (traj._spin_yaw(t + dt)[1] - traj._spin_yaw(t - dt)[1]) / (2 * dt)
+    np.testing.assert_allclose(psi_dd, num_dd, atol=1e-6)
+    np.testing.assert_allclose(psi_d, np.gradient(psi, t), atol=2e-3)
+
+
+@pytest.mark.parametrize("name", list(SPIN_CASES))
+def test_imu_integrates_back_to_the_poses_across_the_spin(name: str) -> None:
+    make, options = SPIN_CASES[name]
+    traj = RobotTrajectory(make(), options=options)
+    pos_err, rot_err = imu_errors(traj)  # 1 s windows over the whole run, as without a spin
+    imu = traj.imu(rate_hz=200.0)
+    t = imu["t_ns"] * 1e-9
+    # one integration from cruise before the stop to cruise after the restart
+    i0 = int(np.searchsorted(t, SPIN_AT - RAMP_S - 0.5))
+    i1 = int(np.searchsorted(t, SPIN_AT + SPIN_S + RAMP_S + 0.5))
+    p0, v0, R0 = traj.position(t[i0])[0], traj.velocity(t[i0])[0], traj.rotation(t[i0])[0]
+    p, R = integrate_imu(imu, i0, i1 - i0, p0, v0, R0)
+    p_true, R_true = traj.position(t[i1])[0], traj.rotation(t[i1])[0]
+    pos_err = max(pos_err, float(np.linalg.norm(p - p_true)))
+    angle = np.linalg.norm(Rotation.from_matrix(R_true.T @ R).as_rotvec())
+    rot_err = max(rot_err, float(np.rad2deg(angle)))
+    print(f"{name}: max position error {pos_err:.2e} m, rotation error {rot_err:.2e} deg")
+    assert pos_err < 0.01
+    assert rot_err < 0.1
+
+
+def test_spin_off_is_the_run_without_spin_options() -> None:
+    """spin_deg / spin_duration_s do nothing without spin_at_s: identical arrays."""
+    t = np.linspace(0.0, 20.0, 300)
+    a = RobotTrajectory(rounded_rectangle(), options=TrajectoryOptions(seed=7))
+    b = RobotTrajectory(
+        rounded_rectangle(), options=TrajectoryOptions(seed=7, spin_deg=90.0, spin_duration_s=3.0)
+    )
+    np.testing.assert_array_equal(a.pose(t), b.pose(t))
+    np.testing.assert_array_equal(a.imu()["gyro"], b.imu()["gyro"])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"spin_at_s": float("nan")}, "spin_at_s must be finite"),
+        ({"spin_at_s": 3.0}, r"spin_at_s must be >= 2 \* accel_time_s = 4.0 s"),
+        ({"spin_at_s": 10.0, "spin_duration_s": 0.0}, "spin_duration_s must be > 0"),
+        ({"spin_at_s": 10.0, "spin_duration_s": -2.0}, "spin_duration_s must be > 0"),
+        ({"spin_at_s": 10.0, "spin_deg": float("inf")}, "spin_deg must be finite"),
+        ({"spin_at_s": 10.0, "spin_deg": 1000.0}, "spin_deg must be in"),
+        ({"spin_at_s": 10.0, "accel_time_s": 0.0}, "accel_time_s must be > 0 with spin_at_s"),
+    ],
+)
+def test_bad_spin_options_raise(kwargs, message) -> None:
+    with pytest.raises(InputError, match=message):
+        TrajectoryOptions(**kwargs)
+
+
+def test_spin_beyond_the_path_raises() -> None:
+    # stops at 0.8 * (20 - 2) = 14.4 m of a 10 m path
+    with pytest.raises(InputError, match=r"spin_at_s: 20.0 s stops the robot at 14.40 m"):
+        RobotTrajectory(straight(10.0), options=TrajectoryOptions(spin_at_s=20.0))
+    # and a duration longer than the path allows, pause included, is refused as before
+    traj = RobotTrajectory(straight(), options=spin_options())
+    with pytest.raises(InputError, match=r"more than the 40\.00 m path"):
+        RobotTrajectory(straight(), duration_s=traj.duration_s + 0.1, options=spin_options())

@@ -62,6 +62,9 @@ class SimOptions:
     imu_rate_hz: float = 200.0
     noise: bool = True  # image, IMU and LiDAR noise (off: exact measurements)
     speed_mps: float = 0.8  # robot cruise speed [m/s]
+    spin_at_s: float | None = None  # the robot stops and turns on the spot at this time [s]
+    spin_deg: float = 360.0  # yaw turned on the spot [deg], > 0 = left; kept afterwards
+    spin_duration_s: float = 6.0  # duration of the turn [s]
     exposure: float = 2.0  # sensor exposure [-]: light 1.0 gives a median gray of about 90
     headlamp_power: float = 12.0  # [irradiance units * m^2]
     section: CrossSection = field(default_factory=CrossSection)
@@ -86,6 +89,18 @@ class SimOptions:
             raise ValueError(f"speed_mps must be in [0.1, 3], got {self.speed_mps}")
         self.section.check()
         self.camera.check()
+        self.trajectory_options()  # checks the spin options
+
+    def trajectory_options(self) -> TrajectoryOptions:
+        """How the robot drives: cruise speed, body height, vibration seed, turn on the spot."""
+        return TrajectoryOptions(
+            speed_mps=self.speed_mps,
+            body_height_m=0.4,
+            seed=self.seed,
+            spin_at_s=self.spin_at_s,
+            spin_deg=self.spin_deg,
+            spin_duration_s=self.spin_duration_s,
+        )
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -114,11 +129,7 @@ class Simulator:
         self.scene = RaycastScene(self.mesh)
         duration = (options.frames - 1) / options.rate_hz + 1.0 / options.rate_hz
         self.trajectory = RobotTrajectory(
-            path,
-            duration_s=duration,
-            options=TrajectoryOptions(
-                speed_mps=options.speed_mps, body_height_m=0.4, seed=options.seed
-            ),
+            path, duration_s=duration, options=options.trajectory_options()
         )
         self.camera = options.camera
         self.lidar = Lidar()

@@ -6,11 +6,13 @@ frame: x forward, y left, z up (the IMU frame).
 
 The centreline polyline is resampled, lightly smoothed and fitted with a quintic spline that is
 parametrised by arc length ``s``. The robot moves along it with ``s(t)``: a quintic smoothstep
-ramp from rest to cruise speed, then constant speed. Ground-induced vibration (height, roll,
-pitch) is a sum of sinusoids in ``s``, so it vanishes at rest and has ``vibration_freq_hz`` at
-cruise speed. Every quantity (velocity, acceleration, angular velocity) is analytic: derivatives
-of the spline and the chain rule, never finite differences, so the IMU integrates back to the
-poses.
+ramp from rest to cruise speed, then constant speed. Optionally the robot turns on the spot:
+it slows to rest with the mirrored ramp, stays at ``s`` constant while a yaw offset ``psi(t)``
+(quintic smoothstep) turns it about its own up axis, then ramps back to cruise speed.
+Ground-induced vibration (height, roll, pitch) is a sum of sinusoids in ``s``, so it vanishes at
+rest and has ``vibration_freq_hz`` at cruise speed. Every quantity (velocity, acceleration,
+angular velocity) is analytic: derivatives of the spline and the chain rule, never finite
+differences, so the IMU integrates back to the poses.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ RESAMPLE_STEP_M = 0.25
 #: Relative frequencies and weights of the vibration components (weights sum to 1).
 _VIB_WEIGHTS = np.array([0.6, 0.25, 0.15])
 _VIB_FREQ_RANGES = ((1.0, 1.0), (1.3, 1.9), (2.2, 3.0))
+#: Largest turn on the spot [deg] (two full turns); larger values are likely unit mistakes.
+MAX_SPIN_DEG = 720.0
 
 
 def _require(ok: bool, source: str, problem: str) -> None:
@@ -66,6 +70,15 @@ class TrajectoryOptions:
     roll_pitch_amplitude_deg: float = 0.3  # peak roll / pitch vibration [deg]
     seed: int = 0  # picks vibration phases and frequencies
     corner_smoothing_m: float = 0.5  # Gaussian smoothing of the centreline (sigma) [m]; 0 = none
+    # Turn on the spot: the robot decelerates over accel_time_s to rest at spin_at_s [s] (None =
+    # no turn), turns spin_deg [deg] (> 0 = left) about its up axis in spin_duration_s [s], then
+    # accelerates over accel_time_s back to cruise speed. The turn is kept for the rest of the
+    # run: a multiple of 360 drives on facing forward; any other angle leaves the body (and the
+    # cameras) turned away from the direction of travel, e.g. 180 drives on looking backwards, a
+    # purely kinematic motion that a real skid-steer robot would not make.
+    spin_at_s: float | None = None
+    spin_deg: float = 360.0
+    spin_duration_s: float = 6.0
 
     def __post_init__(self) -> None:
         self.check()
@@ -74,6 +87,8 @@ class TrajectoryOptions:
         """Raise :class:`slslam.InputError` (a ``ValueError``) naming the first bad value."""
         src = "TrajectoryOptions"
         for name, value in vars(self).items():
+            if name == "spin_at_s" and value is None:
+                continue
             _require(np.isfinite(value), src, f"{name} must be finite, got {value}")
         _require(self.speed_mps > 0, src, f"speed_mps must be > 0, got {self.speed_mps}")
         for name in ("accel_time_s", "vibration_amplitude_m", "corner_smoothing_m"):
@@ -89,6 +104,28 @@ class TrajectoryOptions:
             isinstance(self.seed, int | np.integer) and self.seed >= 0,
             src,
             f"seed must be an int >= 0, got {self.seed!r}",
+        )
+        if self.spin_at_s is not None:
+            self._check_spin(src)
+
+    def _check_spin(self, src: str) -> None:
+        ta = self.accel_time_s
+        _require(ta > 0, src, "accel_time_s must be > 0 with spin_at_s (a smooth stop)")
+        _require(
+            self.spin_at_s >= 2.0 * ta,
+            src,
+            f"spin_at_s must be >= 2 * accel_time_s = {2.0 * ta} s (ramp up to cruise speed, "
+            f"then down to rest), got {self.spin_at_s}",
+        )
+        _require(
+            self.spin_duration_s > 0,
+            src,
+            f"spin_duration_s must be > 0, got {self.spin_duration_s}",
+        )
+        _require(
+            abs(self.spin_deg) <= MAX_SPIN_DEG,
+            src,
+            f"spin_deg must be in [-{MAX_SPIN_DEG}, {MAX_SPIN_DEG}], got {self.spin_deg}",
         )
 
 
@@ -199,6 +236,16 @@ class RobotTrajectory:
         need = f"the {o.accel_time_s} s ramp to {o.speed_mps} m/s needs {ramp_m:.2f} m"
         _require(ramp_m <= self.length_m, "centreline_xyz", f"is {self.length_m:.2f} m; {need}")
         full = o.accel_time_s + (self.length_m - ramp_m) / o.speed_mps
+        if o.spin_at_s is not None:
+            # rest at s_stop, then the ramp back to speed must fit on the path
+            s_stop = o.speed_mps * (o.spin_at_s - o.accel_time_s)
+            _require(
+                s_stop + ramp_m <= self.length_m,
+                "spin_at_s",
+                f"{o.spin_at_s} s stops the robot at {s_stop:.2f} m; with the {ramp_m:.2f} m "
+                f"ramp back to speed it needs more than the {self.length_m:.2f} m path",
+            )
+            full += o.spin_duration_s + o.accel_time_s  # the pause and the two half-speed ramps
         if duration_s is None:
             return full
         _require(bool(np.isfinite(duration_s) and duration_s > 0), "duration_s", "must be > 0")
@@ -225,7 +272,28 @@ class RobotTrajectory:
         s = np.where(t < ta, ramp_s, 0.5 * v * ta + v * (t - ta))
         sd = v * x**3 * (x * (6.0 * x - 15.0) + 10.0)
         sdd = (v / ta) * 30.0 * x**2 * (x - 1.0) ** 2
+        if self.options.spin_at_s is not None:
+            # speed v * (ramp(t) - ramp(t - t_stop) + ramp(t - t_go)): each ramp is C2 and
+            # constant outside its accel_time_s, so the sum is C2, and exactly 0 during the spin
+            t_stop = self.options.spin_at_s - ta
+            t_go = self.options.spin_at_s + self.options.spin_duration_s
+            for start, sign in ((t_stop, -v), (t_go, v)):
+                g, gd, gdd = _unit_ramp(t - start, ta)
+                s, sd, sdd = s + sign * g, sd + sign * gd, sdd + sign * gdd
         return s, sd, sdd
+
+    def _spin_yaw(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Yaw offset psi [rad] of the turn on the spot, psi' [rad/s] and psi'' [rad/s^2].
+
+        The IMU sits at the body origin, so the gyro needs psi' only; psi'' (the angular
+        acceleration, zero at both ends of the turn) is there for checks."""
+        o = self.options
+        x = np.clip((t - o.spin_at_s) / o.spin_duration_s, 0.0, 1.0)
+        turn = np.deg2rad(o.spin_deg)
+        psi = turn * x**3 * (x * (6.0 * x - 15.0) + 10.0)
+        psi_d = (turn / o.spin_duration_s) * 30.0 * x**2 * (x - 1.0) ** 2
+        psi_dd = (turn / o.spin_duration_s**2) * 60.0 * x * (x - 1.0) * (2.0 * x - 1.0)
+        return psi, psi_d, psi_dd
 
     def _times(self, t: np.ndarray | float) -> np.ndarray:
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -235,7 +303,8 @@ class RobotTrajectory:
         return np.clip(t, 0.0, self._duration)
 
     def _state(self, t: np.ndarray | float) -> _State:
-        s, sd, sdd = self._profile(self._times(t))
+        t = self._times(t)
+        s, sd, sdd = self._profile(t)
         q0, q1, q2, q3 = (self._q(s, nu) for nu in range(4))
         cy, sy, yaw_s, yaw_ss = _yaw_terms(q1, q2, q3)
         # position = centreline + lateral offset along the horizontal left normal + height
@@ -261,6 +330,9 @@ class RobotTrajectory:
         omega = _omega_body_zyx(
             pitch, roll, yaw_s * sd, (pitch_path_s + dpitch_s) * sd, roll_s * sd
         )
+        if self.options.spin_at_s is not None:
+            psi, psi_d, _ = self._spin_yaw(t)
+            R, omega = _turn_about_body_z(R, omega, psi, psi_d)
         return _State(p, vel, acc, R, omega)
 
     def position(self, t: np.ndarray | float) -> np.ndarray:
@@ -321,6 +393,31 @@ class RobotTrajectory:
                 out[key + "_bias"] = bias
                 out[key] = out[key] + bias + white
         return out
+
+
+def _unit_ramp(tau: np.ndarray, ta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Distance [s], speed [-] and acceleration [1/s] of a unit-speed smoothstep ramp from rest
+    that starts at ``tau = 0`` and lasts ``ta`` seconds (``tau`` [s])."""
+    x = np.clip(tau / ta, 0.0, 1.0)
+    g = np.where(tau < ta, ta * x**4 * (x * (x - 3.0) + 2.5), tau - 0.5 * ta)
+    return g, x**3 * (x * (6.0 * x - 15.0) + 10.0), (30.0 / ta) * x**2 * (x - 1.0) ** 2
+
+
+def _turn_about_body_z(
+    R: np.ndarray, omega: np.ndarray, psi: np.ndarray, psi_d: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``R @ Rz(psi)`` and its body angular velocity ``Rz(psi)^T omega + psi_d e_z`` [rad/s].
+
+    The turn is about the body's own up axis, so on a slope the robot stays on the floor plane;
+    at rest (omega = 0) the gyro reads ``(0, 0, psi_d)`` exactly.
+    """
+    c, s = np.cos(psi), np.sin(psi)
+    Rz = np.zeros((len(psi), 3, 3))
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = c, -s, s, c, 1.0
+    w = np.column_stack(
+        [c * omega[:, 0] + s * omega[:, 1], c * omega[:, 1] - s * omega[:, 0], omega[:, 2] + psi_d]
+    )
+    return R @ Rz, w
 
 
 def _yaw_terms(
