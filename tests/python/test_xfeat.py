@@ -61,7 +61,8 @@ def test_real_image_keypoints_are_spread_unit_and_survive_a_shift(xfeat):
     assert kp.uv.dtype == np.float32 and kp.descriptors.dtype == np.float32
     assert kp.descriptors.shape == (len(kp), DESCRIPTOR_DIM) and kp.scores.shape == (len(kp),)
     np.testing.assert_allclose(np.linalg.norm(kp.descriptors, axis=1), 1.0, atol=1e-5)
-    assert np.all(np.diff(kp.scores) <= 0) and np.all(kp.scores > 0)  # strongest first
+    # Scores are heatmap values, on the detection threshold's scale (the tracker's fallback).
+    assert np.all(kp.scores > xfeat.options.detection_threshold) and np.all(kp.scores <= 1)
     assert {(u > 376, v > 240) for u, v in kp.uv} == {(a, b) for a in (0, 1) for b in (0, 1)}
     assert len(kp) == 4096  # capped at max_keypoints (this image has more)
     unlimited = XFeat(XFeatOptions(max_keypoints=None))
@@ -207,9 +208,11 @@ def test_keypoints_match_the_reference_detect_and_compute(xfeat, reference):
     close = distance[np.arange(len(ours)), nearest] <= 1.0
     assert close.mean() > 0.95
     exact = distance[np.arange(len(ours)), nearest] == 0
-    np.testing.assert_allclose(
-        ours.scores[exact], theirs["scores"].numpy()[nearest[exact]], atol=1e-4
-    )
+    # Same order (the reference's score ranks both; near-ties may swap); our score is its
+    # heatmap factor.
+    assert np.mean(np.all(ours.uv[:200] == ref_uv[:200], axis=1)) > 0.95
+    ref_scores = theirs["scores"].numpy()[nearest[exact]]
+    assert np.all(ref_scores <= ours.scores[exact] + 1e-6)
     np.testing.assert_allclose(
         ours.descriptors[exact], theirs["descriptors"].numpy()[nearest[exact]], atol=1e-4
     )
