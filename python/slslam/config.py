@@ -155,7 +155,7 @@ class TrackingConfig:
     # guided matching window [px] (doubled on a retry)
     search_radius_px: float = _option(15.0, "[1, 10000]")
     # guided matching bound for ORB [Hamming bits]
-    max_distance_binary: float = _option(50.0, "[1, 256]")
+    max_distance_binary: float = _option(80.0, "[1, 256]")
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
     max_distance_float: float = _option(0.8, "[0.01, 2]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]

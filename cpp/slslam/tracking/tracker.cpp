@@ -555,10 +555,34 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     relocalised = Relocalise(*frame, order, &result, &tracking);
   }
   if (!tracked && !relocalised && mode_ == Mode::kLost) {
-    // The frozen pose may still be close (a blackout while the robot crept on): the local map is
-    // tried from it with a window twice as wide, accepted only on twice the inliers.
-    track_local_map(2.0f * options_.lost_search_scale);
-    tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
+    // The robot most likely kept moving through the dark as before the loss: the local map is
+    // tried from poses along the pre-loss motion (a fraction of the frames since the last
+    // estimate, and the frozen pose), with a wide window; the best is accepted on twice the
+    // inliers tracking needs.
+    const int since = lost_count_ + 1;  // frames since the last estimated pose
+    std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> hypotheses = {{R_pred, t_pred}};
+    for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
+      Eigen::Matrix3d R = loss_R_;
+      Eigen::Vector3d t = loss_t_;
+      const int steps = static_cast<int>(std::lround(fraction * since));
+      for (int k = 0; k < steps; ++k) {
+        t = loss_velocity_R_ * t + loss_velocity_t_;
+        R = loss_velocity_R_ * R;
+      }
+      if (steps > 0) hypotheses.emplace_back(R, t);
+    }
+    LocalTracking best;
+    for (const auto& [R, t] : hypotheses) {
+      Map& map = *maps_[active_];
+      std::lock_guard<std::mutex> lock(map.mutex());
+      LocalTracking attempt =
+          TrackLocalMap(*frame, map, last_keyframe_, R, t, options_.lost_search_scale);
+      if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
+        best = std::move(attempt);
+      }
+    }
+    tracked = best.pose.success && best.weighted_inliers >= 2.0 * options_.min_inliers;
+    if (tracked || tracking.point_ids.empty()) tracking = std::move(best);
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
   result.matched_lines = static_cast<int>(tracking.line_ids.size());
@@ -595,6 +619,12 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   }
 
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
+  if (mode_ == Mode::kTracking) {  // the last estimate and the motion before the loss
+    loss_R_ = last_R_;
+    loss_t_ = last_t_;
+    loss_velocity_R_ = velocity_R_;
+    loss_velocity_t_ = velocity_t_;
+  }
   ++lost_count_;
   if (lost_count_ > options_.recently_lost_frames)
     mode_ = Mode::kLost;

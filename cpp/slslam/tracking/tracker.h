@@ -76,7 +76,8 @@ struct TrackerOptions {
   int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
   float search_radius_px = 15.0f;      ///< guided matching window [px]; doubled on a retry
-  float max_distance_binary = 50.0f;   ///< guided matching, ORB (Hamming) [bits]
+  float max_distance_binary = 80.0f;   ///< guided matching, ORB (Hamming) [bits]; dark, noisy
+                                       ///< frames need more than 50 (ORB-SLAM uses 100)
   float max_distance_float = 0.8f;     ///< guided matching, SuperPoint (L2) [-]
   float match_ratio = 0.9f;            ///< ratio test inside the window [-]
   float line_search_px = 20.0f;        ///< frame segment midpoint to predicted line [px]
@@ -194,7 +195,11 @@ class Tracker {
   std::unique_ptr<LocalMapper> mapper_;
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
-  int lost_count_ = 0;  ///< frames since tracking failed
+  int lost_count_ = 0;                                    ///< frames since tracking failed
+  Eigen::Matrix3d loss_R_ = Eigen::Matrix3d::Identity();  ///< last estimated pose before a loss
+  Eigen::Vector3d loss_t_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d loss_velocity_R_ = Eigen::Matrix3d::Identity();  ///< motion before the loss
+  Eigen::Vector3d loss_velocity_t_ = Eigen::Vector3d::Zero();
   bool have_pose_ = false;
   Eigen::Matrix3d last_R_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d last_t_ = Eigen::Vector3d::Zero();

@@ -301,9 +301,10 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   EXPECT_EQ(tracker.num_maps(), 2);
 }
 
-TEST(TrackerTest, ALongBlackoutRecoversFromTheFrozenPoseWithoutAVocabulary) {
-  // 1.25 m driven in the dark; the frozen pose is behind, but the wide window from it still finds
-  // the old map's landmarks: tracking resumes in map 1 without a vocabulary.
+TEST(TrackerTest, ALongBlackoutRecoversAlongThePreLossMotionWithoutAVocabulary) {
+  // 1.25 m driven in the dark; the frozen pose is behind, but the local map tried from poses
+  // along the motion before the loss finds the old map's landmarks: tracking resumes in map 1
+  // without a vocabulary.
   const Scene scene;
   Tracker tracker(Options(true, /*lines=*/false));
   std::vector<TrackResult> results;
@@ -314,7 +315,7 @@ TEST(TrackerTest, ALongBlackoutRecoversFromTheFrozenPoseWithoutAVocabulary) {
   EXPECT_EQ(results[39].state, TrackingState::kLost);
   for (int k = 40; k < 50; ++k) {
     EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
-    EXPECT_LT(CenterError(results[k], k), 0.08) << k;
+    EXPECT_LT(CenterError(results[k], k), 0.06) << k;  // 4.7 cm measured
   }
   EXPECT_EQ(tracker.num_maps(), 1);
 }
