@@ -561,15 +561,24 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     // inliers tracking needs.
     const int since = lost_count_ + 1;  // frames since the last estimated pose
     std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> hypotheses = {{R_pred, t_pred}};
+    // With the full pre-loss motion, and with its translation only: one frame's rotation may be
+    // mostly vibration (roll, pitch), and twenty frames of it extrapolated tilt the camera by
+    // degrees. The best-supported hypothesis wins.
+    const Eigen::Vector3d center = -loss_R_.transpose() * loss_t_;
+    const Eigen::Matrix3d R_prev = loss_velocity_R_.transpose() * loss_R_;
+    const Eigen::Vector3d t_prev = loss_velocity_R_.transpose() * (loss_t_ - loss_velocity_t_);
+    const Eigen::Vector3d step = center - (-R_prev.transpose() * t_prev);  // world, per frame
     for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
+      const double steps = std::round(fraction * since);
+      if (steps <= 0.0) continue;
+      hypotheses.emplace_back(loss_R_, -loss_R_ * (center + steps * step));
       Eigen::Matrix3d R = loss_R_;
       Eigen::Vector3d t = loss_t_;
-      const int steps = static_cast<int>(std::lround(fraction * since));
-      for (int k = 0; k < steps; ++k) {
+      for (int k = 0; k < static_cast<int>(steps); ++k) {
         t = loss_velocity_R_ * t + loss_velocity_t_;
         R = loss_velocity_R_ * R;
       }
-      if (steps > 0) hypotheses.emplace_back(R, t);
+      hypotheses.emplace_back(R, t);
     }
     LocalTracking best;
     for (const auto& [R, t] : hypotheses) {
