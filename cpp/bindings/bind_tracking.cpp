@@ -27,8 +27,8 @@ Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, cons
   Keypoints k;
   k.uv = uv;
   const cv::Mat d = WrapDescriptors(descriptors);
-  Require(d.rows == uv.rows(), Message(side, " keypoints: ", uv.rows(), " positions but ", d.rows,
-                                       " descriptor rows"));
+  SLSLAM_CHECK(d.rows == uv.rows(), side, " keypoints: ", uv.rows(), " positions but ", d.rows,
+               " descriptor rows");
   k.descriptors = d.clone();  // the frame outlives the numpy array
   k.score = Eigen::VectorXf::Ones(uv.rows());
   k.octave = Eigen::VectorXi::Zero(uv.rows());
@@ -55,9 +55,8 @@ class TrackerSession {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     const PinholeCamera& cam = options_.rig.camera;
-    Require(left.cols == cam.width && left.rows == cam.height,
-            Message("left image is ", left.cols, "x", left.rows, ", calibration says ", cam.width,
-                    "x", cam.height));
+    SLSLAM_CHECK(left.cols == cam.width && left.rows == cam.height, "left image is ", left.cols,
+                 "x", left.rows, ", calibration says ", cam.width, "x", cam.height);
     Require(right.size() == left.size(), "left and right images differ in size");
     Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
     Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
@@ -71,15 +70,16 @@ class TrackerSession {
       LineFeatures ll, lr;
       if (options_.use_lines) {
         // LSD is single-threaded: the two images on two threads.
-        auto right_lines = std::async(std::launch::async, [&] { return ExtractLines(right, lines_); });
+        auto right_lines =
+            std::async(std::launch::async, [&] { return ExtractLines(right, lines_); });
         ll = ExtractLines(left, lines_);
         lr = right_lines.get();
       }
       line_ms = Ms(start);
       start = std::chrono::steady_clock::now();
-      auto frame = std::make_shared<StereoFrame>(MakeStereoFrame(
-          index, timestamp, kl, kr, options_.use_lines ? &ll : nullptr,
-          options_.use_lines ? &lr : nullptr, options_.rig, options_.stereo));
+      auto frame = std::make_shared<StereoFrame>(
+          MakeStereoFrame(index, timestamp, kl, kr, options_.use_lines ? &ll : nullptr,
+                          options_.use_lines ? &lr : nullptr, options_.rig, options_.stereo));
       RefineStereoSubpixel(left, right, options_.rig, options_.stereo, frame.get());
       num_lines = frame->NumLines();
       stereo_ms = Ms(start);
@@ -249,7 +249,8 @@ void BindTracking(py::module_& m) {
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
       .def(py::init([](const TrackerOptions& options, const LinePreprocessOptions& preprocess) {
-             return std::make_unique<TrackerSession>(options, LineExtractorOptions{preprocess, true});
+             return std::make_unique<TrackerSession>(options,
+                                                     LineExtractorOptions{preprocess, true});
            }),
            py::arg("options"), py::arg("line_preprocess"))
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),

@@ -10,14 +10,14 @@
 namespace slslam {
 
 cv::Mat ReadGrayImage(const std::string& path) {
-  Require(std::filesystem::is_regular_file(path), Message("image file not found: ", path));
+  SLSLAM_CHECK(std::filesystem::is_regular_file(path), "image file not found: ", path);
   cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  Require(!image.empty(), Message("image file is unreadable or not an image: ", path));
+  SLSLAM_CHECK(!image.empty(), "image file is unreadable or not an image: ", path);
   return image;
 }
 
 void WriteImage(const std::string& path, const cv::Mat& image) {
-  Require(!image.empty(), Message("refusing to write an empty image to ", path));
+  SLSLAM_CHECK(!image.empty(), "refusing to write an empty image to ", path);
   if (!cv::imwrite(path, image)) {
     throw std::runtime_error(Message("could not write image ", path));
   }

@@ -7,12 +7,12 @@
 namespace slslam {
 
 void PinholeCamera::Check() const {
-  Require(std::isfinite(fx) && fx > 0.0, Message("camera fx must be finite and > 0, got ", fx));
-  Require(std::isfinite(fy) && fy > 0.0, Message("camera fy must be finite and > 0, got ", fy));
-  Require(std::isfinite(cx) && std::isfinite(cy),
-          Message("camera principal point must be finite, got (", cx, ", ", cy, ")"));
-  Require(width > 0 && height > 0,
-          Message("camera image size must be positive, got ", width, "x", height));
+  SLSLAM_CHECK(std::isfinite(fx) && fx > 0.0, "camera fx must be finite and > 0, got ", fx);
+  SLSLAM_CHECK(std::isfinite(fy) && fy > 0.0, "camera fy must be finite and > 0, got ", fy);
+  SLSLAM_CHECK(std::isfinite(cx) && std::isfinite(cy),
+               "camera principal point must be finite, got (", cx, ", ", cy, ")");
+  SLSLAM_CHECK(width > 0 && height > 0, "camera image size must be positive, got ", width, "x",
+               height);
 }
 
 Eigen::Matrix3d PinholeCamera::K() const {
@@ -22,7 +22,7 @@ Eigen::Matrix3d PinholeCamera::K() const {
 }
 
 Eigen::Vector2d PinholeCamera::Project(const Eigen::Vector3d& point_in_cam) const {
-  Require(point_in_cam.z() > 0.0, Message("cannot project a point with z = ", point_in_cam.z()));
+  SLSLAM_CHECK(point_in_cam.z() > 0.0, "cannot project a point with z = ", point_in_cam.z());
   return {fx * point_in_cam.x() / point_in_cam.z() + cx,
           fy * point_in_cam.y() / point_in_cam.z() + cy};
 }

@@ -20,10 +20,9 @@ void CheckRigid(const Eigen::Matrix4d& T) {
   Require(T.allFinite(), "stereo extrinsics T_left_right contain NaN or Inf");
   const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
   const double orthonormality_error = (R * R.transpose() - Eigen::Matrix3d::Identity()).norm();
-  Require(
-      orthonormality_error < kRotationTolerance && R.determinant() > 0.0,
-      Message("stereo extrinsics T_left_right: rotation block is not a rotation (|R R^T - I| = ",
-              orthonormality_error, ")"));
+  SLSLAM_CHECK(orthonormality_error < kRotationTolerance && R.determinant() > 0.0,
+               "stereo extrinsics T_left_right: rotation block is not a rotation (|R R^T - I| = ",
+               orthonormality_error, ")");
   Require(T.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)),
           "stereo extrinsics T_left_right: last row must be [0 0 0 1]");
 }
@@ -46,9 +45,10 @@ StereoRectifier::StereoRectifier(const RadTanCamera& left, const RadTanCamera& r
   left.Check();
   right.Check();
   CheckRigid(T_left_right);
-  Require(left.pinhole.width == right.pinhole.width && left.pinhole.height == right.pinhole.height,
-          Message("left and right image sizes differ: ", left.pinhole.width, "x",
-                  left.pinhole.height, " vs ", right.pinhole.width, "x", right.pinhole.height));
+  SLSLAM_CHECK(
+      left.pinhole.width == right.pinhole.width && left.pinhole.height == right.pinhole.height,
+      "left and right image sizes differ: ", left.pinhole.width, "x", left.pinhole.height, " vs ",
+      right.pinhole.width, "x", right.pinhole.height);
 
   // OpenCV wants the transform that maps left-camera coordinates into the right camera.
   const Eigen::Matrix4d T_right_left = T_left_right.inverse();
@@ -73,9 +73,9 @@ StereoRectifier::StereoRectifier(const RadTanCamera& left, const RadTanCamera& r
   rectified_.Check();
   // P2(0,3) = -fx * baseline for a right camera on the +x side of the left one.
   baseline_m_ = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
-  Require(std::isfinite(baseline_m_) && baseline_m_ > 0.0,
-          Message("the right camera is not to the right of the left camera (rectified baseline ",
-                  baseline_m_, " m); check the order of cam0/cam1 and T_left_right"));
+  SLSLAM_CHECK(std::isfinite(baseline_m_) && baseline_m_ > 0.0,
+               "the right camera is not to the right of the left camera (rectified baseline ",
+               baseline_m_, " m); check the order of cam0/cam1 and T_left_right");
   cv::cv2eigen(R1, R_rect_left_);
   cv::cv2eigen(R2, R_rectright_right_);
 
@@ -86,13 +86,12 @@ StereoRectifier::StereoRectifier(const RadTanCamera& left, const RadTanCamera& r
 
 cv::Mat StereoRectifier::RectifyOne(const cv::Mat& image, bool is_left) const {
   const char* which = is_left ? "left" : "right";
-  Require(!image.empty(), Message("the ", which, " image is empty"));
-  Require(image.type() == CV_8UC1,
-          Message("the ", which, " image must be 8-bit single channel (got OpenCV type ",
-                  image.type(), ")"));
-  Require(image.cols == rectified_.width && image.rows == rectified_.height,
-          Message("the ", which, " image is ", image.cols, "x", image.rows,
-                  " but the calibration is for ", rectified_.width, "x", rectified_.height));
+  SLSLAM_CHECK(!image.empty(), "the ", which, " image is empty");
+  SLSLAM_CHECK(image.type() == CV_8UC1, "the ", which,
+               " image must be 8-bit single channel (got OpenCV type ", image.type(), ")");
+  SLSLAM_CHECK(image.cols == rectified_.width && image.rows == rectified_.height, "the ", which,
+               " image is ", image.cols, "x", image.rows, " but the calibration is for ",
+               rectified_.width, "x", rectified_.height);
   cv::Mat out;
   cv::remap(image, out, is_left ? left_map1_ : right_map1_, is_left ? left_map2_ : right_map2_,
             cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);

@@ -13,8 +13,8 @@
 namespace slslam {
 
 void MatchOptions::Check() const {
-  Require(max_distance > 0.0f, Message("match.max_distance must be > 0, got ", max_distance));
-  Require(ratio > 0.0f && ratio <= 1.0f, Message("match.ratio must be in (0, 1], got ", ratio));
+  SLSLAM_CHECK(max_distance > 0.0f, "match.max_distance must be > 0, got ", max_distance);
+  SLSLAM_CHECK(ratio > 0.0f && ratio <= 1.0f, "match.ratio must be in (0, 1], got ", ratio);
 }
 
 Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
@@ -23,8 +23,8 @@ Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
   Require(query.type() == train.type(), "query and train descriptors differ in type");
   Require(query.type() == CV_8U || query.type() == CV_32F,
           "descriptors must be CV_8U (binary) or CV_32F (float)");
-  Require(query.empty() || train.empty() || query.cols == train.cols,
-          Message("descriptor lengths differ: ", query.cols, " vs ", train.cols));
+  SLSLAM_CHECK(query.empty() || train.empty() || query.cols == train.cols,
+               "descriptor lengths differ: ", query.cols, " vs ", train.cols);
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> pairs(0, 2);
   if (query.rows == 0 || train.rows == 0) return pairs;
 
@@ -58,9 +58,9 @@ Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
 }
 
 void GuidedMatchOptions::Check() const {
-  Require(radius_px > 0.0f, Message("guided.radius_px must be > 0, got ", radius_px));
-  Require(max_distance > 0.0f, Message("guided.max_distance must be > 0, got ", max_distance));
-  Require(ratio > 0.0f && ratio <= 1.0f, Message("guided.ratio must be in (0, 1], got ", ratio));
+  SLSLAM_CHECK(radius_px > 0.0f, "guided.radius_px must be > 0, got ", radius_px);
+  SLSLAM_CHECK(max_distance > 0.0f, "guided.max_distance must be > 0, got ", max_distance);
+  SLSLAM_CHECK(ratio > 0.0f && ratio <= 1.0f, "guided.ratio must be in (0, 1], got ", ratio);
 }
 
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
@@ -80,10 +80,10 @@ Eigen::VectorXi GuidedMatch(
     const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& keypoints,
     const cv::Mat& keypoint_descriptors, const GuidedMatchOptions& options) {
   options.Check();
-  Require(predicted.rows() == query_descriptors.rows,
-          Message(predicted.rows(), " predictions but ", query_descriptors.rows, " descriptors"));
-  Require(keypoints.rows() == keypoint_descriptors.rows,
-          Message(keypoints.rows(), " keypoints but ", keypoint_descriptors.rows, " descriptors"));
+  SLSLAM_CHECK(predicted.rows() == query_descriptors.rows, predicted.rows(), " predictions but ",
+               query_descriptors.rows, " descriptors");
+  SLSLAM_CHECK(keypoints.rows() == keypoint_descriptors.rows, keypoints.rows(), " keypoints but ",
+               keypoint_descriptors.rows, " descriptors");
   Eigen::VectorXi match = Eigen::VectorXi::Constant(predicted.rows(), -1);
   if (predicted.rows() == 0 || keypoints.rows() == 0) return match;
   Require(query_descriptors.type() == keypoint_descriptors.type() &&

@@ -10,18 +10,17 @@
 namespace slslam {
 
 void DynamicCellOptions::Check() const {
-  Require(cell_size_px >= 4, Message("dynamic.cell_size_px must be >= 4, got ", cell_size_px));
-  Require(sigma_px > 0.0, Message("dynamic.sigma_px must be > 0, got ", sigma_px));
-  Require(alpha > 0.0 && alpha <= 1.0, Message("dynamic.alpha must be in (0, 1], got ", alpha));
-  Require(threshold >= 0.0 && threshold <= 1.0,
-          Message("dynamic.threshold must be in [0, 1], got ", threshold));
+  SLSLAM_CHECK(cell_size_px >= 4, "dynamic.cell_size_px must be >= 4, got ", cell_size_px);
+  SLSLAM_CHECK(sigma_px > 0.0, "dynamic.sigma_px must be > 0, got ", sigma_px);
+  SLSLAM_CHECK(alpha > 0.0 && alpha <= 1.0, "dynamic.alpha must be in (0, 1], got ", alpha);
+  SLSLAM_CHECK(threshold >= 0.0 && threshold <= 1.0, "dynamic.threshold must be in [0, 1], got ",
+               threshold);
 }
 
 DynamicCellFilter::DynamicCellFilter(int width, int height, const DynamicCellOptions& options)
     : options_(options), width_(width), height_(height) {
   options_.Check();
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
   cells_x_ = (width + options_.cell_size_px - 1) / options_.cell_size_px;
   cells_y_ = (height + options_.cell_size_px - 1) / options_.cell_size_px;
   Reset();
@@ -40,8 +39,8 @@ int DynamicCellFilter::CellOf(float u, float v) const {
 
 const std::vector<bool>& DynamicCellFilter::Update(const PixelArray& observed,
                                                    const PixelArray& predicted) {
-  Require(observed.rows() == predicted.rows(),
-          Message(observed.rows(), " observed but ", predicted.rows(), " predicted positions"));
+  SLSLAM_CHECK(observed.rows() == predicted.rows(), observed.rows(), " observed but ",
+               predicted.rows(), " predicted positions");
   std::vector<double> sum(weights_.size(), 0.0);
   std::vector<int> count(weights_.size(), 0);
   for (Eigen::Index i = 0; i < observed.rows(); ++i) {
@@ -86,8 +85,8 @@ RobustPrediction PredictWithRobustPose(
     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& points_prev,
     const PixelArray& observed, const PinholeCamera& camera, double reprojection_threshold_px) {
   camera.Check();
-  Require(points_prev.rows() == observed.rows(),
-          Message(points_prev.rows(), " points but ", observed.rows(), " observations"));
+  SLSLAM_CHECK(points_prev.rows() == observed.rows(), points_prev.rows(), " points but ",
+               observed.rows(), " observations");
   RobustPrediction out;
   out.T_cur_prev.setIdentity();
   if (points_prev.rows() < 6) return out;  // too few for a trustworthy RANSAC pose

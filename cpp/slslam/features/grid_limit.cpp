@@ -9,18 +9,16 @@
 namespace slslam {
 
 void GridLimitOptions::Check() const {
-  Require(cell_size_px >= 4, Message("grid.cell_size_px must be >= 4, got ", cell_size_px));
-  Require(max_per_cell >= 1, Message("grid.max_per_cell must be >= 1, got ", max_per_cell));
+  SLSLAM_CHECK(cell_size_px >= 4, "grid.cell_size_px must be >= 4, got ", cell_size_px);
+  SLSLAM_CHECK(max_per_cell >= 1, "grid.max_per_cell must be >= 1, got ", max_per_cell);
   Require(!std::isnan(strong_score), "grid.strong_score must not be NaN");
 }
 
 std::vector<int> GridLimit(const PixelArray& uv, const Eigen::VectorXf& score, int width,
                            int height, const GridLimitOptions& options) {
   options.Check();
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
-  Require(score.size() == uv.rows(),
-          Message(uv.rows(), " keypoints but ", score.size(), " scores"));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
+  SLSLAM_CHECK(score.size() == uv.rows(), uv.rows(), " keypoints but ", score.size(), " scores");
   const int cells_x = (width + options.cell_size_px - 1) / options.cell_size_px;
   std::vector<int> cell(uv.rows(), -1);
   std::vector<int> order;

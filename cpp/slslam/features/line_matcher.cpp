@@ -9,7 +9,7 @@
 namespace slslam {
 
 void LineMatchOptions::Check() const {
-  Require(min_votes >= 1, Message("line_match.min_votes must be >= 1, got ", min_votes));
+  SLSLAM_CHECK(min_votes >= 1, "line_match.min_votes must be >= 1, got ", min_votes);
   Require(max_lbd_distance > 0, "line_match.max_lbd_distance must be > 0");
   Require(max_angle_rad > 0, "line_match.max_angle_rad must be > 0");
 }

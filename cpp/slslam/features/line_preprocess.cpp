@@ -9,11 +9,11 @@
 namespace slslam {
 
 void LinePreprocessOptions::Check() const {
-  Require(length_ratio > 0.0f && length_ratio < 1.0f,
-          Message("lines.length_ratio must be in (0, 1), got ", length_ratio));
-  Require(theta_min_rad > 0.0f, Message("lines.theta_min_rad must be > 0, got ", theta_min_rad));
-  Require(xi_d_px > 0.0f, Message("lines.xi_d_px must be > 0, got ", xi_d_px));
-  Require(max_gap_px >= 0.0f, Message("lines.max_gap_px must be >= 0, got ", max_gap_px));
+  SLSLAM_CHECK(length_ratio > 0.0f && length_ratio < 1.0f,
+               "lines.length_ratio must be in (0, 1), got ", length_ratio);
+  SLSLAM_CHECK(theta_min_rad > 0.0f, "lines.theta_min_rad must be > 0, got ", theta_min_rad);
+  SLSLAM_CHECK(xi_d_px > 0.0f, "lines.xi_d_px must be > 0, got ", xi_d_px);
+  SLSLAM_CHECK(max_gap_px >= 0.0f, "lines.max_gap_px must be >= 0, got ", max_gap_px);
 }
 
 float AngleGateFactor(float candidate_length, float length_threshold) {
@@ -50,8 +50,7 @@ LineSegment Merge(const LineSegment& source, const LineSegment& candidate) {
 Segments PreprocessLines(const Segments& segments, int width, int height,
                          const LinePreprocessOptions& options) {
   options.Check();
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
   const float length_threshold = std::min(width, height) * options.length_ratio;
   Segments sorted;
   for (const LineSegment& s : segments) {

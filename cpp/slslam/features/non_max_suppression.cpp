@@ -9,11 +9,9 @@ namespace slslam {
 
 std::vector<int> SuppressNonMaxima(const PixelIndexArray& uv, const Eigen::VectorXf& score,
                                    int width, int height, int radius_px) {
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
-  Require(radius_px >= 0, Message("NMS radius must be >= 0, got ", radius_px));
-  Require(score.size() == uv.rows(),
-          Message(uv.rows(), " candidates but ", score.size(), " scores"));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
+  SLSLAM_CHECK(radius_px >= 0, "NMS radius must be >= 0, got ", radius_px);
+  SLSLAM_CHECK(score.size() == uv.rows(), uv.rows(), " candidates but ", score.size(), " scores");
   std::vector<int> order(uv.rows());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return score(a) > score(b); });

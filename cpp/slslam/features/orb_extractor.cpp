@@ -124,15 +124,14 @@ Keypoints ExtractPlain(const cv::Mat& image, const OrbOptions& options) {
 }  // namespace
 
 void OrbOptions::Check() const {
-  Require(max_features > 0, Message("orb.max_features must be > 0, got ", max_features));
-  Require(scale_factor > 1.0f, Message("orb.scale_factor must be > 1, got ", scale_factor));
-  Require(num_levels >= 1, Message("orb.num_levels must be >= 1, got ", num_levels));
-  Require(fast_threshold > 0, Message("orb.fast_threshold must be > 0, got ", fast_threshold));
-  Require(edge_threshold >= 0, Message("orb.edge_threshold must be >= 0, got ", edge_threshold));
-  Require(
-      min_fast_threshold > 0 && min_fast_threshold <= fast_threshold,
-      Message("orb.min_fast_threshold must be in [1, fast_threshold], got ", min_fast_threshold));
-  Require(cell_size_px >= 8, Message("orb.cell_size_px must be >= 8, got ", cell_size_px));
+  SLSLAM_CHECK(max_features > 0, "orb.max_features must be > 0, got ", max_features);
+  SLSLAM_CHECK(scale_factor > 1.0f, "orb.scale_factor must be > 1, got ", scale_factor);
+  SLSLAM_CHECK(num_levels >= 1, "orb.num_levels must be >= 1, got ", num_levels);
+  SLSLAM_CHECK(fast_threshold > 0, "orb.fast_threshold must be > 0, got ", fast_threshold);
+  SLSLAM_CHECK(edge_threshold >= 0, "orb.edge_threshold must be >= 0, got ", edge_threshold);
+  SLSLAM_CHECK(min_fast_threshold > 0 && min_fast_threshold <= fast_threshold,
+               "orb.min_fast_threshold must be in [1, fast_threshold], got ", min_fast_threshold);
+  SLSLAM_CHECK(cell_size_px >= 8, "orb.cell_size_px must be >= 8, got ", cell_size_px);
   Require(std::isfinite(denoise_above_noise), "orb.denoise_above_noise must be finite");
 }
 

@@ -8,10 +8,10 @@
 namespace slslam {
 
 void AssociationOptions::Check() const {
-  Require(cell_size_px >= 4, Message("association.cell_size_px must be >= 4, got ", cell_size_px));
-  Require(layers >= 0, Message("association.layers must be >= 0, got ", layers));
-  Require(max_distance_px > 0.0f,
-          Message("association.max_distance_px must be > 0, got ", max_distance_px));
+  SLSLAM_CHECK(cell_size_px >= 4, "association.cell_size_px must be >= 4, got ", cell_size_px);
+  SLSLAM_CHECK(layers >= 0, "association.layers must be >= 0, got ", layers);
+  SLSLAM_CHECK(max_distance_px > 0.0f, "association.max_distance_px must be > 0, got ",
+               max_distance_px);
 }
 
 std::vector<std::vector<int>> AssociatePointsToLines(const PixelArray& keypoints,
@@ -19,13 +19,12 @@ std::vector<std::vector<int>> AssociatePointsToLines(const PixelArray& keypoints
                                                      const AssociationOptions& options,
                                                      const std::vector<bool>& valid_cells) {
   options.Check();
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
   const int P = options.cell_size_px;
   const int cells_x = (width + P - 1) / P, cells_y = (height + P - 1) / P;
-  Require(valid_cells.empty() || valid_cells.size() == static_cast<size_t>(cells_x) * cells_y,
-          Message("valid_cells has ", valid_cells.size(), " entries for ", cells_x * cells_y,
-                  " cells"));
+  SLSLAM_CHECK(valid_cells.empty() || valid_cells.size() == static_cast<size_t>(cells_x) * cells_y,
+               "valid_cells has ", valid_cells.size(), " entries for ", cells_x * cells_y,
+               " cells");
   // Keypoints bucketed by cell.
   std::vector<std::vector<int>> in_cell(static_cast<size_t>(cells_x) * cells_y);
   for (Eigen::Index i = 0; i < keypoints.rows(); ++i) {

@@ -9,8 +9,8 @@ namespace slslam {
 
 void StereoRig::Check() const {
   camera.Check();
-  Require(std::isfinite(baseline_m) && baseline_m > 0.0,
-          Message("stereo baseline must be positive and finite, got ", baseline_m, " m"));
+  SLSLAM_CHECK(std::isfinite(baseline_m) && baseline_m > 0.0,
+               "stereo baseline must be positive and finite, got ", baseline_m, " m");
 }
 
 namespace {

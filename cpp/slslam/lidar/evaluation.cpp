@@ -16,7 +16,7 @@ namespace {
 
 // Every number of every non-comment line, one vector per line.
 std::vector<std::vector<double>> ReadNumberLines(const std::string& path) {
-  Require(std::filesystem::is_regular_file(path), Message(path, ": no such file"));
+  SLSLAM_CHECK(std::filesystem::is_regular_file(path), path, ": no such file");
   std::ifstream in(path);
   std::vector<std::vector<double>> lines;
   std::string line;
@@ -51,8 +51,8 @@ Eigen::Matrix4d FromRowMajor12(const double* v) {
 Eigen::Matrix4d ReadMatrix4(const std::string& path) {
   std::vector<double> all;
   for (const auto& line : ReadNumberLines(path)) all.insert(all.end(), line.begin(), line.end());
-  Require(all.size() == 12 || all.size() == 16,
-          Message(path, ": expected 12 or 16 numbers (3x4 or 4x4 matrix), got ", all.size()));
+  SLSLAM_CHECK(all.size() == 12 || all.size() == 16, path,
+               ": expected 12 or 16 numbers (3x4 or 4x4 matrix), got ", all.size());
   return FromRowMajor12(all.data());
 }
 
@@ -65,8 +65,8 @@ std::map<int, Eigen::Matrix4d> ReadKittiPoses(const std::string& path) {
     if (line.size() == 12) {
       poses[index] = FromRowMajor12(line.data());
     } else {
-      Require(line.size() == 14, Message(path, ": line ", index + 1, " has ", line.size(),
-                                         " numbers (expected 12, or 14 with frame and time)"));
+      SLSLAM_CHECK(line.size() == 14, path, ": line ", index + 1, " has ", line.size(),
+                   " numbers (expected 12, or 14 with frame and time)");
       poses[static_cast<int>(line[0])] = FromRowMajor12(line.data() + 2);
     }
     ++index;

@@ -18,7 +18,7 @@ namespace slslam::lidar {
 namespace {
 
 void RequireFile(const std::string& path) {
-  Require(std::filesystem::is_regular_file(path), Message(path, ": no such file"));
+  SLSLAM_CHECK(std::filesystem::is_regular_file(path), path, ": no such file");
 }
 
 PointMatrix FromPcl(const pcl::PointCloud<pcl::PointXYZI>& cloud) {
@@ -44,26 +44,26 @@ std::string LowerExtension(const std::string& path) {
 PointMatrix ReadKittiBin(const std::string& path) {
   RequireFile(path);
   const std::uintmax_t bytes = std::filesystem::file_size(path);
-  Require(bytes % (4 * sizeof(float)) == 0,
-          Message(path, ": size ", bytes, " bytes is not a multiple of 16 (float32 x y z i)"));
+  SLSLAM_CHECK(bytes % (4 * sizeof(float)) == 0, path, ": size ", bytes,
+               " bytes is not a multiple of 16 (float32 x y z i)");
   PointMatrix out(static_cast<Eigen::Index>(bytes / (4 * sizeof(float))), 4);
   std::ifstream in(path, std::ios::binary);
   in.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(bytes));
-  Require(static_cast<bool>(in), Message(path, ": read failed"));
+  SLSLAM_CHECK(static_cast<bool>(in), path, ": read failed");
   return out;
 }
 
 PointMatrix ReadPcd(const std::string& path) {
   RequireFile(path);
   pcl::PointCloud<pcl::PointXYZI> cloud;
-  Require(pcl::io::loadPCDFile(path, cloud) == 0, Message(path, ": not a readable PCD file"));
+  SLSLAM_CHECK(pcl::io::loadPCDFile(path, cloud) == 0, path, ": not a readable PCD file");
   return FromPcl(cloud);
 }
 
 PointMatrix ReadPly(const std::string& path) {
   RequireFile(path);
   pcl::PointCloud<pcl::PointXYZI> cloud;
-  Require(pcl::io::loadPLYFile(path, cloud) == 0, Message(path, ": not a readable PLY file"));
+  SLSLAM_CHECK(pcl::io::loadPLYFile(path, cloud) == 0, path, ": not a readable PLY file");
   return FromPcl(cloud);
 }
 

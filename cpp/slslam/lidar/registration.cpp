@@ -1,22 +1,20 @@
 #include "slslam/lidar/registration.h"
 
 #include <algorithm>
-#include <unordered_map>
-#include <tuple>
-#include <cstdint>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <future>
 #include <limits>
 #include <numeric>
 #include <random>
+#include <tuple>
+#include <unordered_map>
 #include <vector>
 
 #include <omp.h>
-#include <Eigen/Cholesky>
-#include <Eigen/Geometry>
 #include <pcl/common/centroid.h>
 #include <pcl/common/io.h>
 #include <pcl/features/feature.h>
@@ -28,6 +26,8 @@
 #include <pcl/point_types.h>
 #include <pcl/registration/ndt.h>
 #include <pcl/search/flann_search.h>
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 
 #include "slslam/core/check.h"
 
@@ -244,21 +244,19 @@ void AddFineNormals(const pcl::Indices& wanted, const RegistrationOptions& optio
 // Range crop, fine voxel grid, coarse voxel grid of the fine level; statistical outlier removal
 // and normals on the coarse level from one k-NN query per point; fine points whose coarse voxel
 // was dropped are dropped too.
-Prepared Preprocess(const PointMatrix& points, const RegistrationOptions& options,
-                    bool fine_tree, int threads, const char* name) {
+Prepared Preprocess(const PointMatrix& points, const RegistrationOptions& options, bool fine_tree,
+                    int threads, const char* name) {
   pcl::VoxelGrid<pcl::PointXYZ> coarse_grid;
   const CloudXYZ::Ptr fine = CropToVoxelCentroids(points, options);
-  Require(static_cast<int>(fine->size()) > options.normal_k,
-          Message(name, ": only ", fine->size(),
-                  " points left after range crop and voxel grid (need more than normal_k = ",
-                  options.normal_k, ")"));
+  SLSLAM_CHECK(static_cast<int>(fine->size()) > options.normal_k, name, ": only ", fine->size(),
+               " points left after range crop and voxel grid (need more than normal_k = ",
+               options.normal_k, ")");
   coarse_grid.setSaveLeafLayout(true);
   const CloudN::Ptr coarse =
       WithoutNormals(*Downsample(&coarse_grid, fine, options.coarse_voxel_m));
   const int n = static_cast<int>(coarse->size());
-  Require(n > options.normal_k,
-          Message(name, ": only ", n, " points on the coarse level (voxel ",
-                  options.coarse_voxel_m, " m); need more than normal_k = ", options.normal_k));
+  SLSLAM_CHECK(n > options.normal_k, name, ": only ", n, " points on the coarse level (voxel ",
+               options.coarse_voxel_m, " m); need more than normal_k = ", options.normal_k);
 
   const std::shared_ptr<Tree> tree = MakeTree(coarse);
   std::vector<pcl::Indices> neighbours;
@@ -303,9 +301,9 @@ Prepared Preprocess(const PointMatrix& points, const RegistrationOptions& option
     kept_index[i] = static_cast<int>(out.coarse->size());
     out.coarse->push_back((*coarse)[i]);
   }
-  Require(out.coarse->size() >= 10,
-          Message(name, ": only ", out.coarse->size(), " points on the coarse level (voxel ",
-                  options.coarse_voxel_m, " m) after outlier removal; need at least 10"));
+  SLSLAM_CHECK(out.coarse->size() >= 10, name, ": only ", out.coarse->size(),
+               " points on the coarse level (voxel ", options.coarse_voxel_m,
+               " m) after outlier removal; need at least 10");
   out.coarse_tree = out.coarse->size() == coarse->size() ? tree : MakeTree(out.coarse);
 
   out.fine = std::make_shared<CloudN>();
@@ -337,8 +335,7 @@ pcl::IndicesPtr Thinned(std::size_t n, int max_count) {
 // FPFH (Rusu et al. 2009) of the coarse points `keypoints`, with the whole coarse level as
 // support: PCL's SPFH and weighting steps, with the radius neighbourhoods found by batch queries
 // and shared by both steps (pcl::FPFHEstimationOMP searches twice per point, a query at a time).
-pcl::PointCloud<pcl::FPFHSignature33>::Ptr Fpfh(const Prepared& scan,
-                                                const pcl::Indices& keypoints,
+pcl::PointCloud<pcl::FPFHSignature33>::Ptr Fpfh(const Prepared& scan, const pcl::Indices& keypoints,
                                                 const RegistrationOptions& options, int threads) {
   using Estimator = pcl::FPFHEstimation<PointN, PointN, pcl::FPFHSignature33>;
   const CloudN& cloud = *scan.coarse;
@@ -401,8 +398,7 @@ pcl::PointCloud<pcl::FPFHSignature33>::Ptr Fpfh(const Prepared& scan,
 }
 
 // PFH (the paper's comparison) of the coarse points `indices` through PCL's estimator.
-pcl::PointCloud<pcl::PFHSignature125>::Ptr Pfh(const Prepared& scan,
-                                               const pcl::IndicesPtr& indices,
+pcl::PointCloud<pcl::PFHSignature125>::Ptr Pfh(const Prepared& scan, const pcl::IndicesPtr& indices,
                                                const RegistrationOptions& options) {
   auto features = std::make_shared<pcl::PointCloud<pcl::PFHSignature125>>();
   pcl::PFHEstimation<PointN, PointN, pcl::PFHSignature125> estimator;
@@ -484,9 +480,8 @@ Eigen::Matrix4f CoarseAlign(const Prepared& source, const pcl::Indices& keypoint
                             const Prepared& target, const pcl::PointCloud<Feature>& source_features,
                             const pcl::PointCloud<Feature>& target_features,
                             const RegistrationOptions& options) {
-  const std::vector<std::vector<int>> similar =
-      SimilarFeatures(source_features, target_features, options.sac_ia_randomness,
-                      Threads(options));
+  const std::vector<std::vector<int>> similar = SimilarFeatures(
+      source_features, target_features, options.sac_ia_randomness, Threads(options));
   std::vector<int> usable;  // keypoints with at least one similar target descriptor
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
     if (!similar[i].empty()) usable.push_back(static_cast<int>(i));
@@ -560,8 +555,7 @@ Eigen::Matrix4f CoarseAlign(const Prepared& source, const pcl::Indices& keypoint
        ++iteration) {
     // Keypoints at least sac_ia_min_sample_m apart (a bounded number of draws, as PCL).
     chosen.clear();
-    for (int draw = 0; draw < 100 * samples && static_cast<int>(chosen.size()) < samples;
-         ++draw) {
+    for (int draw = 0; draw < 100 * samples && static_cast<int>(chosen.size()) < samples; ++draw) {
       const int candidate = usable[pick(rng)];
       const Eigen::Vector3f p = point(src[keypoints[candidate]]);
       bool far = true;
@@ -571,8 +565,8 @@ Eigen::Matrix4f CoarseAlign(const Prepared& source, const pcl::Indices& keypoint
     if (static_cast<int>(chosen.size()) < samples) continue;
     for (int j = 0; j < samples; ++j) {
       const std::vector<int>& matches = similar[chosen[j]];
-      const int match = matches[std::uniform_int_distribution<int>(
-          0, static_cast<int>(matches.size()) - 1)(rng)];
+      const int match =
+          matches[std::uniform_int_distribution<int>(0, static_cast<int>(matches.size()) - 1)(rng)];
       from.col(j) = point(src[keypoints[chosen[j]]]);
       to.col(j) = point(tgt[match]);
     }
@@ -826,60 +820,58 @@ Method MethodFromName(const std::string& name) {
 }
 
 void RegistrationOptions::Check() const {
-  Require(min_range_m >= 0, Message("min_range_m must be >= 0, got ", min_range_m));
-  Require(max_range_m <= 0 || max_range_m > min_range_m,
-          Message("max_range_m must be <= 0 (no limit) or > min_range_m, got ", max_range_m));
-  Require(fine_voxel_m > 0, Message("fine_voxel_m must be > 0, got ", fine_voxel_m));
-  Require(coarse_voxel_m >= fine_voxel_m,
-          Message("coarse_voxel_m must be >= fine_voxel_m, got ", coarse_voxel_m));
-  Require(outlier_k >= 0, Message("outlier_k must be >= 0, got ", outlier_k));
-  Require(outlier_std_mul > 0, Message("outlier_std_mul must be > 0, got ", outlier_std_mul));
-  Require(normal_k >= 3, Message("normal_k must be >= 3, got ", normal_k));
-  Require(feature_radius_m > coarse_voxel_m,
-          Message("feature_radius_m must be > coarse_voxel_m, got ", feature_radius_m));
-  Require(sac_ia_iterations >= 1,
-          Message("sac_ia_iterations must be >= 1, got ", sac_ia_iterations));
-  Require(sac_ia_samples >= 3, Message("sac_ia_samples must be >= 3, got ", sac_ia_samples));
-  Require(sac_ia_source_keypoints >= 0,
-          Message("sac_ia_source_keypoints must be >= 0, got ", sac_ia_source_keypoints));
-  Require(sac_ia_randomness >= 1,
-          Message("sac_ia_randomness must be >= 1, got ", sac_ia_randomness));
-  Require(sac_ia_min_sample_m >= 0,
-          Message("sac_ia_min_sample_m must be >= 0, got ", sac_ia_min_sample_m));
-  Require(sac_ia_max_corr_m > 0, Message("sac_ia_max_corr_m must be > 0, got ", sac_ia_max_corr_m));
-  Require(sac_ia_edge_similarity >= 0 && sac_ia_edge_similarity < 1,
-          Message("sac_ia_edge_similarity must be in [0, 1), got ", sac_ia_edge_similarity));
-  Require(sac_ia_confidence > 0 && sac_ia_confidence <= 1,
-          Message("sac_ia_confidence must be in (0, 1], got ", sac_ia_confidence));
-  Require(icp_source_points_coarse >= 0,
-          Message("icp_source_points_coarse must be >= 0, got ", icp_source_points_coarse));
-  Require(icp_source_points_fine >= 0,
-          Message("icp_source_points_fine must be >= 0, got ", icp_source_points_fine));
-  Require(icp_iterations_coarse >= 0,
-          Message("icp_iterations_coarse must be >= 0, got ", icp_iterations_coarse));
-  Require(icp_iterations_fine >= 1,
-          Message("icp_iterations_fine must be >= 1, got ", icp_iterations_fine));
-  Require(icp_max_corr_coarse_m > 0,
-          Message("icp_max_corr_coarse_m must be > 0, got ", icp_max_corr_coarse_m));
-  Require(icp_max_corr_fine_m > 0,
-          Message("icp_max_corr_fine_m must be > 0, got ", icp_max_corr_fine_m));
-  Require(icp_transformation_epsilon >= 0,
-          Message("icp_transformation_epsilon must be >= 0, got ", icp_transformation_epsilon));
-  Require(icp_fitness_epsilon >= 0,
-          Message("icp_fitness_epsilon must be >= 0, got ", icp_fitness_epsilon));
-  Require(ndt_resolution_m > 0, Message("ndt_resolution_m must be > 0, got ", ndt_resolution_m));
-  Require(ndt_step_m > 0, Message("ndt_step_m must be > 0, got ", ndt_step_m));
-  Require(ndt_iterations >= 1, Message("ndt_iterations must be >= 1, got ", ndt_iterations));
-  Require(num_threads >= 0, Message("num_threads must be >= 0, got ", num_threads));
+  SLSLAM_CHECK(min_range_m >= 0, "min_range_m must be >= 0, got ", min_range_m);
+  SLSLAM_CHECK(max_range_m <= 0 || max_range_m > min_range_m,
+               "max_range_m must be <= 0 (no limit) or > min_range_m, got ", max_range_m);
+  SLSLAM_CHECK(fine_voxel_m > 0, "fine_voxel_m must be > 0, got ", fine_voxel_m);
+  SLSLAM_CHECK(coarse_voxel_m >= fine_voxel_m, "coarse_voxel_m must be >= fine_voxel_m, got ",
+               coarse_voxel_m);
+  SLSLAM_CHECK(outlier_k >= 0, "outlier_k must be >= 0, got ", outlier_k);
+  SLSLAM_CHECK(outlier_std_mul > 0, "outlier_std_mul must be > 0, got ", outlier_std_mul);
+  SLSLAM_CHECK(normal_k >= 3, "normal_k must be >= 3, got ", normal_k);
+  SLSLAM_CHECK(feature_radius_m > coarse_voxel_m, "feature_radius_m must be > coarse_voxel_m, got ",
+               feature_radius_m);
+  SLSLAM_CHECK(sac_ia_iterations >= 1, "sac_ia_iterations must be >= 1, got ", sac_ia_iterations);
+  SLSLAM_CHECK(sac_ia_samples >= 3, "sac_ia_samples must be >= 3, got ", sac_ia_samples);
+  SLSLAM_CHECK(sac_ia_source_keypoints >= 0, "sac_ia_source_keypoints must be >= 0, got ",
+               sac_ia_source_keypoints);
+  SLSLAM_CHECK(sac_ia_randomness >= 1, "sac_ia_randomness must be >= 1, got ", sac_ia_randomness);
+  SLSLAM_CHECK(sac_ia_min_sample_m >= 0, "sac_ia_min_sample_m must be >= 0, got ",
+               sac_ia_min_sample_m);
+  SLSLAM_CHECK(sac_ia_max_corr_m > 0, "sac_ia_max_corr_m must be > 0, got ", sac_ia_max_corr_m);
+  SLSLAM_CHECK(sac_ia_edge_similarity >= 0 && sac_ia_edge_similarity < 1,
+               "sac_ia_edge_similarity must be in [0, 1), got ", sac_ia_edge_similarity);
+  SLSLAM_CHECK(sac_ia_confidence > 0 && sac_ia_confidence <= 1,
+               "sac_ia_confidence must be in (0, 1], got ", sac_ia_confidence);
+  SLSLAM_CHECK(icp_source_points_coarse >= 0, "icp_source_points_coarse must be >= 0, got ",
+               icp_source_points_coarse);
+  SLSLAM_CHECK(icp_source_points_fine >= 0, "icp_source_points_fine must be >= 0, got ",
+               icp_source_points_fine);
+  SLSLAM_CHECK(icp_iterations_coarse >= 0, "icp_iterations_coarse must be >= 0, got ",
+               icp_iterations_coarse);
+  SLSLAM_CHECK(icp_iterations_fine >= 1, "icp_iterations_fine must be >= 1, got ",
+               icp_iterations_fine);
+  SLSLAM_CHECK(icp_max_corr_coarse_m > 0, "icp_max_corr_coarse_m must be > 0, got ",
+               icp_max_corr_coarse_m);
+  SLSLAM_CHECK(icp_max_corr_fine_m > 0, "icp_max_corr_fine_m must be > 0, got ",
+               icp_max_corr_fine_m);
+  SLSLAM_CHECK(icp_transformation_epsilon >= 0, "icp_transformation_epsilon must be >= 0, got ",
+               icp_transformation_epsilon);
+  SLSLAM_CHECK(icp_fitness_epsilon >= 0, "icp_fitness_epsilon must be >= 0, got ",
+               icp_fitness_epsilon);
+  SLSLAM_CHECK(ndt_resolution_m > 0, "ndt_resolution_m must be > 0, got ", ndt_resolution_m);
+  SLSLAM_CHECK(ndt_step_m > 0, "ndt_step_m must be > 0, got ", ndt_step_m);
+  SLSLAM_CHECK(ndt_iterations >= 1, "ndt_iterations must be >= 1, got ", ndt_iterations);
+  SLSLAM_CHECK(num_threads >= 0, "num_threads must be >= 0, got ", num_threads);
 }
 
 void CheckPoints(const PointMatrix& points, const std::string& name, int min_points) {
-  Require(points.cols() == 3 || points.cols() == 4,
-          Message(name, ": expected an N x 3 or N x 4 matrix (x, y, z[, intensity]), got ",
-                  points.rows(), " x ", points.cols()));
-  Require(points.rows() >= min_points,
-          Message(name, ": ", points.rows(), " points, need at least ", min_points));
-  Require(points.allFinite(), Message(name, ": contains NaN or infinite values"));
+  SLSLAM_CHECK(points.cols() == 3 || points.cols() == 4, name,
+               ": expected an N x 3 or N x 4 matrix (x, y, z[, intensity]), got ", points.rows(),
+               " x ", points.cols());
+  SLSLAM_CHECK(points.rows() >= min_points, name, ": ", points.rows(), " points, need at least ",
+               min_points);
+  SLSLAM_CHECK(points.allFinite(), name, ": contains NaN or infinite values");
 }
 
 RegistrationResult RegisterClouds(const PointMatrix& source, const PointMatrix& target,
@@ -909,15 +901,16 @@ RegistrationResult RegisterClouds(const PointMatrix& source, const PointMatrix& 
     const pcl::IndicesPtr all = Thinned(tgt.coarse->size(), 0);
     const int per_scan = concurrent ? 1 : threads;
     if (method == Method::kFpfhSacIaIcp) {
-      const auto [fs, ft] =
-          Both(concurrent, [&] { return Fpfh(src, *keys, options, per_scan); },
-               [&] { return Fpfh(tgt, *all, options, per_scan); });
+      const auto [fs, ft] = Both(
+          concurrent, [&] { return Fpfh(src, *keys, options, per_scan); },
+          [&] { return Fpfh(tgt, *all, options, per_scan); });
       result.features_ms = MsSince(stage);
       stage = Clock::now();
       guess = CoarseAlign(src, *keys, tgt, *fs, *ft, options);
     } else {
-      const auto [fs, ft] = Both(concurrent, [&] { return Pfh(src, keys, options); },
-                                 [&] { return Pfh(tgt, all, options); });
+      const auto [fs, ft] = Both(
+          concurrent, [&] { return Pfh(src, keys, options); },
+          [&] { return Pfh(tgt, all, options); });
       result.features_ms = MsSince(stage);
       stage = Clock::now();
       guess = CoarseAlign(src, *keys, tgt, *fs, *ft, options);

@@ -19,8 +19,8 @@ void WriteLifted(const Eigen::Matrix<double, Rows, Tangent>& tangent, double inv
 }
 
 double InverseSigma(double sigma_px) {
-  Require(std::isfinite(sigma_px) && sigma_px > 0.0,
-          Message("measurement sigma must be positive, got ", sigma_px));
+  SLSLAM_CHECK(std::isfinite(sigma_px) && sigma_px > 0.0,
+               "measurement sigma must be positive, got ", sigma_px);
   return 1.0 / sigma_px;
 }
 

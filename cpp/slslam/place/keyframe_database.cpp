@@ -52,11 +52,11 @@ bool KeyframeDatabase::Contains(int keyframe_id) const {
 std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::Query(
     const BowVector& bow, int max_results, double min_score, double min_shared_ratio,
     const std::function<bool(int)>& accept) const {
-  Require(min_shared_ratio >= 0.0 && min_shared_ratio <= 1.0,
-          Message("KeyframeDatabase::Query: min_shared_ratio must be in [0, 1], got ",
-                  min_shared_ratio));
-  Require(std::isfinite(min_score),
-          Message("KeyframeDatabase::Query: min_score must be finite, got ", min_score));
+  SLSLAM_CHECK(min_shared_ratio >= 0.0 && min_shared_ratio <= 1.0,
+               "KeyframeDatabase::Query: min_shared_ratio must be in [0, 1], got ",
+               min_shared_ratio);
+  SLSLAM_CHECK(std::isfinite(min_score), "KeyframeDatabase::Query: min_score must be finite, got ",
+               min_score);
 
   // 1. Shared words per keyframe from the inverted index.
   std::vector<Candidate> candidates;

@@ -18,14 +18,14 @@ using place_detail::SquaredL2;
 using place_detail::TypeName;
 
 void VocabularyOptions::Check() const {
-  Require(branching >= 2, Message("VocabularyOptions.branching must be >= 2, got ", branching));
-  Require(levels >= 1, Message("VocabularyOptions.levels must be >= 1, got ", levels));
+  SLSLAM_CHECK(branching >= 2, "VocabularyOptions.branching must be >= 2, got ", branching);
+  SLSLAM_CHECK(levels >= 1, "VocabularyOptions.levels must be >= 1, got ", levels);
   // k^L words must stay addressable by 32-bit ids (and fit in memory long before that).
-  Require(std::pow(static_cast<double>(branching), levels) <= 1e8,
-          Message("VocabularyOptions.branching^levels must be <= 1e8 words, got ", branching, "^",
-                  levels));
-  Require(kmeans_iterations >= 1,
-          Message("VocabularyOptions.kmeans_iterations must be >= 1, got ", kmeans_iterations));
+  SLSLAM_CHECK(std::pow(static_cast<double>(branching), levels) <= 1e8,
+               "VocabularyOptions.branching^levels must be <= 1e8 words, got ", branching, "^",
+               levels);
+  SLSLAM_CHECK(kmeans_iterations >= 1, "VocabularyOptions.kmeans_iterations must be >= 1, got ",
+               kmeans_iterations);
 }
 
 void Vocabulary::BuildIndex() {
@@ -110,8 +110,8 @@ NodeId Vocabulary::Descend(const void* query, int depth, NodeId* node_at_depth) 
 WordId Vocabulary::Lookup(const cv::Mat& descriptors, int row, int depth,
                           NodeId* node_at_depth) const {
   CheckDescriptors(descriptors);
-  Require(row >= 0 && row < descriptors.rows,
-          Message("descriptor row ", row, " out of range [0, ", descriptors.rows, ")"));
+  SLSLAM_CHECK(row >= 0 && row < descriptors.rows, "descriptor row ", row, " out of range [0, ",
+               descriptors.rows, ")");
   std::vector<uint64_t> scratch;
   const NodeId leaf = Descend(PrepareQuery(descriptors, row, &scratch), depth, node_at_depth);
   return static_cast<WordId>(word_of_node_[leaf]);
@@ -120,8 +120,7 @@ WordId Vocabulary::Lookup(const cv::Mat& descriptors, int row, int depth,
 void Vocabulary::Transform(const cv::Mat& descriptors, BowVector* bow, FeatureVector* features,
                            int levels_up) const {
   Require(bow != nullptr, "Vocabulary::Transform: bow must not be null");
-  Require(levels_up >= 0,
-          Message("Vocabulary::Transform: levels_up must be >= 0, got ", levels_up));
+  SLSLAM_CHECK(levels_up >= 0, "Vocabulary::Transform: levels_up must be >= 0, got ", levels_up);
   bow->clear();
   if (features != nullptr) features->clear();
   if (descriptors.empty()) return;

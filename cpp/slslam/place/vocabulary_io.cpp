@@ -129,7 +129,7 @@ class VocabularyFile {
 };
 
 void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
-  Require(!v.empty(), Message(path, ": cannot save an empty vocabulary"));
+  SLSLAM_CHECK(!v.empty(), path, ": cannot save an empty vocabulary");
   const bool binary = v.descriptor_type_ == CV_8U;
   Writer out;
   out.Bytes(kMagic, sizeof(kMagic));
@@ -158,7 +158,7 @@ void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
   const std::string partial = path + ".partial";
   {
     std::ofstream file(partial, std::ios::binary | std::ios::trunc);
-    Require(file.is_open(), Message(path, ": cannot open ", partial, " for writing"));
+    SLSLAM_CHECK(file.is_open(), path, ": cannot open ", partial, " for writing");
     file.write(reinterpret_cast<const char*>(out.buffer().data()),
                static_cast<std::streamsize>(out.buffer().size()));
     file.close();

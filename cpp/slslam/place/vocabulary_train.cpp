@@ -240,16 +240,15 @@ Vocabulary Vocabulary::Train(const std::vector<cv::Mat>& descriptors_per_image,
   for (size_t i = 0; i < descriptors_per_image.size(); ++i) {
     const cv::Mat& d = descriptors_per_image[i];
     if (d.rows == 0) continue;
-    Require(d.type() == CV_8UC1 || d.type() == CV_32FC1,
-            Message("Vocabulary::Train: descriptors_per_image[", i,
-                    "] must be single-channel CV_8U (binary, uint8) or CV_32F (float32), got ",
-                    place_detail::TypeName(d.depth()), " with ", d.channels(), " channels"));
+    SLSLAM_CHECK(d.type() == CV_8UC1 || d.type() == CV_32FC1,
+                 "Vocabulary::Train: descriptors_per_image[", i,
+                 "] must be single-channel CV_8U (binary, uint8) or CV_32F (float32), got ",
+                 place_detail::TypeName(d.depth()), " with ", d.channels(), " channels");
     if (type < 0) type = d.type(), cols = d.cols;
-    Require(d.type() == type && d.cols == cols,
-            Message("Vocabulary::Train: descriptors_per_image[", i, "] are ",
-                    place_detail::TypeName(d.type()), " x ", d.cols, " but earlier images have ",
-                    place_detail::TypeName(type), " x ", cols,
-                    " (uint8 binary and float32 descriptors do not mix)"));
+    SLSLAM_CHECK(d.type() == type && d.cols == cols, "Vocabulary::Train: descriptors_per_image[", i,
+                 "] are ", place_detail::TypeName(d.type()), " x ", d.cols,
+                 " but earlier images have ", place_detail::TypeName(type), " x ", cols,
+                 " (uint8 binary and float32 descriptors do not mix)");
     total += d.rows;
   }
   Require(total > 0, "Vocabulary::Train: no descriptors to train on");

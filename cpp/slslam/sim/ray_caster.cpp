@@ -45,13 +45,11 @@ RayCaster::RayCaster(const Vertices& vertices, const Triangles& triangles,
                      std::vector<uint8_t> material)
     : embree_(std::make_unique<Embree>()), material_(std::move(material)) {
   Require(triangles.rows() > 0, "the mesh has no triangles");
-  Require(
-      static_cast<Eigen::Index>(material_.size()) == triangles.rows(),
-      Message("material has ", material_.size(), " entries for ", triangles.rows(), " triangles"));
+  SLSLAM_CHECK(static_cast<Eigen::Index>(material_.size()) == triangles.rows(), "material has ",
+               material_.size(), " entries for ", triangles.rows(), " triangles");
   Require(vertices.allFinite(), "mesh vertices contain NaN or Inf");
-  Require(triangles.maxCoeff() < static_cast<uint32_t>(vertices.rows()),
-          Message("a triangle index (", triangles.maxCoeff(), ") is out of range for ",
-                  vertices.rows(), " vertices"));
+  SLSLAM_CHECK(triangles.maxCoeff() < static_cast<uint32_t>(vertices.rows()), "a triangle index (",
+               triangles.maxCoeff(), ") is out of range for ", vertices.rows(), " vertices");
 
   embree_->device = rtcNewDevice(nullptr);
   if (!embree_->device) throw std::runtime_error("could not create an Embree device");
@@ -177,8 +175,7 @@ RayHits RayCaster::Cast(const Eigen::Vector3f& origin, const Vertices& direction
 RayHits RayCaster::CastPinhole(const Eigen::Matrix3d& R_world_cam, const Eigen::Vector3d& origin,
                                double fx, double fy, double cx, double cy, int width, int height,
                                const RayCaster* dynamic, std::vector<float>* depth) const {
-  Require(width > 0 && height > 0,
-          Message("image size must be positive, got ", width, "x", height));
+  SLSLAM_CHECK(width > 0 && height > 0, "image size must be positive, got ", width, "x", height);
   Require(fx > 0 && fy > 0, "focal lengths must be > 0");
   Require(R_world_cam.allFinite() && origin.allFinite(), "camera pose contains NaN or Inf");
   const std::size_t n = static_cast<std::size_t>(width) * height;

@@ -240,7 +240,7 @@ float SurfaceAlbedo(Material material, const Eigen::Vector3f& p, const Eigen::Ve
       a = 0.13f + 0.2f * Fbm(p, 4.0f, 3, 0.5f, 91u, fp);
       break;
     default:
-      Require(false, Message("unknown material id ", static_cast<int>(material)));
+      SLSLAM_CHECK(false, "unknown material id ", static_cast<int>(material));
   }
   if ((material == Material::kRock || material == Material::kShotcrete ||
        material == Material::kRoofMesh) &&
@@ -371,57 +371,56 @@ void ShadingInput::Check() const {
 }
 
 void ShadingCamera::Check() const {
-  Require(std::isfinite(fx) && fx > 0.0, Message("camera fx must be finite and > 0, got ", fx));
-  Require(std::isfinite(fy) && fy > 0.0, Message("camera fy must be finite and > 0, got ", fy));
+  SLSLAM_CHECK(std::isfinite(fx) && fx > 0.0, "camera fx must be finite and > 0, got ", fx);
+  SLSLAM_CHECK(std::isfinite(fy) && fy > 0.0, "camera fy must be finite and > 0, got ", fy);
   Require(std::isfinite(cx) && std::isfinite(cy), "camera principal point must be finite");
   Require(Finite(position), "camera position must be finite");
 }
 
 void HeadLamp::Check() const {
   Require(Finite(position), "headlamp position must be finite");
-  Require(Finite(direction) && std::abs(direction.norm() - 1.0) < 1e-3,
-          Message("headlamp direction must be a unit vector, got norm ", direction.norm()));
-  Require(std::isfinite(power) && power >= 0.0,
-          Message("headlamp power must be finite and >= 0, got ", power));
-  Require(half_angle_rad > 0.0 && half_angle_rad <= kPi / 2,
-          Message("headlamp half_angle_rad must be in (0, pi/2], got ", half_angle_rad));
-  Require(std::isfinite(falloff_ratio) && falloff_ratio > 1.0,
-          Message("headlamp falloff_ratio must be > 1, got ", falloff_ratio));
+  SLSLAM_CHECK(Finite(direction) && std::abs(direction.norm() - 1.0) < 1e-3,
+               "headlamp direction must be a unit vector, got norm ", direction.norm());
+  SLSLAM_CHECK(std::isfinite(power) && power >= 0.0, "headlamp power must be finite and >= 0, got ",
+               power);
+  SLSLAM_CHECK(half_angle_rad > 0.0 && half_angle_rad <= kPi / 2,
+               "headlamp half_angle_rad must be in (0, pi/2], got ", half_angle_rad);
+  SLSLAM_CHECK(std::isfinite(falloff_ratio) && falloff_ratio > 1.0,
+               "headlamp falloff_ratio must be > 1, got ", falloff_ratio);
 }
 
 void Lighting::Check() const {
   headlamp.Check();
   for (const auto& p : roof_lamp_positions) Require(Finite(p), "roof lamp position must be finite");
-  Require(std::isfinite(roof_lamp_power) && roof_lamp_power >= 0.0,
-          Message("roof_lamp_power must be finite and >= 0, got ", roof_lamp_power));
-  Require(std::isfinite(roof_lamp_range_m) && roof_lamp_range_m >= 0.0,
-          Message("roof_lamp_range_m must be finite and >= 0, got ", roof_lamp_range_m));
-  Require(std::isfinite(light_level) && light_level >= 0.0,
-          Message("light_level must be finite and >= 0, got ", light_level));
-  Require(std::isfinite(ambient) && ambient >= 0.0,
-          Message("ambient must be finite and >= 0, got ", ambient));
+  SLSLAM_CHECK(std::isfinite(roof_lamp_power) && roof_lamp_power >= 0.0,
+               "roof_lamp_power must be finite and >= 0, got ", roof_lamp_power);
+  SLSLAM_CHECK(std::isfinite(roof_lamp_range_m) && roof_lamp_range_m >= 0.0,
+               "roof_lamp_range_m must be finite and >= 0, got ", roof_lamp_range_m);
+  SLSLAM_CHECK(std::isfinite(light_level) && light_level >= 0.0,
+               "light_level must be finite and >= 0, got ", light_level);
+  SLSLAM_CHECK(std::isfinite(ambient) && ambient >= 0.0, "ambient must be finite and >= 0, got ",
+               ambient);
 }
 
 void SensorModel::Check() const {
-  Require(std::isfinite(exposure) && exposure >= 0.0,
-          Message("sensor exposure must be finite and >= 0, got ", exposure));
-  Require(std::isfinite(gain) && gain > 0.0, Message("sensor gain must be > 0, got ", gain));
-  Require(std::isfinite(gamma) && gamma > 0.0, Message("sensor gamma must be > 0, got ", gamma));
-  Require(std::isfinite(full_well_electrons) && full_well_electrons > 0.0,
-          Message("sensor full_well_electrons must be > 0, got ", full_well_electrons));
-  Require(std::isfinite(read_noise_dn) && read_noise_dn >= 0.0,
-          Message("sensor read_noise_dn must be >= 0, got ", read_noise_dn));
+  SLSLAM_CHECK(std::isfinite(exposure) && exposure >= 0.0,
+               "sensor exposure must be finite and >= 0, got ", exposure);
+  SLSLAM_CHECK(std::isfinite(gain) && gain > 0.0, "sensor gain must be > 0, got ", gain);
+  SLSLAM_CHECK(std::isfinite(gamma) && gamma > 0.0, "sensor gamma must be > 0, got ", gamma);
+  SLSLAM_CHECK(std::isfinite(full_well_electrons) && full_well_electrons > 0.0,
+               "sensor full_well_electrons must be > 0, got ", full_well_electrons);
+  SLSLAM_CHECK(std::isfinite(read_noise_dn) && read_noise_dn >= 0.0,
+               "sensor read_noise_dn must be >= 0, got ", read_noise_dn);
 }
 
 void ShadeImage(const ShadingInput& input, int height, int width, const ShadingCamera& camera,
                 const Lighting& lighting, const SensorModel& sensor, uint64_t frame_index,
                 uint8_t* image) {
-  Require(height > 0 && width > 0,
-          Message("image size must be positive, got ", height, "x", width));
+  SLSLAM_CHECK(height > 0 && width > 0, "image size must be positive, got ", height, "x", width);
   input.Check();
-  Require(input.count == static_cast<std::size_t>(height) * static_cast<std::size_t>(width),
-          Message("shading input has ", input.count, " pixels, image ", height, "x", width,
-                  " needs ", static_cast<std::size_t>(height) * width));
+  SLSLAM_CHECK(input.count == static_cast<std::size_t>(height) * static_cast<std::size_t>(width),
+               "shading input has ", input.count, " pixels, image ", height, "x", width, " needs ",
+               static_cast<std::size_t>(height) * width);
   Require(image != nullptr, "shading output buffer is null");
   camera.Check();
   lighting.Check();
@@ -538,8 +537,7 @@ void ShadeImage(const ShadingInput& input, int height, int width, const ShadingC
 
 cv::Mat ShadeImage(const ShadingInput& input, int height, int width, const ShadingCamera& camera,
                    const Lighting& lighting, const SensorModel& sensor, uint64_t frame_index) {
-  Require(height > 0 && width > 0,
-          Message("image size must be positive, got ", height, "x", width));
+  SLSLAM_CHECK(height > 0 && width > 0, "image size must be positive, got ", height, "x", width);
   cv::Mat image(height, width, CV_8UC1);
   ShadeImage(input, height, width, camera, lighting, sensor, frame_index, image.ptr<uint8_t>());
   return image;

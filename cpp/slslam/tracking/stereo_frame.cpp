@@ -28,10 +28,10 @@ Eigen::Vector3d StereoFrame::Backproject(const PinholeCamera& camera, int i) con
 namespace {
 
 void CheckKeypoints(const Keypoints& k, const char* side) {
-  Require(k.uv.rows() == k.descriptors.rows || k.uv.rows() == 0,
-          Message(side, " keypoints: ", k.uv.rows(), " positions but ", k.descriptors.rows,
-                  " descriptor rows"));
-  Require(k.uv.allFinite(), Message(side, " keypoint positions must be finite"));
+  SLSLAM_CHECK(k.uv.rows() == k.descriptors.rows || k.uv.rows() == 0, side,
+               " keypoints: ", k.uv.rows(), " positions but ", k.descriptors.rows,
+               " descriptor rows");
+  SLSLAM_CHECK(k.uv.allFinite(), side, " keypoint positions must be finite");
 }
 
 }  // namespace
@@ -165,8 +165,8 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
     const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
     const int v = static_cast<int>(std::lround(frame->keypoints.uv(i, 1)));
     const int ur0 = static_cast<int>(std::lround(frame->u_right[i]));
-    if (v - w < 0 || v + w >= left.rows || ul - w < 0 || ul + w >= left.cols ||
-        ur0 - L - w < 0 || ur0 + L + w >= right.cols) {
+    if (v - w < 0 || v + w >= left.rows || ul - w < 0 || ul + w >= left.cols || ur0 - L - w < 0 ||
+        ur0 + L + w >= right.cols) {
       continue;  // too close to the border to refine: keep the descriptor match
     }
     auto patch_mean = [w, v](const cv::Mat& image, int u) {
