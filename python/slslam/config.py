@@ -159,6 +159,8 @@ class TrackingConfig:
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
     max_distance_float: float = _option(0.8, "[0.01, 2]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
+    # no keyframe sooner than this after the last while tracking is strong [frames]
+    keyframe_min_frames: int = _option(0, "[0, 1000]")
     # tracked / reference keyframe points below: keyframe
     keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
     keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe

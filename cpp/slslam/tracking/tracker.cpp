@@ -74,8 +74,7 @@ void TrackerOptions::Check() const {
           "tracker descriptor distance bounds must be > 0");
   Require(match_ratio > 0.0f && match_ratio <= 1.0f, "tracker.match_ratio must be in (0, 1]");
   Require(keyframe_max_frames >= 1, "tracker.keyframe_max_frames must be >= 1");
-  Require(keyframe_min_frames >= 0 && keyframe_min_frames <= keyframe_max_frames,
-          "tracker.keyframe_min_frames must be in [0, keyframe_max_frames]");
+  Require(keyframe_min_frames >= 0, "tracker.keyframe_min_frames must be >= 0");
   Require(keyframe_track_ratio > 0.0 && keyframe_track_ratio <= 1.0,
           "tracker.keyframe_track_ratio must be in (0, 1]");
   Require(close_depth_baselines > 0.0, "tracker.close_depth_baselines must be > 0");
@@ -396,7 +395,11 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
   const bool weak = tracking.weighted_inliers < options_.weak_keyframe_inliers &&
                     frames_since >= options_.weak_keyframe_frames;
-  return frames_since >= 1 && ((c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
+  // keyframe_min_frames is a hard gap while tracking is strong (sequential local mapping is
+  // always idle, so ORB-SLAM3's "mapping busy" brake never acts here).
+  const bool gap = frames_since >= std::max(1, options_.keyframe_min_frames);
+  return frames_since >= 1 &&
+         ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
 }
 
 bool Tracker::RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTracking* tracking,

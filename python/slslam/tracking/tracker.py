@@ -93,6 +93,7 @@ def _core_options(
         "max_distance_binary",
         "max_distance_float",
         "keyframe_max_frames",
+        "keyframe_min_frames",
         "keyframe_track_ratio",
         "keyframe_min_inliers",
         "point_sigma_px",
