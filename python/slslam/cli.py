@@ -169,17 +169,16 @@ def rectify_command(
     frames: Annotated[int, typer.Option(min=0, help="Number of pairs to write (0 = all).")] = 0,
 ) -> None:
     """Write rectified stereo pairs as PNG, to check a calibration by eye."""
-    from tqdm import tqdm
-
     from slslam import _core
     from slslam.datasets import EurocSequence
+    from slslam.progress import progress_bar
 
     _check_output_folder(out)
     seq = EurocSequence(dataset)
     count = len(seq) if frames <= 0 else min(frames, len(seq))
     for side in ("left", "right"):
         (out / side).mkdir(parents=True, exist_ok=True)
-    for i in tqdm(range(count), desc="rectify", unit="pair"):
+    for i in progress_bar(range(count), desc="rectify", unit="pair"):
         frame = seq[i]
         _core.write_image(str(out / "left" / f"{frame.t_ns}.png"), frame.left)
         _core.write_image(str(out / "right" / f"{frame.t_ns}.png"), frame.right)

@@ -19,9 +19,9 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from tqdm import tqdm
 
 from slslam import _core
+from slslam.progress import progress_bar
 from slslam.sim import centrelines
 from slslam.sim.asl_writer import AslWriter
 from slslam.sim.dust import DustCloud
@@ -317,8 +317,8 @@ class Simulator:
         pending: Future | None = None
         try:
             with ThreadPoolExecutor(max_workers=1) as pool:
-                for frame in tqdm(
-                    range(opts.frames), desc="simulate", unit="frame", disable=not progress
+                for frame in progress_bar(
+                    range(opts.frames), desc="simulate", unit="frame", enabled=progress
                 ):
                     record = self._render_record(frame, rng)
                     if pending is not None:

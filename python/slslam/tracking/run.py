@@ -41,13 +41,13 @@ from pathlib import Path
 import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
 from scipy.spatial.transform import Rotation
-from tqdm import tqdm
 
 from slslam.config import Config, check_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
 from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
+from slslam.progress import progress_bar
 from slslam.tracking.tracker import TRACKED_STATES, MapData, Tracker, TrackResult
 
 log = logging.getLogger(__name__)
@@ -310,7 +310,7 @@ def run_sequence(
         out_dir: output folder, created when missing.
         config: configuration; defaults when None.
         max_frames: track only the first N frames.
-        progress: show a tqdm progress bar.
+        progress: show progress (a live bar on a terminal, a line every 10 s in a log).
         frontend: a point front end to use instead of the configured one.
         groundtruth: a ground-truth trajectory file (TUM, EuRoC csv or KITTI, left camera frame)
             used instead of the sequence's own, e.g. for an excerpt that ships none.
@@ -350,7 +350,7 @@ def run_sequence(
         ):
             writer = csv.writer(frames_file)
             writer.writerow(["index", "timestamp", "state", *COUNTS, *(f"{s}_ms" for s in STAGES)])
-            bar = tqdm(range(n), desc="tracking", unit="frame", disable=not progress)
+            bar = progress_bar(range(n), desc="tracking", unit="frame", enabled=progress)
             try:
                 for i in bar:
                     signals.raise_if_requested()  # SIGINT / SIGTERM: stop between frames
@@ -370,7 +370,9 @@ def run_sequence(
                         ]
                     )
                     frames_file.flush()
-                    bar.set_postfix(state=result.state, pts=result.counts["inlier_points"])
+                    bar.set_postfix(
+                        state=result.state, pts=result.counts["inlier_points"], refresh=False
+                    )
             except (Exception, KeyboardInterrupt) as exc:  # keep what was tracked
                 error = exc
                 log.error(
