@@ -440,7 +440,10 @@ def vocab_train_command(
     ],
     out: Annotated[Path, typer.Option(help="Vocabulary file to write (.slvoc).")],
     frontend: Annotated[
-        str, typer.Option(help="Descriptors: orb (binary, 1000 per image) or superpoint (float).")
+        str,
+        typer.Option(
+            help="Descriptors, 1000 per image: orb (binary), xfeat or superpoint (float)."
+        ),
     ] = "orb",
     branching: Annotated[int, typer.Option(help="k of the k-means tree.")] = 10,
     levels: Annotated[int, typer.Option(help="Depth L of the tree (at most k^L words).")] = 4,
@@ -463,6 +466,14 @@ def vocab_train_command(
         def detect(image):
             return orb.detect(image).descriptors
 
+    elif frontend == "xfeat":
+        from slslam.features import XFeat, XFeatOptions
+
+        xfeat = XFeat(XFeatOptions(max_keypoints=1000))
+
+        def detect(image):
+            return xfeat.detect(image).descriptors
+
     elif frontend == "superpoint":
         from slslam.features import SuperPoint, SuperPointOptions
 
@@ -472,7 +483,7 @@ def vocab_train_command(
             return superpoint.detect(image).descriptors
 
     else:
-        raise typer.BadParameter(f"--frontend must be orb or superpoint, got {frontend!r}")
+        raise typer.BadParameter(f"--frontend must be orb, xfeat or superpoint, got {frontend!r}")
     images = evenly_spaced(find_images(inputs), max_images)
     summary = train_from_images(images, detect, options, progress=progress)
     path = summary.vocabulary.save(out)

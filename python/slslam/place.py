@@ -1,14 +1,14 @@
 """Place recognition: a bag-of-words vocabulary and a keyframe database (C++ core, DBoW2-style).
 
 A :class:`Vocabulary` is a hierarchical k-means tree over binary (ORB, Hamming) or float
-(SuperPoint, L2) descriptors; ``transform`` gives an image's TF-IDF bag-of-words vector and
+(XFeat, SuperPoint: L2) descriptors; ``transform`` gives an image's TF-IDF bag-of-words vector and
 ``score`` compares two of them (1 identical, 0 nothing shared). :class:`KeyframeDatabase` finds the
 keyframes whose vectors share most words with a query. The vocabulary files (``.slvoc``) are a
-compact checksummed binary format; slslam ships one ORB vocabulary trained on simulated frames
-(:func:`default_vocabulary_path`).
+compact checksummed binary format; slslam ships an ORB and an XFeat vocabulary trained on
+simulated frames (:func:`default_vocabulary_path`).
 
     >>> from slslam.place import Vocabulary, default_vocabulary_path
-    >>> vocabulary = Vocabulary.load(default_vocabulary_path())
+    >>> vocabulary = Vocabulary.load(default_vocabulary_path("orb"))
     >>> bow = vocabulary.transform(orb_descriptors)  # {word: weight}
 """
 
@@ -29,7 +29,13 @@ DescriptorKind = Literal["binary", "float"]
 BowVector = dict[int, float]
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp")
 DATA_DIR = Path(__file__).resolve().parent / "data"
-DEFAULT_VOCABULARIES: dict[str, str] = {"binary": "orb_vocabulary.slvoc"}
+#: The vocabulary shipped for each point front end (``features.point_frontend``). SuperPoint has
+#: none: its weights are not redistributable, so neither is a vocabulary trained on its output.
+SHIPPED_VOCABULARIES: dict[str, str] = {
+    "orb": "orb_vocabulary.slvoc",
+    "xfeat": "xfeat_vocabulary.slvoc",
+}
+FRONTENDS = ("orb", "xfeat", "superpoint")
 
 KeyframeDatabase = _core.KeyframeDatabase
 PlaceCandidate = _core.PlaceCandidate
@@ -84,7 +90,7 @@ class Vocabulary:
         descriptors_per_image: Sequence[np.ndarray],
         options: VocabularyOptions = VocabularyOptions(),
     ) -> Vocabulary:
-        """Train on one (N, D) array per image: all uint8 (ORB) or all float32 (SuperPoint)."""
+        """Train on one (N, D) array per image: all uint8 (ORB) or all float32 (XFeat, ...)."""
         arrays = [
             _as_descriptors(d, f"descriptors_per_image[{i}]")
             for i, d in enumerate(descriptors_per_image)
@@ -169,20 +175,21 @@ class Vocabulary:
         )
 
 
-def default_vocabulary_path(descriptor: DescriptorKind = "binary") -> Path:
-    """The vocabulary shipped with slslam for a descriptor kind (``"binary"``: ORB).
+def default_vocabulary_path(frontend: str = "orb") -> Path:
+    """The vocabulary shipped with slslam for a point front end: ``"orb"`` (binary, 32 bytes) or
+    ``"xfeat"`` (float, 64 values).
 
-    No float (SuperPoint) vocabulary is shipped: SuperPoint's weights are not redistributable, so
-    train one with ``slslam vocab train --frontend superpoint``.
+    None is shipped for SuperPoint (its weights are not redistributable): train one with
+    ``slslam vocab train --frontend superpoint``; :class:`VocabularyError` says so.
     """
-    if descriptor not in ("binary", "float"):
-        raise InputError(None, f"descriptor must be 'binary' or 'float', got {descriptor!r}")
-    name = DEFAULT_VOCABULARIES.get(descriptor)
+    if frontend not in FRONTENDS:
+        raise InputError(None, f"frontend must be one of {', '.join(FRONTENDS)}, got {frontend!r}")
+    name = SHIPPED_VOCABULARIES.get(frontend)
     if name is None:
         raise VocabularyError(
             None,
-            f"slslam ships no {descriptor} vocabulary; train one with `slslam vocab train "
-            "--frontend superpoint`",
+            f"slslam ships no {frontend} vocabulary; train one with `slslam vocab train "
+            f"--frontend {frontend}`",
         )
     path = DATA_DIR / name
     if not path.is_file():
@@ -256,6 +263,7 @@ def train_from_images(
 
 
 __all__ = [
+    "SHIPPED_VOCABULARIES",
     "BowVector",
     "KeyframeDatabase",
     "PlaceCandidate",

