@@ -176,6 +176,8 @@ class TrackingConfig:
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _option(3.0, "[0.01, 1000]")
+    # LSD runs on the image scaled by this (segments mapped back; LBD at full resolution)
+    line_detection_scale: float = _option(1.0, "[0.1, 1]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
     line_inlier_weight: float = _option(1.0, "[0, 100]")

@@ -37,14 +37,33 @@ cv::Mat ComputeLbd(const cv::Mat& image, const Segments& segments) {
   return descriptors;
 }
 
+void LineExtractorOptions::Check() const {
+  preprocess.Check();
+  SLSLAM_CHECK(detection_scale > 0.0f && detection_scale <= 1.0f,
+               "lines.detection_scale must be in (0, 1], got ", detection_scale);
+}
+
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options) {
   options.Check();
   Require(!image.empty() && image.type() == CV_8UC1, "LSD needs a non-empty 8-bit gray image");
   std::vector<cv::Vec4f> raw;
-  cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(image, raw);
+  const float scale = options.detection_scale;
+  cv::Mat detect_on = image;
+  if (scale < 1.0f) {
+    const cv::Size size(std::max(1, static_cast<int>(std::lround(image.cols * scale))),
+                        std::max(1, static_cast<int>(std::lround(image.rows * scale))));
+    cv::resize(image, detect_on, size, 0, 0, cv::INTER_AREA);
+  }
+  cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(detect_on, raw);
+  // Pixel centres: x_full = (x_small + 0.5) * cols / small_cols - 0.5 (same for rows).
+  const float sx = static_cast<float>(image.cols) / detect_on.cols;
+  const float sy = static_cast<float>(image.rows) / detect_on.rows;
+  const auto full = [&](float x, float y) {
+    return Eigen::Vector2f((x + 0.5f) * sx - 0.5f, (y + 0.5f) * sy - 0.5f);
+  };
   Segments segments;
   segments.reserve(raw.size());
-  for (const cv::Vec4f& l : raw) segments.push_back({{l[0], l[1]}, {l[2], l[3]}});
+  for (const cv::Vec4f& l : raw) segments.push_back({full(l[0], l[1]), full(l[2], l[3])});
   LineFeatures out;
   out.raw_count = static_cast<int>(segments.size());
   out.segments = options.run_preprocess

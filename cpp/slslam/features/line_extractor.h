@@ -18,8 +18,12 @@ struct LineFeatures {
 struct LineExtractorOptions {
   LinePreprocessOptions preprocess;
   bool run_preprocess = true;  ///< false: LSD segments as they come (for comparisons)
+  /// LSD runs on the image resized by this factor (area averaging), segments are mapped back to
+  /// full resolution; LBD and everything after work at full resolution. 0.5 cuts LSD's time about
+  /// 4x (benchmarks/README.md) and keeps the long segments preprocessing keeps anyway [-], (0, 1]
+  float detection_scale = 1.0f;
 
-  void Check() const { preprocess.Check(); }
+  void Check() const;
 };
 
 // LSD (cv::createLineSegmentDetector, LSD_REFINE_STD) on an 8-bit gray image, then preprocessing

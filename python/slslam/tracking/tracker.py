@@ -191,7 +191,9 @@ class Tracker:
             self._grid.strong_score = threshold
         self.vocabulary = _vocabulary_for(self.config, self.frontend)
         self._core = _core.TrackerCore(
-            _core_options(camera, self.config, self.vocabulary), _core.LinePreprocessOptions()
+            _core_options(camera, self.config, self.vocabulary),
+            _core.LinePreprocessOptions(),
+            self.config.tracking.line_detection_scale,
         )
         self._results: list[TrackResult] = []
         self._closed = False

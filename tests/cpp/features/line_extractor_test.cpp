@@ -1,0 +1,49 @@
+#include "slslam/features/line_extractor.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+namespace slslam {
+namespace {
+
+// Distance from point p to the infinite line through segment s [px].
+float DistanceToLine(const LineSegment& s, const Eigen::Vector2f& p) {
+  const Eigen::Vector2f d = (s.end - s.start).normalized();
+  const Eigen::Vector2f n(-d.y(), d.x());
+  return std::abs(n.dot(p - s.start));
+}
+
+TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
+  // Dark rectangles with straight edges (arches, pipes) on a mid-gray wall, slightly blurred.
+  cv::Mat image(480, 752, CV_8U, cv::Scalar(120));
+  cv::rectangle(image, cv::Rect(100, 60, 200, 300), cv::Scalar(40), cv::FILLED);
+  cv::rectangle(image, cv::Rect(420, 120, 250, 80), cv::Scalar(200), cv::FILLED);
+  cv::line(image, cv::Point(380, 300), cv::Point(700, 440), cv::Scalar(30), 5);
+  cv::GaussianBlur(image, image, cv::Size(), 1.0);
+  LineExtractorOptions full, half;
+  half.detection_scale = 0.5f;
+  const LineFeatures a = ExtractLines(image, full), b = ExtractLines(image, half);
+  ASSERT_GE(a.segments.size(), 6u);
+  ASSERT_GE(b.segments.size(), 6u);
+  EXPECT_EQ(b.descriptors.rows, static_cast<int>(b.segments.size()));
+  // Every half-resolution segment lies on a full-resolution one: both endpoints within 1 px of
+  // the same line, at an angle below 1 degree.
+  for (const LineSegment& s : b.segments) {
+    float best = 1e9f;
+    for (const LineSegment& t : a.segments) {
+      if (AngleDifference(s.Angle(), t.Angle()) > 1.0f * static_cast<float>(M_PI) / 180.0f)
+        continue;
+      best = std::min(best, std::max(DistanceToLine(t, s.start), DistanceToLine(t, s.end)));
+    }
+    EXPECT_LT(best, 1.0f) << "segment (" << s.start.transpose() << ") - (" << s.end.transpose()
+                          << ")";
+  }
+  LineExtractorOptions bad;
+  bad.detection_scale = 0.0f;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam
