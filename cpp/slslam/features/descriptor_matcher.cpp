@@ -101,16 +101,14 @@ Eigen::VectorXi GuidedMatch(
     const int64_t cy = static_cast<int64_t>(std::floor(keypoints(j, 1) / cell));
     buckets[key(cx, cy)].push_back(static_cast<int>(j));
   }
-  std::vector<float> best_distance(keypoints.rows(), std::numeric_limits<float>::infinity());
-  std::vector<int> owner(keypoints.rows(), -1);
+  OneToOne one_to_one(static_cast<int>(keypoints.rows()));
   const float r2 = options.radius_px * options.radius_px;
   for (Eigen::Index i = 0; i < predicted.rows(); ++i) {
     const float u = predicted(i, 0), v = predicted(i, 1);
     if (!std::isfinite(u) || !std::isfinite(v)) continue;
     const int64_t cx = static_cast<int64_t>(std::floor(u / cell));
     const int64_t cy = static_cast<int64_t>(std::floor(v / cell));
-    float best = std::numeric_limits<float>::infinity(), second = best;
-    int best_j = -1;
+    BestTwo best(std::numeric_limits<float>::infinity());
     for (int64_t dy = -1; dy <= 1; ++dy) {
       for (int64_t dx = -1; dx <= 1; ++dx) {
         const auto it = buckets.find(key(cx + dx, cy + dy));
@@ -118,25 +116,16 @@ Eigen::VectorXi GuidedMatch(
         for (int j : it->second) {
           const float du = keypoints(j, 0) - u, dv = keypoints(j, 1) - v;
           if (du * du + dv * dv > r2) continue;
-          const float d =
-              DescriptorDistance(query_descriptors, static_cast<int>(i), keypoint_descriptors, j);
-          if (d < best) {
-            second = best;
-            best = d;
-            best_j = j;
-          } else if (d < second) {
-            second = d;
-          }
+          best.Add(
+              DescriptorDistance(query_descriptors, static_cast<int>(i), keypoint_descriptors, j),
+              j);
         }
       }
     }
-    if (best_j < 0 || best > options.max_distance) continue;
-    if (std::isfinite(second) && best >= options.ratio * second) continue;
-    if (best >= best_distance[best_j]) continue;  // the keypoint already has a better query
-    if (owner[best_j] >= 0) match(owner[best_j]) = -1;
-    owner[best_j] = static_cast<int>(i);
-    best_distance[best_j] = best;
-    match(i) = best_j;
+    if (best.index < 0 || best.best > options.max_distance) continue;
+    if (std::isfinite(best.second) && best.best >= options.ratio * best.second) continue;
+    // A keypoint already held by a query with a smaller distance stays with it.
+    one_to_one.Offer(static_cast<int>(i), best.index, best.best, &match);
   }
   return match;
 }

@@ -1,10 +1,57 @@
 // Brute-force descriptor matching with the mutual-nearest-neighbour and ratio tests.
 #pragma once
 
+#include <limits>
+#include <vector>
+
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 namespace slslam {
+
+// The smallest and second-smallest distance among candidates, and the index of the best: the
+// accumulator behind every ratio test (the tests themselves differ per caller and stay there).
+struct BestTwo {
+  explicit BestTwo(float start = std::numeric_limits<float>::max()) : best(start), second(start) {}
+
+  void Add(float distance, int candidate) {
+    if (distance < best) {
+      second = best;
+      best = distance;
+      index = candidate;
+    } else if (distance < second) {
+      second = distance;
+    }
+  }
+
+  float best;
+  float second;
+  int index = -1;  ///< -1 until a candidate was added
+};
+
+// One-to-one assignment of queries to targets: a target keeps the query with the smaller
+// distance, and a query it displaces loses its match. `Match` is any indexable container of
+// per-query target indices (-1: none).
+class OneToOne {
+ public:
+  explicit OneToOne(int targets)
+      : distance_(targets, std::numeric_limits<float>::infinity()), owner_(targets, -1) {}
+
+  // Offers `target` to `query` at `distance`; returns whether the query got it.
+  template <typename Match>
+  bool Offer(int query, int target, float distance, Match* match) {
+    if (!(distance < distance_[target])) return false;
+    if (owner_[target] >= 0) (*match)[owner_[target]] = -1;
+    owner_[target] = query;
+    distance_[target] = distance;
+    (*match)[query] = target;
+    return true;
+  }
+
+ private:
+  std::vector<float> distance_;
+  std::vector<int> owner_;
+};
 
 struct MatchOptions {
   float max_distance = 64.0f;  ///< largest accepted descriptor distance (Hamming bits or L2)

@@ -42,9 +42,7 @@ struct View {
   Eigen::Vector3d center;
 };
 
-View MakeView(const KeyFrame& kf) {
-  return {&kf, kf.frame.get(), kf.R_cw, kf.t_cw, kf.Center()};
-}
+View MakeView(const KeyFrame& kf) { return {&kf, kf.frame.get(), kf.R_cw, kf.t_cw, kf.Center()}; }
 
 // Index pairs (i in view 1, j in view 2) of free keypoints matched along the epipolar lines.
 std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const View& b,
@@ -59,37 +57,24 @@ std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const Vi
   const bool binary = ka.descriptors.type() == CV_8U;
   const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
   const Eigen::Matrix3d F = Fundamental21(camera, a.R, a.t, b.R, b.t);
-  std::vector<float> owner_distance(kb.size(), std::numeric_limits<float>::max());
-  std::vector<int> owner(kb.size(), -1);
+  OneToOne one_to_one(kb.size());
   std::vector<int> match(ka.size(), -1);
   for (int i = 0; i < ka.size(); ++i) {
     if (a.keyframe->point_ids[i] >= 0) continue;
     const Eigen::Vector3d line = F * Eigen::Vector3d(ka.uv(i, 0), ka.uv(i, 1), 1.0);
     const double norm = std::hypot(line.x(), line.y());
     if (norm < 1e-12) continue;
-    float best = std::numeric_limits<float>::max();
-    float second = best;
-    int best_j = -1;
+    BestTwo best;
     for (int j : free_b) {
       const double distance =
           std::abs(line.x() * kb.uv(j, 0) + line.y() * kb.uv(j, 1) + line.z()) / norm;
       if (distance > options.epipolar_px) continue;
-      const float d = DescriptorDistance(ka.descriptors, i, kb.descriptors, j);
-      if (d < best) {
-        second = best;
-        best = d;
-        best_j = j;
-      } else if (d < second) {
-        second = d;
-      }
+      best.Add(DescriptorDistance(ka.descriptors, i, kb.descriptors, j), j);
     }
-    if (best_j < 0 || best > max_distance || best > options.ratio * second) continue;
-    if (best < owner_distance[best_j]) {
-      if (owner[best_j] >= 0) match[owner[best_j]] = -1;
-      owner_distance[best_j] = best;
-      owner[best_j] = i;
-      match[i] = best_j;
+    if (best.index < 0 || best.best > max_distance || best.best > options.ratio * best.second) {
+      continue;
     }
+    one_to_one.Offer(i, best.index, best.best, &match);
   }
   std::vector<std::pair<int, int>> pairs;
   for (int i = 0; i < ka.size(); ++i) {
@@ -132,22 +117,14 @@ std::vector<std::pair<int, int>> MatchFreeSegments(const View& a, const View& b,
   }
   std::vector<std::pair<int, int>> pairs;
   for (int x = 0; x < na; ++x) {
-    float best = std::numeric_limits<float>::max();
-    float second = best;
-    int best_y = -1;
-    for (int y = 0; y < nb; ++y) {
-      const float d = distance[static_cast<size_t>(x) * nb + y];
-      if (d < best) {
-        second = best;
-        best = d;
-        best_y = y;
-      } else if (d < second) {
-        second = d;
-      }
+    BestTwo best;
+    for (int y = 0; y < nb; ++y) best.Add(distance[static_cast<size_t>(x) * nb + y], y);
+    if (best.index < 0 || best.best > options.line_max_lbd ||
+        best.best > options.line_ratio * best.second) {
+      continue;
     }
-    if (best_y < 0 || best > options.line_max_lbd || best > options.line_ratio * second) continue;
-    if (best_of_b[best_y] != x) continue;
-    pairs.emplace_back(free_a[x], free_b[best_y]);
+    if (best_of_b[best.index] != x) continue;
+    pairs.emplace_back(free_a[x], free_b[best.index]);
   }
   return pairs;
 }
@@ -234,7 +211,8 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
     const Eigen::Vector3d start = R_wa * (s_a - a.t);
     const Eigen::Vector3d end = R_wa * (e_a - a.t);
     if ((end - start).norm() < 1e-3) continue;
-    auto map_line = map->AddLine(line, start, end, a.frame->line_descriptors.row(ia), a.keyframe->id);
+    auto map_line =
+        map->AddLine(line, start, end, a.frame->line_descriptors.row(ia), a.keyframe->id);
     map->AddLineObservation(map_line->id, a.keyframe->id, ia);
     map->AddLineObservation(map_line->id, b.keyframe->id, ib);
     ++made;

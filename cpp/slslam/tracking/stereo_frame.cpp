@@ -73,16 +73,13 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
     const int band = static_cast<int>(std::ceil(options.max_row_offset_px));
     const double max_depth = options.max_depth_baselines * rig.baseline_m;
     // Best left keypoint per right keypoint, to keep matches one-to-one.
-    std::vector<float> right_best(right.size(), std::numeric_limits<float>::max());
-    std::vector<int> right_owner(right.size(), -1);
+    OneToOne one_to_one(right.size());
     std::vector<int> match(n, -1);
     for (int i = 0; i < n; ++i) {
       const float ul = left.uv(i, 0);
       const float vl = left.uv(i, 1);
       const int r0 = static_cast<int>(std::lround(vl));
-      float best = std::numeric_limits<float>::max();
-      float second = best;
-      int best_j = -1;
+      BestTwo best;
       for (int r = std::max(0, r0 - band); r <= std::min(rows - 1, r0 + band); ++r) {
         for (int j : by_row[r]) {
           if (std::abs(right.uv(j, 1) - vl) > options.max_row_offset_px) continue;
@@ -90,23 +87,13 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
           if (disparity < options.min_disparity_px || disparity > options.max_disparity_px) {
             continue;
           }
-          const float d = DescriptorDistance(left.descriptors, i, right.descriptors, j);
-          if (d < best) {
-            second = best;
-            best = d;
-            best_j = j;
-          } else if (d < second) {
-            second = d;
-          }
+          best.Add(DescriptorDistance(left.descriptors, i, right.descriptors, j), j);
         }
       }
-      if (best_j < 0 || best > max_distance || best > options.ratio * second) continue;
-      if (best < right_best[best_j]) {
-        if (right_owner[best_j] >= 0) match[right_owner[best_j]] = -1;
-        right_best[best_j] = best;
-        right_owner[best_j] = i;
-        match[i] = best_j;
+      if (best.index < 0 || best.best > max_distance || best.best > options.ratio * best.second) {
+        continue;
       }
+      one_to_one.Offer(i, best.index, best.best, &match);
     }
     for (int i = 0; i < n; ++i) {
       if (match[i] < 0) continue;
