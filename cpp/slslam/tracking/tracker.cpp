@@ -402,18 +402,11 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
          ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
 }
 
-bool Tracker::RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTracking* tracking,
+bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
+                              const FeatureVector& features, int map_index, LocalTracking* tracking,
                               int* keyframe_id) {
-  if (!vocabulary_ || frame.NumKeypoints() < options_.relocalisation.min_matches) return false;
   const RelocalisationOptions& ro = options_.relocalisation;
   const cv::Mat& desc = frame.keypoints.descriptors;
-  if (desc.type() != vocabulary_->descriptor_type() ||
-      desc.cols != vocabulary_->descriptor_cols()) {
-    return false;
-  }
-  BowVector bow;
-  FeatureVector features;
-  vocabulary_->Transform(desc, &bow, &features, ro.vocabulary_levels_up);
   Map& map = *maps_[map_index];
   std::lock_guard<std::mutex> lock(map.mutex());
   const auto candidates = databases_[map_index]->Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
@@ -435,28 +428,22 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTrac
       auto it = kf->bow_features.find(node);
       if (it == kf->bow_features.end()) continue;
       for (int i : frame_ids) {
-        float best = std::numeric_limits<float>::max(), second = best;
-        int best_point = -1;
+        BestTwo best;  // index: the map point id
         for (int j : it->second) {
           const int pid = j < static_cast<int>(kf->point_ids.size()) ? kf->point_ids[j] : -1;
           if (pid < 0) continue;
           auto p = map.point(pid);
           if (!p || p->bad) continue;
-          const float d = DescriptorDistance(desc, i, p->descriptor, 0);
-          if (d < best) {
-            second = best;
-            best = d;
-            best_point = pid;
-          } else if (d < second) {
-            second = d;
-          }
+          best.Add(DescriptorDistance(desc, i, p->descriptor, 0), pid);
         }
-        if (best_point < 0 || best > max_distance) continue;
-        if (second < std::numeric_limits<float>::max() && best >= ro.match_ratio * second) {
+        if (best.index < 0 || best.best > max_distance) continue;
+        if (best.second < std::numeric_limits<float>::max() &&
+            best.best >= ro.match_ratio * best.second) {
           continue;
         }
-        auto [pos, inserted] = owner.emplace(best_point, std::make_pair(best, i));
-        if (!inserted && best < pos->second.first) pos->second = {best, i};
+        // Map point ids are sparse, so the one-to-one table is a map here (OneToOne is dense).
+        auto [pos, inserted] = owner.emplace(best.index, std::make_pair(best.best, i));
+        if (!inserted && best.best < pos->second.first) pos->second = {best.best, i};
       }
     }
     if (static_cast<int>(owner.size()) < ro.min_matches) continue;
@@ -497,9 +484,20 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
   if (!vocabulary_) return false;
   const auto start = Clock::now();
   ++stats_.relocalisation_attempts;
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  if (frame.NumKeypoints() < options_.relocalisation.min_matches ||
+      desc.type() != vocabulary_->descriptor_type() ||
+      desc.cols != vocabulary_->descriptor_cols()) {
+    result->relocalisation_ms = Ms(start);
+    return false;
+  }
+  // The frame's words, once for every map tried.
+  BowVector bow;
+  FeatureVector features;
+  vocabulary_->Transform(desc, &bow, &features, options_.relocalisation.vocabulary_levels_up);
   for (int m : order) {
     int keyframe_id = -1;
-    if (!RelocaliseInMap(frame, m, tracking, &keyframe_id)) continue;
+    if (!RelocaliseInMap(frame, bow, features, m, tracking, &keyframe_id)) continue;
     active_ = m;
     last_keyframe_ = keyframe_id;
     last_keyframe_frame_ = frame.index;
@@ -510,6 +508,46 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
   }
   result->relocalisation_ms = Ms(start);
   return false;
+}
+
+Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
+                                                     const Eigen::Matrix3d& R_frozen,
+                                                     const Eigen::Vector3d& t_frozen) {
+  // The robot most likely kept moving through the dark as before the loss: the local map is
+  // tried from poses along the pre-loss motion (a fraction of the frames since the last
+  // estimate) and from the frozen pose, with a wide window; the best-supported attempt wins.
+  const int since = lost_count_ + 1;  // frames since the last estimated pose
+  std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> hypotheses = {{R_frozen, t_frozen}};
+  // With the full pre-loss motion, and with its translation only: one frame's rotation may be
+  // mostly vibration (roll, pitch), and twenty frames of it extrapolated tilt the camera by
+  // degrees.
+  const Eigen::Vector3d center = -loss_R_.transpose() * loss_t_;
+  const Eigen::Matrix3d R_prev = loss_velocity_R_.transpose() * loss_R_;
+  const Eigen::Vector3d t_prev = loss_velocity_R_.transpose() * (loss_t_ - loss_velocity_t_);
+  const Eigen::Vector3d step = center - (-R_prev.transpose() * t_prev);  // world, per frame
+  for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
+    const double steps = std::round(fraction * since);
+    if (steps <= 0.0) continue;
+    hypotheses.emplace_back(loss_R_, -loss_R_ * (center + steps * step));
+    Eigen::Matrix3d R = loss_R_;
+    Eigen::Vector3d t = loss_t_;
+    for (int k = 0; k < static_cast<int>(steps); ++k) {
+      t = loss_velocity_R_ * t + loss_velocity_t_;
+      R = loss_velocity_R_ * R;
+    }
+    hypotheses.emplace_back(R, t);
+  }
+  LocalTracking best;
+  Map& map = *maps_[active_];
+  for (const auto& [R, t] : hypotheses) {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    LocalTracking attempt =
+        TrackLocalMap(frame, map, last_keyframe_, R, t, options_.lost_search_scale);
+    if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
+      best = std::move(attempt);
+    }
+  }
+  return best;
 }
 
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
@@ -558,43 +596,8 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     relocalised = Relocalise(*frame, order, &result, &tracking);
   }
   if (!tracked && !relocalised && mode_ == Mode::kLost) {
-    // The robot most likely kept moving through the dark as before the loss: the local map is
-    // tried from poses along the pre-loss motion (a fraction of the frames since the last
-    // estimate, and the frozen pose), with a wide window; the best is accepted on twice the
-    // inliers tracking needs.
-    const int since = lost_count_ + 1;  // frames since the last estimated pose
-    std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> hypotheses = {{R_pred, t_pred}};
-    // With the full pre-loss motion, and with its translation only: one frame's rotation may be
-    // mostly vibration (roll, pitch), and twenty frames of it extrapolated tilt the camera by
-    // degrees. The best-supported hypothesis wins.
-    const Eigen::Vector3d center = -loss_R_.transpose() * loss_t_;
-    const Eigen::Matrix3d R_prev = loss_velocity_R_.transpose() * loss_R_;
-    const Eigen::Vector3d t_prev = loss_velocity_R_.transpose() * (loss_t_ - loss_velocity_t_);
-    const Eigen::Vector3d step = center - (-R_prev.transpose() * t_prev);  // world, per frame
-    for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
-      const double steps = std::round(fraction * since);
-      if (steps <= 0.0) continue;
-      hypotheses.emplace_back(loss_R_, -loss_R_ * (center + steps * step));
-      Eigen::Matrix3d R = loss_R_;
-      Eigen::Vector3d t = loss_t_;
-      for (int k = 0; k < static_cast<int>(steps); ++k) {
-        t = loss_velocity_R_ * t + loss_velocity_t_;
-        R = loss_velocity_R_ * R;
-      }
-      hypotheses.emplace_back(R, t);
-    }
-    LocalTracking best;
-    for (const auto& [R, t] : hypotheses) {
-      Map& map = *maps_[active_];
-      std::lock_guard<std::mutex> lock(map.mutex());
-      LocalTracking attempt =
-          TrackLocalMap(*frame, map, last_keyframe_, R, t, options_.lost_search_scale);
-      if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
-        best = std::move(attempt);
-      }
-    }
-    tracked = best.pose.success && best.weighted_inliers >= 2.0 * options_.min_inliers;
-    if (tracked || tracking.point_ids.empty()) tracking = std::move(best);
+    tracking = TrackAlongLossMotion(*frame, R_pred, t_pred);  // lost: `tracking` was empty
+    tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
   result.matched_lines = static_cast<int>(tracking.line_ids.size());
@@ -643,7 +646,6 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   else
     mode_ = Mode::kRecentlyLost;
   if (mode_ == Mode::kRecentlyLost) {
-    ++stats_.recently_lost_frames;
     result.state = TrackingState::kRecentlyLost;
     last_R_ = R_pred;
     last_t_ = t_pred;
@@ -667,7 +669,6 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     mode_ = Mode::kTracking;
     lost_count_ = 0;
   } else {
-    ++stats_.lost_frames;
     result.state = TrackingState::kLost;
   }
   result.mapping_ms = Ms(start);

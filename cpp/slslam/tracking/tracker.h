@@ -59,8 +59,6 @@ struct RelocalisationOptions {
 struct TrackingStats {
   int relocalisations = 0;
   int relocalisation_attempts = 0;
-  int recently_lost_frames = 0;
-  int lost_frames = 0;
   int maps_started = 0;
 };
 
@@ -182,8 +180,14 @@ class Tracker {
   // Tries the maps in `order`; on success switches to that map and fills the pose and tracking.
   bool Relocalise(const StereoFrame& frame, const std::vector<int>& order, TrackResult* result,
                   LocalTracking* tracking);
-  bool RelocaliseInMap(const StereoFrame& frame, int map_index, LocalTracking* tracking,
+  // One map: database candidates for the frame's words, matching, PnP, local map.
+  bool RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
+                       const FeatureVector& features, int map_index, LocalTracking* tracking,
                        int* keyframe_id);
+  // Lost: the local map tracked from poses along the motion before the loss and from the frozen
+  // pose; the best-supported attempt (the caller decides whether it is enough).
+  LocalTracking TrackAlongLossMotion(const StereoFrame& frame, const Eigen::Matrix3d& R_frozen,
+                                     const Eigen::Vector3d& t_frozen);
   // The pose predicted for the next frame from the current motion model.
   void Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const;
   void SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, bool update_velocity);

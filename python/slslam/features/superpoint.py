@@ -101,6 +101,20 @@ def _providers(choice: str | tuple[str, ...]) -> list[str]:
     return wanted
 
 
+def open_session(path: Path, providers: str | tuple[str, ...], intra_op_threads: int):
+    """An onnxruntime session on ``path`` (providers as in the options, 0 threads: all cores);
+    a file onnxruntime cannot load is a ModelError naming it. Shared by every network."""
+    import onnxruntime as ort
+
+    session_options = ort.SessionOptions()
+    if intra_op_threads:
+        session_options.intra_op_num_threads = intra_op_threads
+    try:
+        return ort.InferenceSession(str(path), session_options, providers=_providers(providers))
+    except Exception as exc:  # onnxruntime raises its own types for corrupt files
+        raise ModelError(path, f"onnxruntime cannot load it ({exc})") from None
+
+
 def validate_session(session, path: Path) -> None:
     """Raise ModelError unless the session has SuperPoint's input and outputs."""
     inputs = session.get_inputs()
@@ -181,20 +195,10 @@ class SuperPoint:
     """SuperPoint on onnxruntime. ``detect(image)`` returns :class:`Keypoints`."""
 
     def __init__(self, options: SuperPointOptions = SuperPointOptions()):
-        import onnxruntime as ort
-
         options.check()
         self.options = options
         self.model_path = resolve_model_path(options.model_path)
-        session_options = ort.SessionOptions()
-        if options.intra_op_threads:
-            session_options.intra_op_num_threads = options.intra_op_threads
-        try:
-            self.session = ort.InferenceSession(
-                str(self.model_path), session_options, providers=_providers(options.providers)
-            )
-        except Exception as exc:  # onnxruntime raises its own types for corrupt files
-            raise ModelError(self.model_path, f"onnxruntime cannot load it ({exc})") from None
+        self.session = open_session(self.model_path, options.providers, options.intra_op_threads)
         validate_session(self.session, self.model_path)
         self.providers = self.session.get_providers()
 

@@ -45,7 +45,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 
 from slslam.features.keypoints import Keypoints, check_gray_image
-from slslam.features.superpoint import ModelError, _providers, heatmap_from_logits
+from slslam.features.superpoint import ModelError, heatmap_from_logits, open_session
 
 CELL = 8  # the coarse maps are 1/8 of the input [px]
 MULTIPLE = 32  # the network's input sides must be multiples of this [px]
@@ -195,20 +195,10 @@ class XFeat:
     """XFeat on onnxruntime. ``detect(image)`` returns :class:`Keypoints` (64-d float)."""
 
     def __init__(self, options: XFeatOptions = XFeatOptions()):
-        import onnxruntime as ort
-
         options.check()
         self.options = options
         self.model_path = resolve_model_path(options.model_path)
-        session_options = ort.SessionOptions()
-        if options.intra_op_threads:
-            session_options.intra_op_num_threads = options.intra_op_threads
-        try:
-            self.session = ort.InferenceSession(
-                str(self.model_path), session_options, providers=_providers(options.providers)
-            )
-        except Exception as exc:  # onnxruntime raises its own types for corrupt files
-            raise ModelError(self.model_path, f"onnxruntime cannot load it ({exc})") from None
+        self.session = open_session(self.model_path, options.providers, options.intra_op_threads)
         validate_session(self.session, self.model_path)
         self.providers = self.session.get_providers()
 
