@@ -148,11 +148,9 @@ def test_acceleration_is_continuous(options: TrajectoryOptions) -> None:
         assert np.abs(np.diff(acc, n=2, axis=0)).max() < 0.02
 
 
-@pytest.mark.parametrize("name", list(CASES))
-def test_derivatives_match_finite_differences(name: str) -> None:
-    make, options = CASES[name]
-    traj = RobotTrajectory(make(), options=options)
-    t = np.linspace(0.01, traj.duration_s - 0.01, 1501)
+def assert_derivatives_match_finite_differences(traj: RobotTrajectory, t: np.ndarray) -> None:
+    """Analytic velocity, acceleration and body angular velocity at times ``t`` against central
+    (and, for rotation, forward) differences of position, velocity and rotation."""
     dt = 1e-4
     dp = (traj.position(t + dt) - traj.position(t - dt)) / (2 * dt)
     np.testing.assert_allclose(traj.velocity(t), dp, atol=1e-5)
@@ -161,6 +159,14 @@ def test_derivatives_match_finite_differences(name: str) -> None:
     R0, R1 = traj.rotation(t), traj.rotation(t + dt)
     w_num = Rotation.from_matrix(np.einsum("nji,njk->nik", R0, R1)).as_rotvec() / dt
     np.testing.assert_allclose(traj.angular_velocity_body(t + dt / 2), w_num, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_derivatives_match_finite_differences(name: str) -> None:
+    make, options = CASES[name]
+    traj = RobotTrajectory(make(), options=options)
+    t = np.linspace(0.01, traj.duration_s - 0.01, 1501)
+    assert_derivatives_match_finite_differences(traj, t)
 
 
 def test_pose_is_rigid_and_follows_the_path() -> None:
@@ -348,14 +354,8 @@ def test_spin_profile_is_continuous_at_its_junctions(name: str) -> None:
         assert np.abs(w1 - w0).max() < 1e-5, f"angular velocity jumps at {tj} s"
     # analytic derivatives across the whole spin agree with finite differences
     t = np.linspace(SPIN_AT - RAMP_S - 0.5, SPIN_AT + SPIN_S + RAMP_S + 0.5, 1201)
+    assert_derivatives_match_finite_differences(traj, t)
     dt = 1e-4
-    dp = (traj.position(t + dt) - traj.position(t - dt)) / (2 * dt)
-    np.testing.assert_allclose(traj.velocity(t), dp, atol=1e-5)
-    dv = (traj.velocity(t + dt) - traj.velocity(t - dt)) / (2 * dt)
-    np.testing.assert_allclose(traj.acceleration(t), dv, atol=1e-4)
-    R0, R1 = traj.rotation(t), traj.rotation(t + dt)
-    w_num = Rotation.from_matrix(np.einsum("nji,njk->nik", R0, R1)).as_rotvec() / dt
-    np.testing.assert_allclose(traj.angular_velocity_body(t + dt / 2), w_num, atol=1e-6)
     # the yaw offset's second derivative matches its first (smooth angular acceleration)
     psi, psi_d, psi_dd = traj._spin_yaw(t)
     num_dd = (traj._spin_yaw(t + dt)[1] - traj._spin_yaw(t - dt)[1]) / (2 * dt)
