@@ -48,6 +48,21 @@ class ModelError(InputError):
     """The SuperPoint model file is missing or does not have SuperPoint's inputs and outputs."""
 
 
+def check_detector_options(options) -> None:
+    """ValueError unless a network detector's shared options (detection_threshold, nms_radius,
+    border_px, max_keypoints, intra_op_threads) are in range; SuperPoint and XFeat use it."""
+    if not 0.0 < options.detection_threshold < 1.0:
+        raise ValueError(
+            f"detection_threshold must be in (0, 1), got {options.detection_threshold}"
+        )
+    if options.nms_radius < 0 or options.border_px < 0:
+        raise ValueError("nms_radius and border_px must be >= 0")
+    if options.max_keypoints is not None and options.max_keypoints < 1:
+        raise ValueError(f"max_keypoints must be >= 1 or None, got {options.max_keypoints}")
+    if options.intra_op_threads < 0:
+        raise ValueError(f"intra_op_threads must be >= 0, got {options.intra_op_threads}")
+
+
 @dataclass(frozen=True)
 class SuperPointOptions:
     """SuperPoint settings; the defaults are the paper's post-processing."""
@@ -65,16 +80,7 @@ class SuperPointOptions:
     batch_images: bool = False
 
     def check(self) -> None:
-        if not 0.0 < self.detection_threshold < 1.0:
-            raise ValueError(
-                f"detection_threshold must be in (0, 1), got {self.detection_threshold}"
-            )
-        if self.nms_radius < 0 or self.border_px < 0:
-            raise ValueError("nms_radius and border_px must be >= 0")
-        if self.max_keypoints is not None and self.max_keypoints < 1:
-            raise ValueError(f"max_keypoints must be >= 1 or None, got {self.max_keypoints}")
-        if self.intra_op_threads < 0:
-            raise ValueError(f"intra_op_threads must be >= 0, got {self.intra_op_threads}")
+        check_detector_options(self)
 
 
 def resolve_model_path(model_path: str | os.PathLike | None) -> Path:

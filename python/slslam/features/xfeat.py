@@ -45,7 +45,12 @@ import numpy as np
 from scipy.sparse import csr_matrix
 
 from slslam.features.keypoints import Keypoints, check_gray_image
-from slslam.features.superpoint import ModelError, heatmap_from_logits, open_session
+from slslam.features.superpoint import (
+    ModelError,
+    check_detector_options,
+    heatmap_from_logits,
+    open_session,
+)
 
 CELL = 8  # the coarse maps are 1/8 of the input [px]
 MULTIPLE = 32  # the network's input sides must be multiples of this [px]
@@ -76,16 +81,7 @@ class XFeatOptions:
     intra_op_threads: int = 0  # onnxruntime threads (0: its default, all cores)
 
     def check(self) -> None:
-        if not 0.0 < self.detection_threshold < 1.0:
-            raise ValueError(
-                f"detection_threshold must be in (0, 1), got {self.detection_threshold}"
-            )
-        if self.nms_radius < 0 or self.border_px < 0:
-            raise ValueError("nms_radius and border_px must be >= 0")
-        if self.max_keypoints is not None and self.max_keypoints < 1:
-            raise ValueError(f"max_keypoints must be >= 1 or None, got {self.max_keypoints}")
-        if self.intra_op_threads < 0:
-            raise ValueError(f"intra_op_threads must be >= 0, got {self.intra_op_threads}")
+        check_detector_options(self)
 
 
 def resolve_model_path(model_path: str | None) -> Path:
