@@ -133,11 +133,27 @@ def eval_command(
 
 @app.command("info")
 def info_command(
-    dataset: Annotated[Path, typer.Argument(help="EuRoC ASL folder (holding mav0/, or mav0).")],
+    dataset: Annotated[
+        Path,
+        typer.Argument(
+            help="EuRoC ASL folder (holding mav0/, or mav0), or a ROS bag (ROS1 .bag, ROS2 "
+            "folder, .db3 or .mcap)."
+        ),
+    ],
 ) -> None:
-    """Describe a dataset: frames, rate, rectified camera, baseline, ground truth."""
+    """Describe a dataset: frames, rate, rectified camera, baseline, ground truth; for a ROS bag
+    its topics with message types and counts (what `slslam run BAG --left/--right` take)."""
     from slslam.datasets import EurocSequence
+    from slslam.datasets.rosbag import bag_topics, is_rosbag
 
+    if is_rosbag(dataset):
+        table = Table(title=f"ROS bag {escape(str(dataset))}")
+        for column in ("topic", "type", "messages"):
+            table.add_column(column)
+        for topic in bag_topics(dataset):
+            table.add_row(escape(topic.topic), topic.msgtype, str(topic.count))
+        Console(width=120).print(table)
+        return
     seq = EurocSequence(dataset)
     cam = seq.camera
     duration = (seq.timestamps_ns[-1] - seq.timestamps_ns[0]) * 1e-9
@@ -291,10 +307,25 @@ def run_command(
         Path,
         typer.Argument(
             help="Sequence folder: EuRoC ASL (the folder holding mav0/, or mav0 itself), e.g. "
-            "what `slslam sim` writes."
+            "what `slslam sim` writes; or a ROS bag (ROS1 .bag, ROS2 folder / .db3 / .mcap) "
+            "with --left, --right and --calib."
         ),
     ],
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("slslam_run"),
+    left: Annotated[
+        str | None,
+        typer.Option(help="Bag: left camera topic (sensor_msgs/Image or CompressedImage)."),
+    ] = None,
+    right: Annotated[str | None, typer.Option(help="Bag: right camera topic.")] = None,
+    imu: Annotated[str | None, typer.Option(help="Bag: sensor_msgs/Imu topic (optional).")] = None,
+    calib: Annotated[
+        list[Path] | None,
+        typer.Option(
+            help="Bag: stereo calibration: a Kalibr camchain YAML (its rostopic entries serve "
+            "as --left/--right), or --calib cam0/sensor.yaml --calib cam1/sensor.yaml (EuRoC), "
+            "or an ASL folder holding them."
+        ),
+    ] = None,
     config: Annotated[
         Path | None,
         typer.Option(help="YAML config (keys as in configs/default.yaml); defaults otherwise."),
@@ -338,9 +369,10 @@ def run_command(
         )
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
+    sequence = _open_bag(dataset, left, right, imu, calib)
     try:
         summary = run_sequence(
-            dataset,
+            sequence if sequence is not None else dataset,
             out,
             cfg,
             max_frames=max_frames or None,
@@ -367,6 +399,29 @@ def run_command(
     elif "evaluation_error" in m:
         console.print(f"no ATE: {escape(m['evaluation_error'])}", highlight=False)
     console.print(f"results in {out}")
+
+
+def _open_bag(dataset: Path, left, right, imu, calib):
+    """A RosbagSequence when ``dataset`` is a ROS bag (topics and calibration checked), else
+    None (an ASL folder: bag options are refused)."""
+    from slslam.datasets.rosbag import RosbagSequence, is_rosbag, kalibr_topics
+
+    if not is_rosbag(dataset):
+        given = [f"--{n}" for n, v in (("left", left), ("right", right), ("imu", imu)) if v]
+        if given or calib:
+            raise InputError(dataset, f"{', '.join(given or ['--calib'])}: only for a ROS bag")
+        return None
+    if not calib:
+        raise InputError(dataset, "a ROS bag needs --calib (Kalibr camchain or EuRoC sensor.yaml)")
+    if len(calib) == 1 and (left is None or right is None):
+        default_left, default_right = kalibr_topics(calib[0])
+        left, right = left or default_left, right or default_right
+    if left is None or right is None:
+        raise InputError(
+            dataset,
+            "a ROS bag needs --left and --right image topics (`slslam info BAG` lists them)",
+        )
+    return RosbagSequence(dataset, left, right, calib, imu_topic=imu)
 
 
 models_app = typer.Typer(

@@ -197,6 +197,52 @@ def _check_files_exist(files: list[Path], csv_path: Path) -> None:
         )
 
 
+def stereo_rectifier(
+    left: CameraCalibration, right: CameraCalibration, where: str | Path
+) -> _core.StereoRectifier:
+    """The C++ rectifier of a radial-tangential stereo pair (maps built once); a rig that is not
+    a left-right stereo pair raises :class:`DatasetError` naming ``where`` or the right camera's
+    calibration file."""
+
+    def radtan(c: CameraCalibration) -> _core.RadTanCamera:
+        return _core.RadTanCamera(
+            _core.PinholeCamera(c.fx, c.fy, c.cx, c.cy, c.width, c.height), list(c.distortion)
+        )
+
+    T_left_right = invert_transform(left.T_body_cam) @ right.T_body_cam
+    t_right = T_left_right[:3, 3]  # cam1's centre in cam0's frame [m]
+    if np.linalg.norm(t_right) < MIN_BASELINE_M or t_right[0] <= 0:
+        raise DatasetError(
+            right.path,
+            f"'T_BS' puts cam1 at ({t_right[0]:.4g}, {t_right[1]:.4g}, {t_right[2]:.4g}) m "
+            "in cam0's frame: a stereo pair needs cam1 to the right of cam0 (x > 0) and a "
+            f"baseline of at least {MIN_BASELINE_M * 1000:g} mm (check both cameras' T_BS)",
+        )
+    try:
+        return _core.StereoRectifier(radtan(left), radtan(right), T_left_right)
+    except ValueError as exc:
+        raise DatasetError(where, f"cannot rectify the stereo pair: {exc}") from None
+
+
+def rectified_camera(
+    rectifier: _core.StereoRectifier, left: CameraCalibration
+) -> RectifiedStereoCamera:
+    """The rectified stereo camera the tracker sees, placed in the body frame."""
+    pinhole = rectifier.rectified_camera
+    T_cam0_rect = np.eye(4)
+    T_cam0_rect[:3, :3] = np.asarray(rectifier.R_rect_left).T
+    return RectifiedStereoCamera(
+        fx=pinhole.fx,
+        fy=pinhole.fy,
+        cx=pinhole.cx,
+        cy=pinhole.cy,
+        width=pinhole.width,
+        height=pinhole.height,
+        baseline_m=rectifier.baseline_m,
+        T_body_cam=left.T_body_cam @ T_cam0_rect,
+    )
+
+
 class EurocSequence:
     """A EuRoC ASL stereo sequence, read lazily in time order.
 
@@ -236,46 +282,12 @@ class EurocSequence:
         self._rectifier = self._build_rectifier()
 
     def _build_rectifier(self) -> _core.StereoRectifier:
-        def radtan(c: CameraCalibration) -> _core.RadTanCamera:
-            return _core.RadTanCamera(
-                _core.PinholeCamera(c.fx, c.fy, c.cx, c.cy, c.width, c.height), list(c.distortion)
-            )
-
-        T_left_right = (
-            invert_transform(self.left_calibration.T_body_cam) @ self.right_calibration.T_body_cam
-        )
-        t_right = T_left_right[:3, 3]  # cam1's centre in cam0's frame [m]
-        if np.linalg.norm(t_right) < MIN_BASELINE_M or t_right[0] <= 0:
-            raise DatasetError(
-                self.right_calibration.path,
-                f"'T_BS' puts cam1 at ({t_right[0]:.4g}, {t_right[1]:.4g}, {t_right[2]:.4g}) m "
-                "in cam0's frame: a stereo pair needs cam1 to the right of cam0 (x > 0) and a "
-                f"baseline of at least {MIN_BASELINE_M * 1000:g} mm (check both cameras' T_BS)",
-            )
-        try:
-            return _core.StereoRectifier(
-                radtan(self.left_calibration), radtan(self.right_calibration), T_left_right
-            )
-        except ValueError as exc:
-            raise DatasetError(self.root, f"cannot rectify the stereo pair: {exc}") from None
+        return stereo_rectifier(self.left_calibration, self.right_calibration, self.root)
 
     @property
     def camera(self) -> RectifiedStereoCamera:
         """The rectified stereo camera the tracker sees."""
-        r = self._rectifier
-        pinhole = r.rectified_camera
-        T_cam0_rect = np.eye(4)
-        T_cam0_rect[:3, :3] = np.asarray(r.R_rect_left).T
-        return RectifiedStereoCamera(
-            fx=pinhole.fx,
-            fy=pinhole.fy,
-            cx=pinhole.cx,
-            cy=pinhole.cy,
-            width=pinhole.width,
-            height=pinhole.height,
-            baseline_m=r.baseline_m,
-            T_body_cam=self.left_calibration.T_body_cam @ T_cam0_rect,
-        )
+        return rectified_camera(self._rectifier, self.left_calibration)
 
     @property
     def rectifier(self) -> _core.StereoRectifier:

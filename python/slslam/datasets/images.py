@@ -7,6 +7,10 @@ gray PNG is read here at full depth: when the first one of a sequence holds noth
 the sequence is taken as 12-bit data and scaled by 1/16 (said once in the log); otherwise by 1/256
 as OpenCV would. The choice is made once per reader so that every frame gets the same scale; a
 later frame above 4095 in a 12-bit sequence saturates, with one warning.
+
+Arrays (what ``cv2.imread`` or a ROS message gives) go through :meth:`GrayImageReader.convert`:
+uint8 gray as is, 3- and 4-channel uint8 in OpenCV's BGR / BGRA order to gray with OpenCV's
+weights (0.299 R + 0.587 G + 0.114 B), 16-bit gray by the rule above, 16-bit colour first to gray.
 """
 
 from __future__ import annotations
@@ -60,6 +64,31 @@ class GrayImageReader:
         if data.ndim != 2:
             raise ValueError(f"{path}: 16-bit PNG is not a single gray channel")
         return data.astype(np.uint16, copy=False)
+
+    def convert(self, image: np.ndarray, where: str | Path = "image") -> np.ndarray:
+        """``image`` as a C-contiguous uint8 H x W gray array (see the module docstring);
+        ValueError naming ``where`` for any other shape or type."""
+        if not isinstance(image, np.ndarray):
+            raise ValueError(f"{where}: expected a numpy array, got {type(image).__name__}")
+        if image.ndim == 3 and image.shape[2] == 1:
+            image = image[:, :, 0]
+        if image.ndim == 3:
+            if image.shape[2] not in (3, 4) or image.dtype not in (np.uint8, np.uint16):
+                raise ValueError(
+                    f"{where}: expected gray, BGR or BGRA of uint8 or uint16, got shape "
+                    f"{image.shape} {image.dtype}"
+                )
+            import cv2  # opencv-python-headless
+
+            code = cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
+            image = cv2.cvtColor(np.ascontiguousarray(image), code)
+        if image.ndim != 2:
+            raise ValueError(f"{where}: expected a H x W or H x W x C image, got {image.shape}")
+        if image.dtype == np.uint16:
+            return np.ascontiguousarray(self._from_16_bit(Path(str(where)), image))
+        if image.dtype != np.uint8:
+            raise ValueError(f"{where}: expected uint8 or uint16 pixels, got {image.dtype}")
+        return np.ascontiguousarray(image)
 
     def _from_16_bit(self, path: Path, data: np.ndarray) -> np.ndarray:
         peak = int(data.max()) if data.size else 0

@@ -44,6 +44,7 @@ from scipy.spatial.transform import Rotation
 
 from slslam.config import Config, check_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
+from slslam.datasets.rosbag import is_rosbag
 from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
@@ -170,6 +171,12 @@ def open_dataset(path: str | Path) -> EurocSequence:
         raise DatasetError(path, "dataset folder not found")
     if is_euroc(path):
         return EurocSequence(path)
+    if is_rosbag(path):
+        raise DatasetError(
+            path,
+            "a ROS bag: give its image topics and calibration (slslam run BAG --left "
+            "TOPIC --right TOPIC --calib YAML; `slslam info BAG` lists the topics)",
+        )
     raise DatasetError(
         path,
         "unknown dataset layout: slslam run reads EuRoC ASL folders (the folder holding mav0/, "
@@ -295,7 +302,7 @@ def _map_metrics(map_data: MapData) -> dict:
 
 @_with_signal_handling
 def run_sequence(
-    dataset: str | Path,
+    dataset: str | Path | EurocSequence,
     out_dir: str | Path,
     config: Config | None = None,
     max_frames: int | None = None,
@@ -306,7 +313,9 @@ def run_sequence(
     """Runs the tracker over a sequence and writes the outputs listed in the module docstring.
 
     Args:
-        dataset: the sequence folder (see :func:`open_dataset`).
+        dataset: the sequence folder (see :func:`open_dataset`), or an opened sequence: an
+            ``EurocSequence``, a ``slslam.datasets.rosbag.RosbagSequence`` or anything with
+            ``camera``, ``len``, ``sequence[i]`` -> ``StereoFrame`` and ``groundtruth_path``.
         out_dir: output folder, created when missing.
         config: configuration; defaults when None.
         max_frames: track only the first N frames.
@@ -317,7 +326,7 @@ def run_sequence(
     """
     config = config or Config()
     check_config(config)
-    sequence = open_dataset(dataset)
+    sequence = open_dataset(dataset) if isinstance(dataset, str | os.PathLike) else dataset
     gt = _groundtruth(sequence, groundtruth)  # a bad ground truth fails before any tracking
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
