@@ -149,6 +149,8 @@ class TrackingConfig:
 
     use_lines: bool = True  # line features in tracking and mapping
     sequential: bool = True  # local mapping inline: exactly reproducible; false: own thread
+    # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
+    pipeline: bool = True
     min_init_points: int = _option(50, "[3, 100000]")  # stereo points a frame needs to start a map
     # fewer inliers after motion-only BA: the frame is LOST
     min_inliers: int = _option(15, "[3, 100000]")

@@ -290,6 +290,13 @@ def _groundtruth(sequence: EurocSequence, groundtruth: str | Path | None):
     return None
 
 
+def _stereo_frames(sequence: EurocSequence, n: int) -> Iterator[tuple]:
+    """(left, right, timestamp [s]) of the first n frames, read as they are asked for."""
+    for i in range(n):
+        frame = sequence[i]
+        yield frame.left, frame.right, frame.t_ns * 1e-9
+
+
 def _map_metrics(map_data: MapData) -> dict:
     return {
         "keyframes": map_data.keyframes,
@@ -359,12 +366,14 @@ def run_sequence(
         ):
             writer = csv.writer(frames_file)
             writer.writerow(["index", "timestamp", "state", *COUNTS, *(f"{s}_ms" for s in STAGES)])
-            bar = progress_bar(range(n), desc="tracking", unit="frame", enabled=progress)
+            # The front end reads and prepares frame k+1 while the core tracks frame k
+            # (tracking.pipeline; Tracker.track_stream).
+            stream = tracker.track_stream(
+                _stereo_frames(sequence, n), pipeline=config.tracking.pipeline
+            )
+            bar = progress_bar(stream, desc="tracking", unit="frame", enabled=progress, total=n)
             try:
-                for i in bar:
-                    signals.raise_if_requested()  # SIGINT / SIGTERM: stop between frames
-                    frame = sequence[i]
-                    result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
+                for result in bar:
                     results.append(result)
                     pose_file = traj_file if result.state in TRACKED_STATES else lost_file
                     pose_file.write(_tum_line(result))
@@ -382,6 +391,7 @@ def run_sequence(
                     bar.set_postfix(
                         state=result.state, pts=result.counts["inlier_points"], refresh=False
                     )
+                    signals.raise_if_requested()  # SIGINT / SIGTERM: stop between frames
             except (Exception, KeyboardInterrupt) as exc:  # keep what was tracked
                 error = exc
                 log.error(
@@ -389,6 +399,8 @@ def run_sequence(
                     len(results),
                     exc,
                 )
+            finally:
+                stream.close()  # the front-end worker stops after the frame it is preparing
     # After the frame loop: the map, then the scores. An error or a signal in one of them skips
     # what is left; metrics.json is written in every case and says where the run stopped.
     stops: list[tuple[str, BaseException]] = [] if error is None else [("tracking", error)]

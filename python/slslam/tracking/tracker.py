@@ -9,6 +9,12 @@ with the GIL released.
             result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
         stamps, poses, states = tracker.trajectory()
         cloud = tracker.map()
+
+Frame pipeline (``Tracker.track_stream``): a worker thread reads frame k+1 and runs the point
+front end on it (onnxruntime and the C++ ORB release the GIL) while the C++ core tracks frame k.
+The hand-over holds one frame: the worker starts frame k+1 only once the core has taken frame k,
+so a result comes at most one frame later than from ``track`` in a loop, and the poses are the
+same (the front end has no state from frame to frame).
 """
 
 from __future__ import annotations
@@ -16,7 +22,10 @@ from __future__ import annotations
 import inspect
 import logging
 import math
+import queue
+import threading
 import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -60,6 +69,22 @@ class TrackResult:
     @property
     def tracked(self) -> bool:
         return self.state in TRACKED_STATES
+
+
+@dataclass
+class _Prepared:
+    """A checked frame with its keypoints, ready for the core."""
+
+    index: int
+    timestamp: float
+    left: np.ndarray
+    right: np.ndarray
+    left_keypoints: Keypoints
+    right_keypoints: Keypoints
+    inference_ms: float
+
+
+_END = object()  # the pipeline's worker has read every frame
 
 
 @dataclass
@@ -224,6 +249,88 @@ class Tracker:
         if self._closed:
             raise RuntimeError("the tracker is closed")
         index = len(self._results)
+        previous = self._results[-1].timestamp if self._results else None
+        return self._track_prepared(self._prepare(index, left, right, timestamp, previous))
+
+    def track_stream(
+        self, frames: Iterable[tuple[np.ndarray, np.ndarray, float]], pipeline: bool = True
+    ) -> Iterator[TrackResult]:
+        """Tracks (left, right, timestamp) triples in order, yielding each frame's result.
+
+        With ``pipeline`` the point front end of frame k+1 (and reading it from ``frames``)
+        runs on a worker thread while the core tracks frame k: one frame prepared ahead at most,
+        results in input order and equal to ``track`` in a loop. An error in frame k (bad input,
+        a failing reader) is raised after the results of the frames before it. Stopping the
+        iteration early (break, an exception, a signal) stops the worker after the frame it is
+        preparing.
+        """
+        if self._closed:
+            raise RuntimeError("the tracker is closed")
+        if not pipeline:
+            for left, right, timestamp in frames:
+                yield self.track(left, right, timestamp)
+            return
+        handoff: queue.Queue = queue.Queue()
+        slot = threading.Semaphore(1)  # frames prepared and not yet taken by the core: <= 1
+        stop = threading.Event()
+        worker = threading.Thread(
+            target=self._prepare_frames,
+            args=(frames, handoff, slot, stop),
+            name="slslam-frontend",
+            daemon=True,
+        )
+        worker.start()
+        try:
+            while True:
+                item = handoff.get()
+                slot.release()  # the worker may start the next frame now
+                if item is _END:
+                    return
+                if isinstance(item, BaseException):
+                    raise item
+                yield self._track_prepared(item)
+        finally:
+            stop.set()
+            slot.release()  # a worker waiting for the slot sees the stop
+            worker.join(timeout=60.0)
+
+    def _prepare_frames(
+        self,
+        frames: Iterable[tuple[np.ndarray, np.ndarray, float]],
+        handoff: queue.Queue,
+        slot: threading.Semaphore,
+        stop: threading.Event,
+    ) -> None:
+        """The pipeline's worker: reads and prepares frames one at a time, each after the core
+        has taken the one before; ends with _END or the exception that stopped it."""
+        index = len(self._results)
+        previous = self._results[-1].timestamp if self._results else None
+        try:
+            iterator = iter(frames)
+            while True:
+                slot.acquire()
+                if stop.is_set():
+                    return
+                try:
+                    left, right, timestamp = next(iterator)
+                except StopIteration:
+                    handoff.put(_END)
+                    return
+                handoff.put(self._prepare(index, left, right, timestamp, previous))
+                index, previous = index + 1, timestamp
+        except BaseException as exc:  # handed to the consumer, raised there in frame order
+            handoff.put(exc)
+
+    def _prepare(
+        self,
+        index: int,
+        left: np.ndarray,
+        right: np.ndarray,
+        timestamp: float,
+        previous: float | None,
+    ) -> _Prepared:
+        """Checks one frame and runs the point front end on both images (thread-safe: no state
+        of the tracker is written)."""
         where = f"frame {index}"
         try:
             left = check_gray_image(left)
@@ -239,19 +346,25 @@ class Tracker:
             )
         if not math.isfinite(timestamp):
             raise InputError(where, f"timestamp {timestamp} is not finite")
-        if self._results and timestamp <= self._results[-1].timestamp:
+        if previous is not None and timestamp <= previous:
             raise InputError(
-                where,
-                f"timestamp {timestamp} does not increase (previous {self._results[-1].timestamp})",
+                where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
-
         start = time.perf_counter()
         kl = self._detect(left)
         kr = self._detect(right)
         inference_ms = (time.perf_counter() - start) * 1e3
+        return _Prepared(index, float(timestamp), left, right, kl, kr, inference_ms)
+
+    def _track_prepared(self, frame: _Prepared) -> TrackResult:
+        """The core's part of one frame (GIL released inside): lines, stereo, tracking."""
+        index, where = frame.index, f"frame {frame.index}"
+        left, right, kl, kr = frame.left, frame.right, frame.left_keypoints, frame.right_keypoints
+        timestamp, inference_ms = frame.timestamp, frame.inference_ms
+        start = time.perf_counter()
         out = self._core.track(
             index,
-            float(timestamp),
+            timestamp,
             left,
             right,
             np.ascontiguousarray(kl.uv, dtype=np.float32).reshape(-1, 2),
@@ -274,7 +387,8 @@ class Tracker:
             "mapping": out["mapping_ms"],
             "relocalisation": out["relocalisation_ms"],
         }
-        timings["total"] = (time.perf_counter() - start) * 1e3
+        # The frame's own work: front end plus core (in the pipeline the two overlap other frames).
+        timings["total"] = inference_ms + (time.perf_counter() - start) * 1e3
         counts = {
             "keypoints": len(kl),
             "lines": out["lines"],
@@ -286,7 +400,7 @@ class Tracker:
             "map": out["map_index"],
             "weighted_inliers": round(float(out["weighted_inliers"]), 3),
         }
-        result = TrackResult(index, float(timestamp), out["state"], T_wc, timings, counts)
+        result = TrackResult(index, timestamp, out["state"], T_wc, timings, counts)
         self._results.append(result)
         return result
 

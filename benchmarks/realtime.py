@@ -1,0 +1,306 @@
+"""Real time on this machine: speed and accuracy of the tracker per front end, in one run.
+
+    python benchmarks/realtime.py [--configs orb,orb_lines,xfeat,xfeat_lines,superpoint_lines]
+        [--lights 1.0,0.15] [--frames 300] [--data-dir /tmp/slslam_realtime] [--out DIR]
+        [--set features.xfeat.detection_threshold=0.02 ...]
+
+Sequences: the simulated shaft-bottom loop (``slslam sim --preset loop``, 752 x 480 stereo at
+20 Hz, seed 0, no dust, no LiDAR) at each light level, simulated once into --data-dir and reused.
+The frames are decoded into memory before timing (a camera driver hands images over in memory).
+
+Per configuration and light level, two passes over the same frames with the same tracker
+settings (local mapping inline, so both passes give the same poses; the script checks it):
+
+* sequential (``Tracker.track`` in a loop): per-frame latency, median and 95th percentile, from
+  handing the pair over to having the pose; per-stage medians (the tracker's ``timings_ms``,
+  the columns of frames.csv);
+* pipelined (``Tracker.track_stream``, the default of ``slslam run``): throughput (frames / wall
+  time), per-frame latency from the moment the worker takes the pair to the pose, and CPU use
+  (process CPU time / wall time: 2.0 is both cores busy).
+
+Accuracy: ATE RMSE of the frames with an estimated pose (evo, SE3 alignment) against the
+simulator's ground truth, the tracked ratio and the keyframes. Learned configurations are
+compared with SuperPoint + lines at the same light level when that ran (ATE ratio).
+
+The machine is shared: the 1-minute load average (os.getloadavg) is recorded before and after
+every pass; read speeds as ratios between configurations of one run.
+
+SuperPoint runs when its weights are found ($SLSLAM_SUPERPOINT_MODEL or
+../shared/models/superpoint_v1/superpoint_v1.onnx next to the repository), and is skipped with a
+note otherwise. Writes realtime.json and realtime.md into --out (default benchmarks/results).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from slslam.config import Config, config_from_dict
+from slslam.datasets import EurocSequence
+from slslam.eval.report import evaluate
+from slslam.features.superpoint import ENV_MODEL
+from slslam.sim import SimOptions, Simulator
+from slslam.tracking import Tracker
+from slslam.tracking.run import tracked_trajectory
+
+from common import RESULTS_DIR, write_results
+
+SHARED_SUPERPOINT = (
+    Path(__file__).resolve().parents[1].parent
+    / "shared"
+    / "models"
+    / "superpoint_v1"
+    / "superpoint_v1.onnx"
+)
+CONFIGS = {  # name: (label, point front end, lines)
+    "orb": ("ORB points", "orb", False),
+    "orb_lines": ("ORB + lines", "orb", True),
+    "xfeat": ("XFeat points", "xfeat", False),
+    "xfeat_lines": ("XFeat + lines", "xfeat", True),
+    "superpoint_lines": ("SuperPoint + lines", "superpoint", True),
+}
+STAGES = (
+    "inference",
+    "line_extraction",
+    "stereo_matching",
+    "matching",
+    "optimisation",
+    "mapping",
+    "total",
+)
+
+
+def superpoint_model() -> str | None:
+    env = os.environ.get(ENV_MODEL)
+    if env and Path(env).is_file():
+        return env
+    return str(SHARED_SUPERPOINT) if SHARED_SUPERPOINT.is_file() else None
+
+
+def simulate(light: float, frames: int, data_dir: Path) -> Path:
+    out = data_dir / f"loop_l{round(light * 100):03d}"
+    if (out / "mav0").is_dir() and len(EurocSequence(out)) >= frames:
+        return out
+    print(f"simulating the loop at light {light} ({frames} frames) into {out}", flush=True)
+    Simulator(SimOptions(preset="loop", light=light, frames=frames, lidar=False)).write(
+        out, progress=False
+    )
+    return out
+
+
+def parse_overrides(items: list[str]) -> dict:
+    """``a.b.c=value`` pairs as a nested dict (values parsed as YAML scalars)."""
+    import yaml
+
+    tree: dict = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SystemExit(f"--set {item!r}: expected KEY=VALUE, e.g. tracking.use_lines=false")
+        node = tree
+        *parents, leaf = key.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = yaml.safe_load(value)
+    return tree
+
+
+def config_for(name: str, overrides: dict, model: str | None) -> Config:
+    _, frontend, lines = CONFIGS[name]
+    base = config_from_dict(overrides) if overrides else Config()
+    superpoint = dataclasses.replace(base.features.superpoint, model_path=model)
+    features = dataclasses.replace(base.features, point_frontend=frontend, superpoint=superpoint)
+    tracking = dataclasses.replace(base.tracking, use_lines=lines, sequential=True)
+    return dataclasses.replace(base, features=features, tracking=tracking)
+
+
+def percentiles(values: list[float]) -> dict[str, float]:
+    a = np.asarray(values)
+    return {"median": float(np.median(a)), "p95": float(np.percentile(a, 95))}
+
+
+def sequential_pass(sequence: EurocSequence, frames: list, config: Config) -> dict:
+    load_before = os.getloadavg()[0]
+    latency, stages = [], {s: [] for s in STAGES}
+    with Tracker(sequence.camera, config) as tracker:
+        for left, right, t in frames:
+            start = time.perf_counter()
+            result = tracker.track(left, right, t)
+            latency.append((time.perf_counter() - start) * 1e3)
+            for s in STAGES:
+                stages[s].append(result.timings_ms[s])
+        frontend = tracker.frontend_name
+        providers = getattr(tracker.frontend, "providers", None)
+    return {
+        "frontend": frontend,
+        "providers": providers,
+        "latency_ms": percentiles(latency),
+        "stage_median_ms": {s: float(np.median(v)) for s, v in stages.items()},
+        "load_before": load_before,
+        "load_after": os.getloadavg()[0],
+        "poses": tracker.trajectory()[1],
+    }
+
+
+def pipelined_pass(sequence: EurocSequence, frames: list, config: Config, gt) -> dict:
+    load_before = os.getloadavg()[0]
+    taken: list[float] = []
+
+    def feed():
+        for frame in frames:
+            taken.append(time.perf_counter())
+            yield frame
+
+    latency = []
+    with Tracker(sequence.camera, config) as tracker:
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        for result in tracker.track_stream(feed(), pipeline=True):
+            latency.append((time.perf_counter() - taken[result.index]) * 1e3)
+        wall = time.perf_counter() - wall0
+        cpu = time.process_time() - cpu0
+        results = tracker.results
+        map_data = tracker.map()
+    estimate = tracked_trajectory(results)
+    ate = None
+    if estimate is not None:
+        evaluation = evaluate(estimate, gt, align="se3", rpe_delta=None, plot=False)
+        ate = float(evaluation.summary()["ape"]["rmse"])
+    tracked = sum(r.tracked for r in results) / len(results)
+    return {
+        "throughput_fps": len(frames) / wall,
+        "wall_s": wall,
+        "latency_ms": percentiles(latency),
+        "cpu_cores": cpu / wall,
+        "ate_rmse_m": ate,
+        "tracked_ratio": tracked,
+        "keyframes": map_data.keyframes,
+        "maps": map_data.maps,
+        "load_before": load_before,
+        "load_after": os.getloadavg()[0],
+        "poses": np.array([r.T_wc for r in results]),
+    }
+
+
+def run_one(name: str, light: float, data: Path, n: int, overrides: dict, model) -> dict:
+    sequence = EurocSequence(data)
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in (sequence[i] for i in range(n))]
+    gt = sequence.groundtruth(frame="rectified")
+    config = config_for(name, overrides, model)
+    seq = sequential_pass(sequence, frames, config)
+    pipe = pipelined_pass(sequence, frames, config, gt)
+    same = bool(np.array_equal(seq.pop("poses"), pipe.pop("poses")))
+    return {
+        "label": CONFIGS[name][0],
+        "light": light,
+        "frames": n,
+        "sequential": seq,
+        "pipelined": pipe,
+        "same_poses": same,
+    }
+
+
+def fmt(x, spec: str) -> str:
+    return "-" if x is None else format(x, spec)
+
+
+def table(runs: list[dict]) -> str:
+    head = (
+        "| configuration | light | tracked | ATE [m] | vs SuperPoint + lines | latency median / p95 "
+        "[ms] | pipelined [frames/s] | pipelined latency median / p95 [ms] | CPU [cores] "
+        "| inference | lines | stereo | matching | optimisation | mapping | load 1 min |"
+    )
+    lines = [head, "|---|---:" + "|---:" * 14 + "|"]
+    reference = {
+        r["light"]: r["pipelined"]["ate_rmse_m"]
+        for r in runs
+        if r["label"] == CONFIGS["superpoint_lines"][0]
+    }
+    for r in runs:
+        s, p = r["sequential"], r["pipelined"]
+        st = s["stage_median_ms"]
+        ref = reference.get(r["light"])
+        ratio = p["ate_rmse_m"] / ref if ref and p["ate_rmse_m"] is not None else None
+        lines.append(
+            f"| {r['label']} | {r['light']} | {p['tracked_ratio']:.3f} "
+            f"| {fmt(p['ate_rmse_m'], '.4f')} | {fmt(ratio, '.2f')} "
+            f"| {s['latency_ms']['median']:.1f} / {s['latency_ms']['p95']:.1f} "
+            f"| {p['throughput_fps']:.1f} "
+            f"| {p['latency_ms']['median']:.1f} / {p['latency_ms']['p95']:.1f} "
+            f"| {p['cpu_cores']:.2f} "
+            + " ".join(f"| {st[k]:.1f}" for k in STAGES[:-1])
+            + f" | {s['load_before']:.1f}-{p['load_after']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--configs", default=",".join(CONFIGS))
+    parser.add_argument("--lights", default="1.0,0.15")
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--data-dir", type=Path, default=Path("/tmp/slslam_realtime"))
+    parser.add_argument("--out", type=Path, default=RESULTS_DIR)
+    parser.add_argument("--name", default="realtime", help="result file stem")
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="config override"
+    )
+    args = parser.parse_args(argv)
+    configs = [c for c in args.configs.split(",") if c]
+    unknown = sorted(set(configs) - set(CONFIGS))
+    if unknown:
+        parser.error(f"unknown configuration {unknown[0]!r} (known: {', '.join(CONFIGS)})")
+    if args.frames < 10:
+        parser.error("--frames must be >= 10")
+    lights = [float(x) for x in args.lights.split(",") if x]
+    overrides = parse_overrides(args.set)
+    model = superpoint_model()
+    notes = []
+    if "superpoint_lines" in configs and model is None:
+        configs.remove("superpoint_lines")
+        notes.append(f"SuperPoint + lines skipped: no weights ({ENV_MODEL} or {SHARED_SUPERPOINT})")
+        print(notes[-1])
+    runs = []
+    for light in lights:
+        data = simulate(light, args.frames, args.data_dir)
+        for name in configs:
+            start = time.perf_counter()
+            r = run_one(name, light, data, args.frames, overrides, model)
+            runs.append(r)
+            p, s = r["pipelined"], r["sequential"]
+            print(
+                f"{r['label']:20s} light {light:4.2f}: ATE {fmt(p['ate_rmse_m'], '.4f')} m, "
+                f"tracked {p['tracked_ratio']:.3f}, latency {s['latency_ms']['median']:.1f} ms "
+                f"median, pipelined {p['throughput_fps']:.1f} frames/s, CPU {p['cpu_cores']:.2f}, "
+                f"same poses {r['same_poses']} [{time.perf_counter() - start:.0f} s]",
+                flush=True,
+            )
+    text = table(runs)
+    if notes:
+        text += "\n\n" + "\n".join(notes)
+    print(text)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / f"{args.name}.md").write_text(text + "\n")
+    path = write_results(
+        args.name,
+        {
+            "frames": args.frames,
+            "lights": lights,
+            "overrides": overrides,
+            "cpu_count": os.cpu_count(),
+            "runs": runs,
+            "notes": notes,
+        },
+        args.out / f"{args.name}.json",
+    )
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

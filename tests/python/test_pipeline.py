@@ -1,0 +1,96 @@
+"""The tracker's frame pipeline (``Tracker.track_stream``): the front end of frame k+1 on a worker
+thread while the core tracks frame k gives the same poses as ``track`` in a loop, prepares at
+most one frame ahead, and reports a bad frame after the results of the frames before it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from slslam.config import Config
+from slslam.datasets import EurocSequence
+from slslam.errors import InputError
+from slslam.sim import SimOptions, Simulator
+from slslam.tracking import Tracker
+
+FRAMES = 24
+
+
+@pytest.fixture(scope="module")
+def sequence(tmp_path_factory) -> EurocSequence:
+    out = tmp_path_factory.mktemp("sim") / "loop"
+    Simulator(SimOptions(preset="loop", frames=FRAMES, lidar=False)).write(out, progress=False)
+    return EurocSequence(out)
+
+
+def orb_lines() -> Config:
+    base = Config()
+    features = dataclasses.replace(base.features, point_frontend="orb")
+    return dataclasses.replace(base, features=features)
+
+
+def frames_of(sequence: EurocSequence, pulled: list[int] | None = None):
+    for i in range(len(sequence)):
+        if pulled is not None:
+            pulled.append(i)
+        f = sequence[i]
+        yield f.left, f.right, f.t_ns * 1e-9
+
+
+def test_pipelined_stream_gives_the_poses_of_a_plain_loop(sequence):
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        for left, right, t in frames_of(sequence):
+            tracker.track(left, right, t)
+        _, loop_poses, loop_states = tracker.trajectory()
+    pulled: list[int] = []
+    ahead = []
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        for result in tracker.track_stream(frames_of(sequence, pulled), pipeline=True):
+            ahead.append(len(pulled) - 1 - result.index)  # frames read beyond this result
+        _, poses, states = tracker.trajectory()
+        indices = [r.index for r in tracker.results]
+    assert indices == list(range(FRAMES))
+    assert states == loop_states and "OK" in states
+    assert np.array_equal(poses, loop_poses)
+    # One frame ahead at most (two would mean the worker ran past its slot); the worker did run
+    # ahead at some point, or nothing overlapped.
+    assert max(ahead) == 1
+
+
+def test_a_bad_frame_is_raised_after_the_frames_before_it(sequence):
+    def frames():
+        for k, (left, right, t) in enumerate(frames_of(sequence)):
+            yield left, right, (t if k != 5 else 0.0)  # frame 5 goes back in time
+
+    seen = []
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        with pytest.raises(InputError, match=r"frame 5.*does not increase"):
+            for result in tracker.track_stream(frames()):
+                seen.append(result.index)
+    assert seen == [0, 1, 2, 3, 4]
+
+
+def test_a_failing_reader_is_raised_and_stopping_early_stops_the_worker(sequence):
+    def frames():
+        yield from list(frames_of(sequence))[:3]
+        raise OSError("camera unplugged")
+
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        with pytest.raises(OSError, match="camera unplugged"):
+            list(tracker.track_stream(frames()))
+        assert len(tracker.results) == 3
+    pulled: list[int] = []
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        stream = tracker.track_stream(frames_of(sequence, pulled))
+        next(stream)
+        stream.close()
+        assert len(tracker.results) == 1 and len(pulled) <= 2
+
+
+def test_bad_images_name_the_frame(sequence):
+    f = sequence[0]
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        with pytest.raises(InputError, match="frame 0"):
+            list(tracker.track_stream([(f.left[:-2], f.right, 0.0)]))
