@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "slslam/core/byte_io.h"
 #include "slslam/core/check.h"
 #include "slslam/place/descriptor_space.h"
 #include "slslam/place/vocabulary.h"
@@ -39,84 +40,6 @@ constexpr size_t kHeaderBytes = 32;
 constexpr size_t kChecksumBytes = 8;
 constexpr uint32_t kMaxCols = 1 << 16;  // far beyond any descriptor; guards the size arithmetic
 
-uint64_t Fnv1a64(const uint8_t* data, size_t size) {
-  uint64_t hash = 0xcbf29ce484222325ull;  // FNV offset basis
-  for (size_t i = 0; i < size; ++i) {
-    hash ^= data[i];
-    hash *= 0x100000001b3ull;  // FNV prime
-  }
-  return hash;
-}
-
-// Appends fixed-width little-endian values to a byte buffer, whatever the host's byte order.
-class Writer {
- public:
-  void Bytes(const void* data, size_t size) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    buffer_.insert(buffer_.end(), p, p + size);
-  }
-  void U32(uint32_t v) {
-    for (int i = 0; i < 4; ++i) buffer_.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  }
-  void U64(uint64_t v) {
-    for (int i = 0; i < 8; ++i) buffer_.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  }
-  void I32(int32_t v) { U32(static_cast<uint32_t>(v)); }
-  void F32(float v) {
-    uint32_t bits;
-    std::memcpy(&bits, &v, 4);
-    U32(bits);
-  }
-  void F64(double v) {
-    uint64_t bits;
-    std::memcpy(&bits, &v, 8);
-    U64(bits);
-  }
-  std::vector<uint8_t>& buffer() { return buffer_; }
-
- private:
-  std::vector<uint8_t> buffer_;
-};
-
-// Reads little-endian values from a buffer whose length was checked beforehand.
-class Reader {
- public:
-  explicit Reader(const uint8_t* data) : p_(data) {}
-  uint32_t U32() {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(p_[i]) << (8 * i);
-    p_ += 4;
-    return v;
-  }
-  uint64_t U64() {
-    uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= static_cast<uint64_t>(p_[i]) << (8 * i);
-    p_ += 8;
-    return v;
-  }
-  int32_t I32() { return static_cast<int32_t>(U32()); }
-  float F32() {
-    const uint32_t bits = U32();
-    float v;
-    std::memcpy(&v, &bits, 4);
-    return v;
-  }
-  double F64() {
-    const uint64_t bits = U64();
-    double v;
-    std::memcpy(&v, &bits, 8);
-    return v;
-  }
-  const uint8_t* Skip(size_t n) {
-    const uint8_t* at = p_;
-    p_ += n;
-    return at;
-  }
-
- private:
-  const uint8_t* p_;
-};
-
 }  // namespace
 
 class VocabularyFile {
@@ -131,7 +54,7 @@ class VocabularyFile {
 void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
   SLSLAM_CHECK(!v.empty(), path, ": cannot save an empty vocabulary");
   const bool binary = v.descriptor_type_ == CV_8U;
-  Writer out;
+  ByteWriter out;
   out.Bytes(kMagic, sizeof(kMagic));
   out.U32(kFormatVersion);
   out.U32(binary ? kKindBinary : kKindFloat);
@@ -191,18 +114,18 @@ Vocabulary VocabularyFile::Read(const std::string& path) {
     fail(Message("truncated: ", data.size(), " bytes, shorter than the ",
                  kHeaderBytes + kChecksumBytes, "-byte header and checksum"));
   }
-  Reader in(data.data() + sizeof(kMagic));
-  const uint32_t version = in.U32();
+  ByteReader in(data.data() + sizeof(kMagic), kHeaderBytes - sizeof(kMagic), path);
+  const uint32_t version = in.U32("format version");
   if (version > kFormatVersion) {
     fail(Message("format version ", version, " is newer than this slslam reads (", kFormatVersion,
                  "); upgrade slslam"));
   }
   if (version == 0) fail("format version 0 is not a valid version");
-  const uint32_t kind = in.U32();
-  const uint32_t cols = in.U32();
-  const uint32_t branching = in.U32();
-  const uint32_t levels = in.U32();
-  const uint32_t nodes = in.U32();
+  const uint32_t kind = in.U32("header");
+  const uint32_t cols = in.U32("header");
+  const uint32_t branching = in.U32("header");
+  const uint32_t levels = in.U32("header");
+  const uint32_t nodes = in.U32("header");
   if (kind != kKindBinary && kind != kKindFloat) {
     fail(Message("unknown descriptor kind ", kind, " (1 binary, 2 float)"));
   }
@@ -220,7 +143,7 @@ Vocabulary VocabularyFile::Read(const std::string& path) {
                  data.size() < expected ? " (truncated)" : " (trailing data)"));
   }
   const size_t payload = data.size() - kChecksumBytes;
-  const uint64_t stored = Reader(data.data() + payload).U64();
+  const uint64_t stored = ByteReader(data.data() + payload, kChecksumBytes, path).U64("checksum");
   const uint64_t computed = Fnv1a64(data.data(), payload);
   if (stored != computed) {
     fail(Message("checksum mismatch (stored ", std::hex, stored, ", computed ", computed,
@@ -241,18 +164,20 @@ Vocabulary VocabularyFile::Read(const std::string& path) {
   } else {
     v.float_.resize(static_cast<size_t>(nodes) * cols);
   }
-  Reader body(data.data() + kHeaderBytes);
+  ByteReader body(data.data() + kHeaderBytes, payload - kHeaderBytes, path);
   for (uint32_t n = 0; n < nodes; ++n) {
-    v.parent_[n] = body.I32();
-    v.word_of_node_[n] = body.I32();
-    v.weight_[n] = body.F64();
+    v.parent_[n] = body.I32("node");
+    v.word_of_node_[n] = body.I32("node");
+    v.weight_[n] = body.F64("node");
     if (kind == kKindBinary) {
-      const cv::Mat row(1, v.cols_, CV_8U, const_cast<uint8_t*>(body.Skip(cols)));
+      const cv::Mat row(1, v.cols_, CV_8U,
+                        const_cast<uint8_t*>(body.Take(cols, "node descriptor")));
       place_detail::PackBinaryRow(
           row, 0, v.words_per_descriptor_,
           v.binary_.data() + static_cast<size_t>(n) * v.words_per_descriptor_);
     } else {
-      for (uint32_t i = 0; i < cols; ++i) v.float_[static_cast<size_t>(n) * cols + i] = body.F32();
+      for (uint32_t i = 0; i < cols; ++i)
+        v.float_[static_cast<size_t>(n) * cols + i] = body.F32("node descriptor");
     }
   }
   CheckTree(v, path);
