@@ -26,6 +26,7 @@ import queue
 import threading
 import time
 from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -221,6 +222,7 @@ class Tracker:
             self.config.tracking.line_detection_scale,
         )
         self._results: list[TrackResult] = []
+        self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
         self._closed = False
 
     # -- per frame -----------------------------------------------------------------------------
@@ -351,8 +353,10 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
+        # The right image on a helper thread meanwhile (ORB and onnxruntime release the GIL).
+        right_keypoints = self._right_side.submit(self._detect, right)
         kl = self._detect(left)
-        kr = self._detect(right)
+        kr = right_keypoints.result()
         inference_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(index, float(timestamp), left, right, kl, kr, inference_ms)
 
@@ -445,6 +449,7 @@ class Tracker:
     def close(self) -> None:
         """Finishes local mapping. The results and the map stay readable."""
         if not self._closed:
+            self._right_side.shutdown()
             self._core.flush()
             self._closed = True
 
