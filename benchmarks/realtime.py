@@ -183,7 +183,7 @@ def pipelined_pass(sequence: EurocSequence, frames: list, config: Config, gt) ->
         "maps": map_data.maps,
         "load_before": load_before,
         "load_after": os.getloadavg()[0],
-        "poses": np.array([r.T_wc for r in results]),
+        "poses": np.array([r.T_world_cam for r in results]),
     }
 
 

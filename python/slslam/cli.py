@@ -347,6 +347,21 @@ def run_command(
         bool, typer.Option("--no-lines", help="Points only (overrides the config).")
     ] = False,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+    viewer: Annotated[
+        bool,
+        typer.Option(
+            "--viewer",
+            help="Watch the run live: spawns the rerun viewer (images with keypoints and "
+            "lines, map, trajectory, keyframes, ground truth, stage timings).",
+        ),
+    ] = False,
+    rerun: Annotated[
+        Path | None,
+        typer.Option(
+            "--rerun",
+            help="Record the same view into FILE.rrd for later (`rerun FILE.rrd` opens it).",
+        ),
+    ] = None,
 ) -> None:
     """Stereo point-line SLAM over a sequence.
 
@@ -370,6 +385,16 @@ def run_command(
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
     sequence = _open_bag(dataset, left, right, imu, calib)
+    shown = None
+    if viewer or rerun is not None:
+        from slslam.tracking.run import open_dataset
+        from slslam.viz.rerun_log import RerunLogger
+
+        sequence = sequence if sequence is not None else open_dataset(dataset)
+        try:
+            shown = RerunLogger(sequence.camera, recording=rerun, spawn=viewer)
+        except ValueError as exc:
+            raise InputError(rerun, str(exc)) from None
     try:
         summary = run_sequence(
             sequence if sequence is not None else dataset,
@@ -378,6 +403,7 @@ def run_command(
             max_frames=max_frames or None,
             progress=progress,
             groundtruth=groundtruth,
+            viewer=shown,
         )
     except RunInterrupted as stop:
         Console(stderr=True).print(
@@ -387,6 +413,9 @@ def run_command(
             soft_wrap=True,
         )
         raise typer.Exit(128 + stop.signum) from None
+    finally:
+        if shown is not None:
+            shown.close()
     m = summary.metrics
     console = Console()
     console.print(
@@ -398,6 +427,8 @@ def run_command(
         console.print(f"ATE RMSE (SE3, tracked frames): {m['ape']['rmse']:.4f} m")
     elif "evaluation_error" in m:
         console.print(f"no ATE: {escape(m['evaluation_error'])}", highlight=False)
+    if rerun is not None:
+        console.print(f"rerun recording in {rerun} (open with `rerun {rerun}`)")
     console.print(f"results in {out}")
 
 

@@ -12,7 +12,6 @@ import pytest
 
 from slslam.config import Config
 from slslam.datasets import EurocSequence
-from slslam.features.orb import Orb
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import Tracker
 from slslam.tracking.run import tracked_trajectory
@@ -49,16 +48,13 @@ def test_recording_holds_the_run(sim_sequence, tmp_path):
         base, features=dataclasses.replace(base.features, point_frontend="orb")
     )
     rrd = tmp_path / "run.rrd"
-    orb = Orb()
     with Tracker(seq.camera, config) as tracker, RerunLogger(seq.camera, rrd) as viewer:
         results = []
         for frame in seq:
             result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
             results.append(result)
-            keypoints = getattr(result, "keypoints_uv", None)
-            if keypoints is None:
-                keypoints = orb.detect(frame.left).uv
-            viewer.log_frame(result, frame.left, keypoints)
+            assert np.array_equal(tracker.last_image, frame.left)
+            viewer.log_frame(result, tracker.last_image, tracker.last_keypoints_uv)
             if viewer.wants_map(result.index):
                 viewer.log_map(tracker.map())
         map_data = tracker.map()
@@ -84,7 +80,7 @@ def test_recording_holds_the_run(sim_sequence, tmp_path):
     # The ground truth, moved into the map frame, lies on the estimated path (simulated: exact
     # images, so within a few centimetres).
     gt = np.array(batches["/world/groundtruth"].column("LineStrips3D:strips")[0].as_py()[0])
-    est = np.array([r.T_wc[:3, 3] for r in results if r.state == "OK"])
+    est = np.array([r.T_world_cam[:3, 3] for r in results if r.state == "OK"])
     assert len(gt) >= tracked - 1
     assert np.median(np.linalg.norm(gt[:, None, :] - est[None, :, :], axis=2).min(axis=1)) < 0.05
     # Per-stage timings are the tracker's numbers.
@@ -100,3 +96,27 @@ def test_bad_arguments(tmp_path):
         RerunLogger(camera, tmp_path / "run.txt")
     with pytest.raises(ValueError, match="jpeg_quality"):
         RerunLogger(camera, tmp_path / "run.rrd", jpeg_quality=101)
+
+
+def test_cli_records_a_run(sim_sequence, tmp_path):
+    """`slslam run SEQ --rerun FILE.rrd`: the recording holds every frame, the map and the ground
+    truth, next to the usual outputs."""
+    from typer.testing import CliRunner
+
+    from slslam.cli import app
+
+    config = tmp_path / "orb.yaml"
+    config.write_text("features:\n  point_frontend: orb\n")
+    rrd = tmp_path / "view" / "run.rrd"
+    done = CliRunner().invoke(app, ["run", str(sim_sequence), "--out", str(tmp_path / "out"),
+                                    "--config", str(config), "--max-frames", "12",
+                                    "--rerun", str(rrd), "--no-progress"])  # fmt: skip
+    assert done.exit_code == 0, done.output
+    assert "rerun recording in" in done.output
+    rows, _ = read_rrd(rrd)
+    assert rows["/world/camera"] == 12 and rows["/world/camera/image/keypoints"] == 12
+    assert rows["/world/map/points"] >= 1 and rows["static:/world/groundtruth"] == 1
+    assert (tmp_path / "out" / "trajectory.tum").is_file()
+    bad = CliRunner().invoke(app, ["run", str(sim_sequence), "--out", str(tmp_path / "o2"),
+                                   "--rerun", str(tmp_path / "run.txt")])  # fmt: skip
+    assert bad.exit_code != 0 and "ends in .rrd" in str(bad.exception)

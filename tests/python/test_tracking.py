@@ -138,7 +138,7 @@ def test_black_frames_are_states_not_exceptions(sim_loop):
             dark = i == 0 or 12 <= i < 15
             left, right = (black, black) if dark else (f.left, f.right)
             result = tracker.track(left, right, f.t_ns * 1e-9)
-            assert np.all(np.isfinite(result.T_wc))
+            assert np.all(np.isfinite(result.T_world_cam))
             states.append(result.state)
         assert tracker.map().maps == 1
     assert states[0] == "NOT_INITIALIZED"
@@ -198,7 +198,7 @@ def test_relocalises_by_bag_of_words_after_a_blackout_and_a_jump_back(sim_loop):
             r = tracker.track(left, right, 100.0 + 0.05 * k)
             if k < 80:
                 assert r.tracked
-                first_pass[i] = r.T_wc
+                first_pass[i] = r.T_world_cam
             elif i is not None:
                 replay.append((i, r))
         maps = tracker.map()
@@ -206,7 +206,7 @@ def test_relocalises_by_bag_of_words_after_a_blackout_and_a_jump_back(sim_loop):
     assert all(r.tracked for _, r in replay)
     assert maps.maps == 1 and maps.stats["relocalisations"] == 1
     # Measured: 6 mm median, 2 cm max on a 600-frame loop; a pose in a wrong place is metres off.
-    errors = [np.linalg.norm(r.T_wc[:3, 3] - first_pass[i][:3, 3]) for i, r in replay]
+    errors = [np.linalg.norm(r.T_world_cam[:3, 3] - first_pass[i][:3, 3]) for i, r in replay]
     assert np.median(errors) < 0.03 and max(errors) < 0.1
 
 

@@ -185,8 +185,8 @@ def open_dataset(path: str | Path) -> EurocSequence:
 
 
 def _tum_line(result: TrackResult) -> str:
-    q = Rotation.from_matrix(result.T_wc[:3, :3]).as_quat()  # x y z w
-    t = result.T_wc[:3, 3]
+    q = Rotation.from_matrix(result.T_world_cam[:3, :3]).as_quat()  # x y z w
+    t = result.T_world_cam[:3, 3]
     return (
         f"{result.timestamp:.9f} {t[0]:.9f} {t[1]:.9f} {t[2]:.9f} "
         f"{q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n"
@@ -235,7 +235,8 @@ def tracked_trajectory(results: list[TrackResult]) -> PoseTrajectory3D | None:
     if len(tracked) < 2:
         return None
     return PoseTrajectory3D(
-        poses_se3=[r.T_wc for r in tracked], timestamps=np.array([r.timestamp for r in tracked])
+        poses_se3=[r.T_world_cam for r in tracked],
+        timestamps=np.array([r.timestamp for r in tracked]),
     )
 
 
@@ -316,6 +317,7 @@ def run_sequence(
     progress: bool = True,
     frontend=None,
     groundtruth: str | Path | None = None,
+    viewer=None,
 ) -> RunSummary:
     """Runs the tracker over a sequence and writes the outputs listed in the module docstring.
 
@@ -330,6 +332,9 @@ def run_sequence(
         frontend: a point front end to use instead of the configured one.
         groundtruth: a ground-truth trajectory file (TUM, EuRoC csv or KITTI, left camera frame)
             used instead of the sequence's own, e.g. for an excerpt that ships none.
+        viewer: a :class:`slslam.viz.rerun_log.RerunLogger` shown every frame, the map every
+            ``map_every_frames`` frames and the ground truth at the end; a viewer that fails
+            is dropped with one warning, the run goes on.
     """
     config = config or Config()
     check_config(config)
@@ -388,6 +393,7 @@ def run_sequence(
                         ]
                     )
                     frames_file.flush()
+                    viewer = _show(viewer, _show_frame, tracker, result)
                     bar.set_postfix(
                         state=result.state, pts=result.counts["inlier_points"], refresh=False
                     )
@@ -446,10 +452,37 @@ def run_sequence(
         metrics["error"] = _one_line(first)
         if len(stops) > 1:  # a second signal (or error) while finishing
             metrics["finishing_stopped_in"] = stops[1][0]
+    viewer = _show(viewer, _show_end, map_data, estimate, gt, metrics)
     write_json(out / "metrics.json", metrics)
     if stops:
         raise stops[-1][1] if isinstance(stops[-1][1], KeyboardInterrupt) else stops[0][1]
     return RunSummary(out, metrics, results)
+
+
+def _show(viewer, show: Callable, *args):
+    """``show(viewer, *args)``; the viewer, or None once it failed (logged once)."""
+    if viewer is None:
+        return None
+    try:
+        show(viewer, *args)
+    except Exception as exc:  # a viewer never stops a run
+        log.warning("viewer stopped: %s", _one_line(exc))
+        return None
+    return viewer
+
+
+def _show_frame(viewer, tracker: Tracker, result: TrackResult) -> None:
+    viewer.log_frame(result, tracker.last_image, tracker.last_keypoints_uv)
+    if viewer.wants_map(result.index):
+        viewer.log_map(tracker.map())
+
+
+def _show_end(viewer, map_data: MapData | None, estimate, gt, metrics: dict) -> None:
+    if map_data is not None:
+        viewer.log_map(map_data)
+    if estimate is not None and gt is not None:
+        viewer.log_groundtruth(estimate, gt)
+    viewer.log_metrics(metrics)
 
 
 def _loss_metrics(results: list[TrackResult]) -> dict:

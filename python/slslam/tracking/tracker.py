@@ -25,6 +25,7 @@ import math
 import queue
 import threading
 import time
+import warnings
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -35,6 +36,7 @@ import numpy as np
 from slslam import _core
 from slslam.config import Config, make_point_frontend
 from slslam.datasets.euroc import RectifiedStereoCamera
+from slslam.datasets.images import GrayImageReader
 from slslam.errors import InputError, SlslamError
 from slslam.features.keypoints import Keypoints, check_gray_image
 
@@ -54,7 +56,8 @@ class TrackResult:
 
     Attributes:
         state: one of ``STATES``.
-        T_wc: 4x4 pose of the left camera in the world (map) frame.
+        T_world_cam: 4x4 pose of the left camera in the world (map) frame (``T_wc`` is a
+            deprecated alias, kept for one release).
         timings_ms: per stage: inference, grid, line_extraction, stereo_matching, matching,
             optimisation, mapping, total.
         counts: matched / inlier points and lines, keypoints, lines, keyframe (0/1).
@@ -63,13 +66,21 @@ class TrackResult:
     index: int
     timestamp: float
     state: str
-    T_wc: np.ndarray
+    T_world_cam: np.ndarray
     timings_ms: dict[str, float] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=dict)
 
     @property
     def tracked(self) -> bool:
         return self.state in TRACKED_STATES
+
+    @property
+    def T_wc(self) -> np.ndarray:
+        """Deprecated alias of :attr:`T_world_cam` (removed in the release after 0.1)."""
+        warnings.warn(
+            "TrackResult.T_wc is deprecated: use T_world_cam", DeprecationWarning, stacklevel=2
+        )
+        return self.T_world_cam
 
 
 @dataclass
@@ -224,6 +235,10 @@ class Tracker:
         self._results: list[TrackResult] = []
         self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
         self._closed = False
+        self._to_gray = GrayImageReader()  # 16-bit scale chosen on the first 16-bit frame
+        #: The rectified left image and its keypoints (N, 2) of the latest result (viewers).
+        self.last_image: np.ndarray | None = None
+        self.last_keypoints_uv: np.ndarray | None = None
 
     # -- per frame -----------------------------------------------------------------------------
     def _detect(self, image: np.ndarray) -> Keypoints:
@@ -243,10 +258,16 @@ class Tracker:
         return keypoints.select(np.asarray(keep))
 
     def track(self, left: np.ndarray, right: np.ndarray, timestamp: float) -> TrackResult:
-        """Tracks one rectified stereo pair (uint8 H x W each) taken at ``timestamp`` seconds.
+        """Tracks one rectified stereo pair taken at ``timestamp`` seconds.
 
-        Bad input (wrong size or type, non-finite or decreasing time) raises ``InputError``;
-        a frame that cannot be tracked (black, blurred, textureless) returns state LOST.
+        Images as ``cv2.imread`` gives them: uint8 gray (H x W) as they are; uint8 BGR / BGRA
+        (H x W x 3 / 4) to gray with OpenCV's weights (0.299 R + 0.587 G + 0.114 B); 16-bit gray
+        (``cv2.IMREAD_UNCHANGED``) to 8 bits by 1/256, or by 1/16 when the first 16-bit frame
+        holds nothing above 4095 (12-bit data), the same scale for the whole run
+        (:class:`~slslam.datasets.images.GrayImageReader`). Bad input (another type or shape,
+        a size other than the calibration's, non-finite or decreasing time) raises
+        ``InputError``; a frame that cannot be tracked (black, blurred, textureless) returns
+        state LOST.
         """
         if self._closed:
             raise RuntimeError("the tracker is closed")
@@ -335,8 +356,8 @@ class Tracker:
         of the tracker is written)."""
         where = f"frame {index}"
         try:
-            left = check_gray_image(left)
-            right = check_gray_image(right)
+            left = check_gray_image(self._to_gray.convert(left, "left image"))
+            right = check_gray_image(self._to_gray.convert(right, "right image"))
         except ValueError as exc:
             raise InputError(where, str(exc)) from exc
         expected = (self.camera.height, self.camera.width)
@@ -405,6 +426,7 @@ class Tracker:
             "weighted_inliers": round(float(out["weighted_inliers"]), 3),
         }
         result = TrackResult(index, timestamp, out["state"], T_wc, timings, counts)
+        self.last_image, self.last_keypoints_uv = left, kl.uv
         self._results.append(result)
         return result
 
@@ -418,7 +440,7 @@ class Tracker:
         """(timestamps (N,), poses T_wc (N, 4, 4), states) for every frame so far; the poses of
         frames whose state is not in ``TRACKED_STATES`` are predictions, not estimates."""
         stamps = np.array([r.timestamp for r in self._results])
-        poses = np.array([r.T_wc for r in self._results]).reshape(-1, 4, 4)
+        poses = np.array([r.T_world_cam for r in self._results]).reshape(-1, 4, 4)
         return stamps, poses, [r.state for r in self._results]
 
     def map(self) -> MapData:

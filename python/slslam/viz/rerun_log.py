@@ -133,9 +133,7 @@ class RerunLogger:
         rr = self._rr
         self._set_time(result.index, result.timestamp)
         colour = STATE_COLOURS.get(result.state, (255, 255, 255))
-        T = np.asarray(
-            getattr(result, "T_world_cam", None) if hasattr(result, "T_world_cam") else result.T_wc
-        )
+        T = np.asarray(result.T_world_cam)
         self.rec.log("world/camera", rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]))
         self.rec.log("state", rr.TextLog(result.state, color=colour))
         if result.state in TRACKED:
@@ -154,8 +152,6 @@ class RerunLogger:
             )
             if self.lines:
                 self._log_lines(image, colour)
-        if keypoints_uv is None:
-            keypoints_uv = getattr(result, "keypoints_uv", None)
         if keypoints_uv is not None:
             self.rec.log(
                 "world/camera/image/keypoints",
