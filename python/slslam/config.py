@@ -99,6 +99,7 @@ FOREIGN_RANGES: dict[type, dict[str, Range]] = {
         "border_px": Range.parse("[0, 1000]"),
         "max_keypoints": Range.parse("[1, 100000]"),
         "intra_op_threads": Range.parse("[0, 1024]"),
+        "denoise_above_noise": Range.parse("[0, 255]"),
     },
 }
 #: Where an option declares no range: finite, and an integer must fit a C++ int.

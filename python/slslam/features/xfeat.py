@@ -70,7 +70,8 @@ SHIPPED_MODEL = Path(__file__).resolve().parent.parent / "data" / "xfeat" / "xfe
 
 @dataclass(frozen=True)
 class XFeatOptions:
-    """XFeat settings; the defaults are the reference detectAndCompute's post-processing."""
+    """XFeat settings; the defaults are the reference detectAndCompute's post-processing, and the
+    smoothing of noisy frames that the reference does not do."""
 
     model_path: str | None = None  # ONNX file; None: the one shipped with slslam
     detection_threshold: float = 0.05  # heatmap value a keypoint must exceed [-]
@@ -79,9 +80,17 @@ class XFeatOptions:
     max_keypoints: int | None = 4096  # keep the strongest N (None: all)
     providers: str | tuple[str, ...] = "auto"  # onnxruntime providers; auto: CUDA if present
     intra_op_threads: int = 0  # onnxruntime threads (0: its default, all cores)
+    # Dark frames are noisy (gain): above this estimated noise (Immerkaer's estimator, as ORB's
+    # denoise_above_noise) the network sees a Gaussian-smoothed image, sigma = noise / 7 px
+    # [gray levels]; 0: never smooth
+    denoise_above_noise: float = 6.0
 
     def check(self) -> None:
         check_detector_options(self)
+        if not 0.0 <= self.denoise_above_noise <= 255.0:
+            raise ValueError(
+                f"denoise_above_noise must be in [0, 255], got {self.denoise_above_noise}"
+            )
 
 
 def resolve_model_path(model_path: str | None) -> Path:
@@ -118,6 +127,39 @@ def validate_session(session, path: Path) -> None:
             raise ModelError(
                 path, f"output '{name}' must be [1, {channels}, H/8, W/8], got {shape}"
             )
+
+
+#: Immerkaer's noise kernel (the difference of two Laplacians; flat on smooth image content).
+_NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], dtype=np.float32)
+#: Smoothing sigma per gray level of estimated noise [px] and its bounds, as ORB's detection image
+#: (orb_extractor.cpp: noise / 7 clamped to [0.5, 2.5] px).
+_SIGMA_PER_NOISE = 1.0 / 7.0
+_SIGMA_BOUNDS_PX = (0.5, 2.5)
+
+
+def estimate_noise(image: np.ndarray) -> float:
+    """Standard deviation of white noise in an 8-bit gray image [gray levels] (Immerkaer 1996)."""
+    import cv2
+
+    h, w = image.shape
+    if h < 3 or w < 3:
+        return 0.0
+    response = cv2.filter2D(image.astype(np.float32), -1, _NOISE_KERNEL)[1:-1, 1:-1]
+    return float(np.sqrt(np.pi / 2.0) * np.abs(response).sum() / (6.0 * (w - 2) * (h - 2)))
+
+
+def denoise(image: np.ndarray, above_noise: float) -> np.ndarray:
+    """The image smoothed by a Gaussian of sigma noise / 7 when its noise exceeds
+    ``above_noise`` (> 0), else the image itself."""
+    if above_noise <= 0.0:
+        return image
+    noise = estimate_noise(image)
+    if noise <= above_noise:
+        return image
+    import cv2
+
+    sigma = float(np.clip(noise * _SIGMA_PER_NOISE, *_SIGMA_BOUNDS_PX))
+    return cv2.GaussianBlur(image, (0, 0), sigma, borderType=cv2.BORDER_REFLECT_101)
 
 
 def pad_to_multiple(image: np.ndarray) -> np.ndarray:
@@ -209,8 +251,8 @@ class XFeat:
         """Keypoints of one uint8 gray image; ``threshold`` overrides the options' detection
         threshold (the tracker's low-texture fallback detects at a lower one)."""
         image = check_gray_image(image)
-        net = self.infer(image)
         o = self.options
+        net = self.infer(denoise(image, o.denoise_above_noise))
         threshold = o.detection_threshold if threshold is None else threshold
         hc, wc = net["keypoint_logits"].shape[1:]
         input_hw = (hc * CELL, wc * CELL)
