@@ -1,0 +1,1550 @@
+"""
+slslam C++ core (camera geometry, rectification, features)
+"""
+from __future__ import annotations
+import collections.abc
+import numpy
+import numpy.typing
+import typing
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'KeyframeDatabase', 'LineMatchOptions', 'LinePreprocessOptions', 'LocalMapperOptions', 'MatchOptions', 'Material', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_stereo_lines', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+class PinholeCamera:
+    """
+    Ideal pinhole intrinsics in pixels.
+    """
+    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 3]"]:
+        ...
+    @typing.overload
+    def __init__(self) -> None:
+        ...
+    @typing.overload
+    def __init__(self, fx: typing.SupportsFloat | typing.SupportsIndex, fy: typing.SupportsFloat | typing.SupportsIndex, cx: typing.SupportsFloat | typing.SupportsIndex, cy: typing.SupportsFloat | typing.SupportsIndex, width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def check(self) -> None:
+        ...
+    def project(self, point_in_cam: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[2, 1]"]:
+        ...
+    @property
+    def cx(self) -> float:
+        ...
+    @cx.setter
+    def cx(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def cy(self) -> float:
+        ...
+    @cy.setter
+    def cy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fx(self) -> float:
+        ...
+    @fx.setter
+    def fx(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fy(self) -> float:
+        ...
+    @fy.setter
+    def fy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def height(self) -> int:
+        ...
+    @height.setter
+    def height(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def width(self) -> int:
+        ...
+    @width.setter
+    def width(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class RadTanCamera:
+    """
+    Pinhole with radial-tangential distortion.
+    """
+    def __init__(self, pinhole: PinholeCamera, distortion: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(4)"]) -> None:
+        ...
+    @property
+    def distortion(self) -> typing.Annotated[list[float], "FixedSize(4)"]:
+        ...
+    @property
+    def pinhole(self) -> PinholeCamera:
+        ...
+class StereoRectifier:
+    """
+    Undistorts and rectifies a calibrated stereo pair (OpenCV).
+    """
+    def __init__(self, left: RadTanCamera, right: RadTanCamera, T_left_right: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
+        ...
+    def rectify(self, left: numpy.ndarray, right: numpy.ndarray) -> tuple[numpy.ndarray, numpy.ndarray]:
+        """
+        Rectify a (left, right) pair of uint8 images; returns the rectified pair.
+        """
+    @property
+    def R_rect_left(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 3]"]:
+        ...
+    @property
+    def R_rectright_right(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 3]"]:
+        ...
+    @property
+    def baseline_m(self) -> float:
+        ...
+    @property
+    def rectified_camera(self) -> PinholeCamera:
+        ...
+class OrbOptions:
+    """
+    ORB extractor options (per-cell adaptive FAST, OpenCV descriptors).
+    """
+    adaptive: bool
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def cell_size_px(self) -> int:
+        ...
+    @cell_size_px.setter
+    def cell_size_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def denoise_above_noise(self) -> float:
+        ...
+    @denoise_above_noise.setter
+    def denoise_above_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def edge_threshold(self) -> int:
+        ...
+    @edge_threshold.setter
+    def edge_threshold(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fast_threshold(self) -> int:
+        ...
+    @fast_threshold.setter
+    def fast_threshold(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_features(self) -> int:
+        ...
+    @max_features.setter
+    def max_features(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_fast_threshold(self) -> int:
+        ...
+    @min_fast_threshold.setter
+    def min_fast_threshold(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def num_levels(self) -> int:
+        ...
+    @num_levels.setter
+    def num_levels(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def scale_factor(self) -> float:
+        ...
+    @scale_factor.setter
+    def scale_factor(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class MatchOptions:
+    """
+    Brute-force matcher options.
+    """
+    mutual: bool
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def max_distance(self) -> float:
+        ...
+    @max_distance.setter
+    def max_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ratio(self) -> float:
+        ...
+    @ratio.setter
+    def ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class GridLimitOptions:
+    """
+    Per-cell keypoint limit (SPEC A2).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def cell_size_px(self) -> int:
+        """
+        cell side P [px]
+        """
+    @cell_size_px.setter
+    def cell_size_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_per_cell(self) -> int:
+        """
+        keypoints kept per cell
+        """
+    @max_per_cell.setter
+    def max_per_cell(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def strong_score(self) -> float:
+        """
+        cells with a keypoint at this score keep only such keypoints; -inf: off
+        """
+    @strong_score.setter
+    def strong_score(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class DynamicCellOptions:
+    """
+    Invalid-cell filter (SPEC A2).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def alpha(self) -> float:
+        """
+        weight of the current frame
+        """
+    @alpha.setter
+    def alpha(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def cell_size_px(self) -> int:
+        """
+        cell side [px]
+        """
+    @cell_size_px.setter
+    def cell_size_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sigma_px(self) -> float:
+        """
+        Gaussian width of G(d) [px]
+        """
+    @sigma_px.setter
+    def sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def threshold(self) -> float:
+        """
+        l: invalid below this
+        """
+    @threshold.setter
+    def threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class DynamicCellFilter:
+    """
+    Per-cell motion-consistency weights; drops moving objects.
+    """
+    def __init__(self, width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, options: DynamicCellOptions = ...) -> None:
+        ...
+    def keypoint_mask(self, uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"]) -> list[bool]:
+        ...
+    def reset(self) -> None:
+        ...
+    def update(self, observed: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], predicted: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"]) -> list[bool]:
+        """
+        Update from matched positions and their motion-predicted positions (M x 2 each); returns the validity of every cell (row-major).
+        """
+    @property
+    def cells_x(self) -> int:
+        ...
+    @property
+    def cells_y(self) -> int:
+        ...
+    @property
+    def valid(self) -> list[bool]:
+        ...
+    @property
+    def weights(self) -> list[float]:
+        ...
+class GuidedMatchOptions:
+    """
+    Window-guided descriptor matching.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def max_distance(self) -> float:
+        """
+        descriptor distance
+        """
+    @max_distance.setter
+    def max_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def radius_px(self) -> float:
+        """
+        search radius [px]
+        """
+    @radius_px.setter
+    def radius_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ratio(self) -> float:
+        """
+        ratio test in the window
+        """
+    @ratio.setter
+    def ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class Material:
+    """
+    Surface material ids of the simulator's shading kernel.
+    
+    Members:
+    
+      ROCK
+    
+      COAL
+    
+      SHOTCRETE
+    
+      STEEL
+    
+      ROOF_MESH
+    
+      FLOOR
+    
+      PIPE
+    
+      CABLE
+    
+      WORKER
+    
+      CART
+    
+      NONE
+    """
+    CABLE: typing.ClassVar[Material]
+    CART: typing.ClassVar[Material]
+    COAL: typing.ClassVar[Material]
+    FLOOR: typing.ClassVar[Material]
+    NONE: typing.ClassVar[Material]
+    PIPE: typing.ClassVar[Material]
+    ROCK: typing.ClassVar[Material]
+    ROOF_MESH: typing.ClassVar[Material]
+    SHOTCRETE: typing.ClassVar[Material]
+    STEEL: typing.ClassVar[Material]
+    WORKER: typing.ClassVar[Material]
+    __members__: typing.ClassVar[dict[str, Material]]
+    @typing.overload
+    def __eq__(self, other: Material) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: Material) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class ShadingCamera:
+    """
+    Pinhole intrinsics [px] and optical centre [m] for shading.
+    """
+    @typing.overload
+    def __init__(self) -> None:
+        ...
+    @typing.overload
+    def __init__(self, fx: typing.SupportsFloat | typing.SupportsIndex, fy: typing.SupportsFloat | typing.SupportsIndex, cx: typing.SupportsFloat | typing.SupportsIndex, cy: typing.SupportsFloat | typing.SupportsIndex, position: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"] = [0.0, 0.0, 0.0]) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def cx(self) -> float:
+        ...
+    @cx.setter
+    def cx(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def cy(self) -> float:
+        ...
+    @cy.setter
+    def cy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fx(self) -> float:
+        ...
+    @fx.setter
+    def fx(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fy(self) -> float:
+        ...
+    @fy.setter
+    def fy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def position(self) -> typing.Annotated[list[float], "FixedSize(3)"]:
+        """
+        optical centre in world [m]
+        """
+    @position.setter
+    def position(self, arg1: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"]) -> None:
+        ...
+class HeadLamp:
+    """
+    Spot light: E = power * cos / d^2 inside half_angle_rad, falling smoothly to zero at falloff_ratio * half_angle_rad.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def direction(self) -> typing.Annotated[list[float], "FixedSize(3)"]:
+        """
+        unit forward axis in world
+        """
+    @direction.setter
+    def direction(self, arg1: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"]) -> None:
+        ...
+    @property
+    def falloff_ratio(self) -> float:
+        """
+        zero at this x half-angle
+        """
+    @falloff_ratio.setter
+    def falloff_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def half_angle_rad(self) -> float:
+        """
+        fully lit half-angle [rad]
+        """
+    @half_angle_rad.setter
+    def half_angle_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def position(self) -> typing.Annotated[list[float], "FixedSize(3)"]:
+        """
+        in world [m]
+        """
+    @position.setter
+    def position(self, arg1: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"]) -> None:
+        ...
+    @property
+    def power(self) -> float:
+        """
+        intensity [irradiance units * m^2]
+        """
+    @power.setter
+    def power(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class SensorModel:
+    """
+    s = radiance * cos^4 * exposure (full-well fraction); DN = gain * 255 * s + shot/read noise; out = 255 * (DN / 255)^gamma.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def exposure(self) -> float:
+        """
+        radiance -> full-well fraction
+        """
+    @exposure.setter
+    def exposure(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def full_well_electrons(self) -> float:
+        """
+        [e-]
+        """
+    @full_well_electrons.setter
+    def full_well_electrons(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gain(self) -> float:
+        """
+        analog gain [-]
+        """
+    @gain.setter
+    def gain(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gamma(self) -> float:
+        """
+        encoding exponent (1/2.2; 1 = linear)
+        """
+    @gamma.setter
+    def gamma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def noise(self) -> bool:
+        """
+        shot + read noise on/off
+        """
+    @noise.setter
+    def noise(self, arg0: bool) -> None:
+        ...
+    @property
+    def read_noise_dn(self) -> float:
+        """
+        read noise sigma [DN]
+        """
+    @read_noise_dn.setter
+    def read_noise_dn(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        noise seed
+        """
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def vignetting(self) -> bool:
+        """
+        cos^4 falloff on/off
+        """
+    @vignetting.setter
+    def vignetting(self, arg0: bool) -> None:
+        ...
+class RayCaster:
+    """
+    A static triangle mesh prepared for ray casting (Embree, BVH built once).
+    """
+    def __init__(self, vertices: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 3]"], triangles: typing.Annotated[numpy.typing.ArrayLike, numpy.uint32, "[m, 3]"], material: typing.Annotated[numpy.typing.ArrayLike, numpy.uint8]) -> None:
+        """
+        vertices float (V, 3) [m], triangles uint32 (F, 3), material uint8 (F,) ids.
+        """
+    def cast(self, origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"], directions: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 3]"], dynamic: RayCaster = None) -> dict:
+        """
+        Cast rays from one origin along unit directions (N, 3). Returns a dict of numpy arrays: t (N,) [m] (inf: miss), normal (N, 3), point (N, 3), material (N,) uint8.
+        """
+    def cast_pinhole(self, R_world_cam: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 3]"], origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"], fx: typing.SupportsFloat | typing.SupportsIndex, fy: typing.SupportsFloat | typing.SupportsIndex, cx: typing.SupportsFloat | typing.SupportsIndex, cy: typing.SupportsFloat | typing.SupportsIndex, width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, dynamic: RayCaster = None) -> dict:
+        """
+        One ray per pixel of a pinhole camera. Returns t, depth (H, W) [m], normal, point (H, W, 3) and material (H, W) uint8; pixel (u, v) looks along R_world_cam * normalize((u - cx) / fx, (v - cy) / fy, 1).
+        """
+    @property
+    def num_triangles(self) -> int:
+        ...
+class LinePreprocessOptions:
+    """
+    Line preprocessing (SPEC A3).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def length_ratio(self) -> float:
+        """
+        zeta
+        """
+    @length_ratio.setter
+    def length_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_gap_px(self) -> float:
+        """
+        gap limit [px]
+        """
+    @max_gap_px.setter
+    def max_gap_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def theta_min_rad(self) -> float:
+        """
+        angle unit [rad]
+        """
+    @theta_min_rad.setter
+    def theta_min_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def xi_d_px(self) -> float:
+        """
+        merge/delete distance [px]
+        """
+    @xi_d_px.setter
+    def xi_d_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class AssociationOptions:
+    """
+    Point-line association (SPEC A4).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def cell_size_px(self) -> int:
+        ...
+    @cell_size_px.setter
+    def cell_size_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def layers(self) -> int:
+        ...
+    @layers.setter
+    def layers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance_px(self) -> float:
+        ...
+    @max_distance_px.setter
+    def max_distance_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class LineMatchOptions:
+    """
+    Point-driven line matching.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def max_angle_rad(self) -> float:
+        ...
+    @max_angle_rad.setter
+    def max_angle_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_lbd_distance(self) -> float:
+        ...
+    @max_lbd_distance.setter
+    def max_lbd_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_votes(self) -> int:
+        ...
+    @min_votes.setter
+    def min_votes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class StereoLineOptions:
+    """
+    Stereo line matching.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def max_angle_rad(self) -> float:
+        ...
+    @max_angle_rad.setter
+    def max_angle_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_lbd_distance(self) -> float:
+        ...
+    @max_lbd_distance.setter
+    def max_lbd_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_angle_from_horizontal_rad(self) -> float:
+        ...
+    @min_angle_from_horizontal_rad.setter
+    def min_angle_from_horizontal_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_disparity_px(self) -> float:
+        ...
+    @min_disparity_px.setter
+    def min_disparity_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_row_overlap(self) -> float:
+        ...
+    @min_row_overlap.setter
+    def min_row_overlap(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class StereoRig:
+    """
+    Rectified stereo pair: left intrinsics and baseline.
+    """
+    camera: PinholeCamera
+    @typing.overload
+    def __init__(self) -> None:
+        ...
+    @typing.overload
+    def __init__(self, camera: PinholeCamera, baseline_m: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def baseline_m(self) -> float:
+        ...
+    @baseline_m.setter
+    def baseline_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class PoseOptimizerOptions:
+    """
+    Motion-only bundle adjustment.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def iterations_per_round(self) -> int:
+        ...
+    @iterations_per_round.setter
+    def iterations_per_round(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_angle_weight(self) -> float:
+        ...
+    @line_angle_weight.setter
+    def line_angle_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_weight(self) -> float:
+        ...
+    @line_weight.setter
+    def line_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def rounds(self) -> int:
+        ...
+    @rounds.setter
+    def rounds(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class BundleAdjustmentOptions:
+    """
+    Local bundle adjustment.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def line_angle_weight(self) -> float:
+        ...
+    @line_angle_weight.setter
+    def line_angle_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_weight(self) -> float:
+        ...
+    @line_weight.setter
+    def line_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def refine_iterations(self) -> int:
+        ...
+    @refine_iterations.setter
+    def refine_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def robust_iterations(self) -> int:
+        ...
+    @robust_iterations.setter
+    def robust_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class LocalMapperOptions:
+    """
+    Local mapping.
+    """
+    ba: BundleAdjustmentOptions
+    cull_keyframes: bool
+    triangulate: bool
+    def __init__(self) -> None:
+        ...
+    @property
+    def local_keyframes(self) -> int:
+        ...
+    @local_keyframes.setter
+    def local_keyframes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_fixed_keyframes(self) -> int:
+        ...
+    @max_fixed_keyframes.setter
+    def max_fixed_keyframes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def redundant_ratio(self) -> float:
+        ...
+    @redundant_ratio.setter
+    def redundant_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class StereoMatchOptions:
+    """
+    Stereo keypoint matching.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def max_depth_baselines(self) -> float:
+        ...
+    @max_depth_baselines.setter
+    def max_depth_baselines(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_disparity_px(self) -> float:
+        ...
+    @max_disparity_px.setter
+    def max_disparity_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance_binary(self) -> float:
+        ...
+    @max_distance_binary.setter
+    def max_distance_binary(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance_float(self) -> float:
+        ...
+    @max_distance_float.setter
+    def max_distance_float(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_row_offset_px(self) -> float:
+        ...
+    @max_row_offset_px.setter
+    def max_row_offset_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ratio(self) -> float:
+        ...
+    @ratio.setter
+    def ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def subpixel_search(self) -> int:
+        ...
+    @subpixel_search.setter
+    def subpixel_search(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def subpixel_window(self) -> int:
+        ...
+    @subpixel_window.setter
+    def subpixel_window(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class RelocalisationOptions:
+    """
+    Relocalisation by bag of words, PnP RANSAC and the local map.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def candidates(self) -> int:
+        ...
+    @candidates.setter
+    def candidates(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def match_ratio(self) -> float:
+        ...
+    @match_ratio.setter
+    def match_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_inliers(self) -> float:
+        ...
+    @min_inliers.setter
+    def min_inliers(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_matches(self) -> int:
+        ...
+    @min_matches.setter
+    def min_matches(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_pnp_inliers(self) -> int:
+        ...
+    @min_pnp_inliers.setter
+    def min_pnp_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ransac_error_px(self) -> float:
+        ...
+    @ransac_error_px.setter
+    def ransac_error_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ransac_iterations(self) -> int:
+        ...
+    @ransac_iterations.setter
+    def ransac_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def vocabulary_levels_up(self) -> int:
+        ...
+    @vocabulary_levels_up.setter
+    def vocabulary_levels_up(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class TrackerOptions:
+    """
+    Tracking, mapping and front-end thresholds.
+    """
+    mapping: LocalMapperOptions
+    pose: PoseOptimizerOptions
+    relocalisation: RelocalisationOptions
+    rig: StereoRig
+    sequential: bool
+    stereo: StereoMatchOptions
+    use_lines: bool
+    vocabulary_path: str
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def close_depth_baselines(self) -> float:
+        ...
+    @close_depth_baselines.setter
+    def close_depth_baselines(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def keyframe_max_frames(self) -> int:
+        ...
+    @keyframe_max_frames.setter
+    def keyframe_max_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def keyframe_min_frames(self) -> int:
+        ...
+    @keyframe_min_frames.setter
+    def keyframe_min_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def keyframe_min_inliers(self) -> int:
+        ...
+    @keyframe_min_inliers.setter
+    def keyframe_min_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def keyframe_track_ratio(self) -> float:
+        ...
+    @keyframe_track_ratio.setter
+    def keyframe_track_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_inlier_weight(self) -> float:
+        ...
+    @line_inlier_weight.setter
+    def line_inlier_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_max_angle_rad(self) -> float:
+        ...
+    @line_max_angle_rad.setter
+    def line_max_angle_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_max_lbd(self) -> float:
+        ...
+    @line_max_lbd.setter
+    def line_max_lbd(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_search_px(self) -> float:
+        ...
+    @line_search_px.setter
+    def line_search_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_sigma_px(self) -> float:
+        ...
+    @line_sigma_px.setter
+    def line_sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lost_search_scale(self) -> float:
+        ...
+    @lost_search_scale.setter
+    def lost_search_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lost_velocity_decay(self) -> float:
+        ...
+    @lost_velocity_decay.setter
+    def lost_velocity_decay(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def match_ratio(self) -> float:
+        ...
+    @match_ratio.setter
+    def match_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance_binary(self) -> float:
+        ...
+    @max_distance_binary.setter
+    def max_distance_binary(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance_float(self) -> float:
+        ...
+    @max_distance_float.setter
+    def max_distance_float(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_init_points(self) -> int:
+        ...
+    @min_init_points.setter
+    def min_init_points(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_inliers(self) -> int:
+        ...
+    @min_inliers.setter
+    def min_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def point_sigma_px(self) -> float:
+        ...
+    @point_sigma_px.setter
+    def point_sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def recently_lost_frames(self) -> int:
+        ...
+    @recently_lost_frames.setter
+    def recently_lost_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def search_radius_px(self) -> float:
+        ...
+    @search_radius_px.setter
+    def search_radius_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def weak_keyframe_frames(self) -> int:
+        ...
+    @weak_keyframe_frames.setter
+    def weak_keyframe_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def weak_keyframe_inliers(self) -> int:
+        ...
+    @weak_keyframe_inliers.setter
+    def weak_keyframe_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class TrackerCore:
+    """
+    Stereo point-line tracker with local mapping (use slslam.Tracker).
+    """
+    def __init__(self, options: TrackerOptions, line_preprocess: LinePreprocessOptions, line_detection_scale: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> None:
+        ...
+    def flush(self) -> None:
+        ...
+    def map(self) -> dict:
+        """
+        Waits for local mapping, returns points and lines.
+        """
+    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray) -> dict:
+        """
+        Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).
+        """
+class VocabularyOptions:
+    """
+    Hierarchical k-means options.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def branching(self) -> int:
+        """
+        k of the k-means tree [-]
+        """
+    @branching.setter
+    def branching(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def kmeans_iterations(self) -> int:
+        """
+        Lloyd iterations per node [-]
+        """
+    @kmeans_iterations.setter
+    def kmeans_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def levels(self) -> int:
+        """
+        depth L of the tree [-]
+        """
+    @levels.setter
+    def levels(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        k-means++ seed [-]
+        """
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class Vocabulary:
+    """
+    Bag-of-words vocabulary (hierarchical k-means, TF-IDF, L1 score).
+    """
+    @staticmethod
+    def load(path: str) -> Vocabulary:
+        """
+        Read a .slvoc file; ValueError naming the path when it is not a valid one.
+        """
+    @staticmethod
+    def score(a: collections.abc.Mapping[typing.SupportsInt | typing.SupportsIndex, typing.SupportsFloat | typing.SupportsIndex], b: collections.abc.Mapping[typing.SupportsInt | typing.SupportsIndex, typing.SupportsFloat | typing.SupportsIndex]) -> float:
+        """
+        L1 score 1 - 0.5 |a - b|_1 of two BoW vectors, in [0, 1].
+        """
+    @staticmethod
+    def train(descriptors_per_image: collections.abc.Sequence[numpy.ndarray], options: VocabularyOptions = ...) -> Vocabulary:
+        """
+        Train on one (N, D) array per image: all uint8 (binary, D bytes) or all float32.
+        """
+    def __init__(self) -> None:
+        ...
+    def save(self, path: str) -> None:
+        """
+        Write a .slvoc file (through path + '.partial' and a rename).
+        """
+    def transform(self, descriptors: numpy.ndarray) -> dict[int, float]:
+        """
+        BoW vector {word: weight} (TF-IDF, L1-normalised).
+        """
+    def transform_with_features(self, descriptors: numpy.ndarray, levels_up: typing.SupportsInt | typing.SupportsIndex = 2) -> tuple[dict[int, float], dict[int, list[int]]]:
+        """
+        (BoW vector, {node: [feature rows]}) with nodes levels_up above the leaves.
+        """
+    def word_weight(self, word: typing.SupportsInt | typing.SupportsIndex) -> float:
+        """
+        IDF weight of a word.
+        """
+    @property
+    def branching(self) -> int:
+        ...
+    @property
+    def descriptor_cols(self) -> int:
+        """
+        bytes (binary) or floats per descriptor
+        """
+    @property
+    def descriptor_type(self) -> typing.Any:
+        """
+        'binary' (uint8, Hamming) or 'float' (float32, L2); None when empty.
+        """
+    @property
+    def empty(self) -> bool:
+        ...
+    @property
+    def levels(self) -> int:
+        ...
+    @property
+    def num_nodes(self) -> int:
+        ...
+    @property
+    def num_words(self) -> int:
+        ...
+class PlaceCandidate:
+    """
+    A keyframe returned by KeyframeDatabase.query.
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def keyframe_id(self) -> int:
+        ...
+    @property
+    def score(self) -> float:
+        ...
+    @property
+    def shared_words(self) -> int:
+        ...
+class KeyframeDatabase:
+    """
+    Inverted index of keyframe BoW vectors (thread-safe).
+    """
+    def __contains__(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> bool:
+        ...
+    def __init__(self) -> None:
+        ...
+    def __len__(self) -> int:
+        ...
+    def add(self, keyframe_id: typing.SupportsInt | typing.SupportsIndex, bow: collections.abc.Mapping[typing.SupportsInt | typing.SupportsIndex, typing.SupportsFloat | typing.SupportsIndex]) -> None:
+        ...
+    def clear(self) -> None:
+        ...
+    def query(self, bow: collections.abc.Mapping[typing.SupportsInt | typing.SupportsIndex, typing.SupportsFloat | typing.SupportsIndex], max_results: typing.SupportsInt | typing.SupportsIndex = 10, min_score: typing.SupportsFloat | typing.SupportsIndex = 0.0, min_shared_ratio: typing.SupportsFloat | typing.SupportsIndex = 0.8, accept: collections.abc.Callable[[int], bool] = None) -> list[PlaceCandidate]:
+        """
+        Keyframes sharing words with bow, best score first; accept(id) -> bool filters ids.
+        """
+    def remove(self, keyframe_id: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class RegistrationMethod:
+    """
+    LiDAR registration method.
+    
+    Members:
+    
+      FPFH_SAC_IA_ICP
+    
+      NDT
+    
+      PFH_SAC_IA_ICP
+    
+      ICP
+    """
+    FPFH_SAC_IA_ICP: typing.ClassVar[RegistrationMethod]
+    ICP: typing.ClassVar[RegistrationMethod]
+    NDT: typing.ClassVar[RegistrationMethod]
+    PFH_SAC_IA_ICP: typing.ClassVar[RegistrationMethod]
+    __members__: typing.ClassVar[dict[str, RegistrationMethod]]
+    @typing.overload
+    def __eq__(self, other: RegistrationMethod) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: RegistrationMethod) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class RegistrationOptions:
+    """
+    Parameters of register_clouds (units: m, counts).
+    """
+    icp_reject_one_to_one: bool
+    point_to_plane: bool
+    sac_ia_try_identity: bool
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def coarse_voxel_m(self) -> float:
+        ...
+    @coarse_voxel_m.setter
+    def coarse_voxel_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def feature_radius_m(self) -> float:
+        ...
+    @feature_radius_m.setter
+    def feature_radius_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def fine_voxel_m(self) -> float:
+        ...
+    @fine_voxel_m.setter
+    def fine_voxel_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_fitness_epsilon(self) -> float:
+        ...
+    @icp_fitness_epsilon.setter
+    def icp_fitness_epsilon(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_iterations_coarse(self) -> int:
+        ...
+    @icp_iterations_coarse.setter
+    def icp_iterations_coarse(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_iterations_fine(self) -> int:
+        ...
+    @icp_iterations_fine.setter
+    def icp_iterations_fine(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_max_corr_coarse_m(self) -> float:
+        ...
+    @icp_max_corr_coarse_m.setter
+    def icp_max_corr_coarse_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_max_corr_fine_m(self) -> float:
+        ...
+    @icp_max_corr_fine_m.setter
+    def icp_max_corr_fine_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_source_points_coarse(self) -> int:
+        ...
+    @icp_source_points_coarse.setter
+    def icp_source_points_coarse(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_source_points_fine(self) -> int:
+        ...
+    @icp_source_points_fine.setter
+    def icp_source_points_fine(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def icp_transformation_epsilon(self) -> float:
+        ...
+    @icp_transformation_epsilon.setter
+    def icp_transformation_epsilon(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_range_m(self) -> float:
+        ...
+    @max_range_m.setter
+    def max_range_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_range_m(self) -> float:
+        ...
+    @min_range_m.setter
+    def min_range_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ndt_iterations(self) -> int:
+        ...
+    @ndt_iterations.setter
+    def ndt_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ndt_resolution_m(self) -> float:
+        ...
+    @ndt_resolution_m.setter
+    def ndt_resolution_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ndt_step_m(self) -> float:
+        ...
+    @ndt_step_m.setter
+    def ndt_step_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_k(self) -> int:
+        ...
+    @normal_k.setter
+    def normal_k(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def num_threads(self) -> int:
+        ...
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def outlier_k(self) -> int:
+        ...
+    @outlier_k.setter
+    def outlier_k(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def outlier_std_mul(self) -> float:
+        ...
+    @outlier_std_mul.setter
+    def outlier_std_mul(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_confidence(self) -> float:
+        ...
+    @sac_ia_confidence.setter
+    def sac_ia_confidence(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_edge_similarity(self) -> float:
+        ...
+    @sac_ia_edge_similarity.setter
+    def sac_ia_edge_similarity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_iterations(self) -> int:
+        ...
+    @sac_ia_iterations.setter
+    def sac_ia_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_max_corr_m(self) -> float:
+        ...
+    @sac_ia_max_corr_m.setter
+    def sac_ia_max_corr_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_min_sample_m(self) -> float:
+        ...
+    @sac_ia_min_sample_m.setter
+    def sac_ia_min_sample_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_randomness(self) -> int:
+        ...
+    @sac_ia_randomness.setter
+    def sac_ia_randomness(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_samples(self) -> int:
+        ...
+    @sac_ia_samples.setter
+    def sac_ia_samples(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sac_ia_source_keypoints(self) -> int:
+        ...
+    @sac_ia_source_keypoints.setter
+    def sac_ia_source_keypoints(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class RegistrationResult:
+    """
+    T_target_source, quality and per-stage times [ms].
+    """
+    @property
+    def coarse_ms(self) -> float:
+        ...
+    @property
+    def converged(self) -> bool:
+        ...
+    @property
+    def features_ms(self) -> float:
+        ...
+    @property
+    def fine_ms(self) -> float:
+        ...
+    @property
+    def fitness(self) -> float:
+        ...
+    @property
+    def inlier_rmse(self) -> float:
+        ...
+    @property
+    def iterations(self) -> int:
+        ...
+    @property
+    def preprocess_ms(self) -> float:
+        ...
+    @property
+    def source_keypoints(self) -> int:
+        ...
+    @property
+    def source_points(self) -> int:
+        ...
+    @property
+    def target_keypoints(self) -> int:
+        ...
+    @property
+    def target_points(self) -> int:
+        ...
+    @property
+    def total_ms(self) -> float:
+        ...
+    @property
+    def transform(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        ...
+def associate_points_to_lines(keypoints: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], segments: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, options: AssociationOptions = ..., valid_cells: collections.abc.Sequence[bool] = []) -> list[list[int]]:
+    """
+    For every segment, the indices of its associated keypoints.
+    """
+def extract_lines(image: numpy.ndarray, preprocess: LinePreprocessOptions = ..., run_preprocess: bool = True) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
+    """
+    LSD + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw LSD segments).
+    """
+def extract_orb(image: numpy.ndarray, options: OrbOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 2]"], typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 1]"], numpy.ndarray]:
+    """
+    ORB keypoints of a uint8 image: (uv float32 N x 2, score float32 N, descriptors uint8 N x 32).
+    """
+def grid_limit(uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], score: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 1]"], width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, options: GridLimitOptions = ...) -> list[int]:
+    """
+    Indices (ascending) of the keypoints kept: the best max_per_cell by score in every cell.
+    """
+def guided_match(predicted: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], query: numpy.ndarray, keypoints: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], train: numpy.ndarray, options: GuidedMatchOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 1]"]:
+    """
+    For each predicted position (M x 2) with descriptor, the index of the best keypoint within the radius, or -1.
+    """
+def match_descriptors(query: numpy.ndarray, train: numpy.ndarray, options: MatchOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
+    """
+    Mutual nearest-neighbour + ratio matching; returns (query index, train index) pairs N x 2.
+    """
+def match_lines_by_points(lines_a: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], points_a: collections.abc.Sequence[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]], lbd_a: numpy.ndarray, lines_b: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], points_b: collections.abc.Sequence[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]], lbd_b: numpy.ndarray, point_matches: typing.Annotated[numpy.typing.ArrayLike, numpy.int32, "[m, 2]"], options: LineMatchOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
+    ...
+def match_stereo_lines(left: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_left: numpy.ndarray, right: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_right: numpy.ndarray, options: StereoLineOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
+    ...
+def predict_with_robust_pose(points_prev: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], observed: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], camera: PinholeCamera, threshold_px: typing.SupportsFloat | typing.SupportsIndex = 2.0) -> tuple[bool, typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 2]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"], list[bool]]:
+    """
+    RANSAC PnP pose from 3-D points (previous camera frame) and their current pixels; returns (ok, predicted uv N x 2, T_cur_prev 4 x 4, inlier flags).
+    """
+def preprocess_lines(segments: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, options: LinePreprocessOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"]:
+    ...
+def read_gray_image(path: str) -> numpy.ndarray:
+    """
+    Read an image file as a uint8 gray array; ValueError names the file.
+    """
+def read_point_cloud(path: str) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]"]:
+    """
+    Read a KITTI .bin, PCD or PLY point cloud (by extension) as float32 (N, 4): x, y, z [m], intensity (0 when the file has none). Raises ValueError naming the file.
+    """
+def register_clouds(source: numpy.ndarray, target: numpy.ndarray, options: RegistrationOptions = ..., method: RegistrationMethod = RegistrationMethod.RegistrationMethod.FPFH_SAC_IA_ICP) -> RegistrationResult:
+    """
+    Register source onto target (float32 (N, 3|4) arrays [m]). Returns a RegistrationResult whose transform (4x4) is T_target_source: it maps source points into the target frame.
+    """
+def shade_image(points: numpy.ndarray, normals: numpy.ndarray, material: numpy.ndarray, height: typing.SupportsInt | typing.SupportsIndex, width: typing.SupportsInt | typing.SupportsIndex, camera: ShadingCamera, headlamp: HeadLamp, roof_lamp_positions: numpy.ndarray, roof_lamp_power: typing.SupportsFloat | typing.SupportsIndex, light_level: typing.SupportsFloat | typing.SupportsIndex, ambient: typing.SupportsFloat | typing.SupportsIndex, sensor: SensorModel, frame_index: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.uint8]:
+    """
+    Shade one image from per-pixel hits (row-major, N = height * width): points and normals float32 (N, 3) or (H, W, 3) in world [m], material uint8 ids (255 = no hit). Returns a uint8 (height, width) image; deterministic for a given sensor.seed and frame_index.
+    """
+def solid_texture(points: numpy.ndarray, material: numpy.ndarray, normals: typing.Any = None) -> numpy.typing.NDArray[numpy.float32]:
+    """
+    Albedo in [0, 1] (float32, N) of world points (float32 (N, 3) [m]) with uint8 material ids; bolt plates are drawn only when normals are given.
+    """
+def suppress_non_maxima(uv: typing.Annotated[numpy.typing.ArrayLike, numpy.int32, "[m, 2]"], score: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 1]"], width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, radius_px: typing.SupportsInt | typing.SupportsIndex) -> list[int]:
+    """
+    Greedy NMS of integer (u, v) candidates (N x 2 int32): kept indices, strongest first.
+    """
+def triangulate_stereo_lines(left: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], right: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], camera: PinholeCamera, baseline_m: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 6]"], list[bool]]:
+    """
+    3-D endpoints (N, 6: start xyz, end xyz in the left camera [m]) and success flags.
+    """
+def write_image(path: str, image: numpy.ndarray) -> None:
+    """
+    Write a uint8 gray image (format from the extension).
+    """
+__version__: str = '0.1.0'
