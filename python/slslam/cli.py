@@ -323,7 +323,8 @@ def run_command(
         typer.Option(
             help="Bag: stereo calibration: a Kalibr camchain YAML (its rostopic entries serve "
             "as --left/--right), or --calib cam0/sensor.yaml --calib cam1/sensor.yaml (EuRoC), "
-            "or an ASL folder holding them."
+            "or an ASL folder holding them. Without it: the bag's sensor_msgs/CameraInfo "
+            "(<namespace>/camera_info beside each image topic)."
         ),
     ] = None,
     config: Annotated[
@@ -442,9 +443,7 @@ def _open_bag(dataset: Path, left, right, imu, calib):
         if given or calib:
             raise InputError(dataset, f"{', '.join(given or ['--calib'])}: only for a ROS bag")
         return None
-    if not calib:
-        raise InputError(dataset, "a ROS bag needs --calib (Kalibr camchain or EuRoC sensor.yaml)")
-    if len(calib) == 1 and (left is None or right is None):
+    if calib and len(calib) == 1 and (left is None or right is None):
         default_left, default_right = kalibr_topics(calib[0])
         left, right = left or default_left, right or default_right
     if left is None or right is None:
@@ -452,7 +451,7 @@ def _open_bag(dataset: Path, left, right, imu, calib):
             dataset,
             "a ROS bag needs --left and --right image topics (`slslam info BAG` lists them)",
         )
-    return RosbagSequence(dataset, left, right, calib, imu_topic=imu)
+    return RosbagSequence(dataset, left, right, calib or None, imu_topic=imu)
 
 
 models_app = typer.Typer(

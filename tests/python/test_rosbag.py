@@ -70,8 +70,42 @@ def _image_msg(typestore, image: np.ndarray, t_ns: int, kind: str):
     )
 
 
-def write_bag(asl: Path, out: Path, storage: str, kind: str) -> Path:
-    """The ASL sequence's raw images (and IMU) as a bag: ``storage`` ros1, sqlite3 or mcap."""
+def _camera_info_msgs(typestore, seq: EurocSequence, t_ns: int):
+    """CameraInfo of both cameras as a ROS stereo calibration writes them: K, D (plumb_bob),
+    R (rectified <- camera) and P (the right one with -fx * baseline)."""
+    rectifier, cam = seq.rectifier, seq.camera
+    P = np.array([[cam.fx, 0, cam.cx, 0], [0, cam.fy, cam.cy, 0], [0, 0, 1, 0]], dtype=float)
+    P_right = P.copy()
+    P_right[0, 3] = -cam.fx * cam.baseline_m
+    Info = typestore.types["sensor_msgs/msg/CameraInfo"]
+    Roi = typestore.types["sensor_msgs/msg/RegionOfInterest"]
+    upper = "D" in Info.__dataclass_fields__  # ROS1 spells the arrays D K R P
+    messages = []
+    for c, R, proj in (
+        (seq.left_calibration, np.asarray(rectifier.R_rect_left), P),
+        (seq.right_calibration, np.asarray(rectifier.R_rectright_right), P_right),
+    ):
+        K = np.array([[c.fx, 0, c.cx], [0, c.fy, c.cy], [0, 0, 1]], dtype=float)
+        arrays = {"d": np.array([*c.distortion, 0.0]), "k": K.reshape(-1), "r": R.reshape(-1),
+                  "p": proj.reshape(-1)}  # fmt: skip
+        messages.append(
+            Info(
+                header=_header(typestore, t_ns),
+                height=c.height,
+                width=c.width,
+                distortion_model="plumb_bob",
+                **{(k.upper() if upper else k): v for k, v in arrays.items()},
+                binning_x=0,
+                binning_y=0,
+                roi=Roi(x_offset=0, y_offset=0, height=0, width=0, do_rectify=False),
+            )
+        )
+    return messages
+
+
+def write_bag(asl: Path, out: Path, storage: str, kind: str, camera_info: bool = False) -> Path:
+    """The ASL sequence's raw images (and IMU) as a bag: ``storage`` ros1, sqlite3 or mcap;
+    ``camera_info`` adds /cam0/camera_info and /cam1/camera_info."""
     from rosbags.rosbag1 import Writer as Writer1
     from rosbags.rosbag2 import StoragePlugin
     from rosbags.rosbag2 import Writer as Writer2
@@ -93,6 +127,16 @@ def write_bag(asl: Path, out: Path, storage: str, kind: str) -> Path:
         left = writer.add_connection(LEFT, image_type, typestore=typestore)
         right = writer.add_connection(RIGHT, image_type, typestore=typestore)
         imu_conn = writer.add_connection(IMU, "sensor_msgs/msg/Imu", typestore=typestore)
+        if camera_info:
+            info_type = "sensor_msgs/msg/CameraInfo"
+            t0 = int(seq.timestamps_ns[0])
+            for topic, msg in zip(
+                ("/cam0/camera_info", "/cam1/camera_info"),
+                _camera_info_msgs(typestore, EurocSequence(asl), t0),
+                strict=True,
+            ):
+                conn = writer.add_connection(topic, info_type, typestore=typestore)
+                writer.write(conn, t0, serialize(msg, info_type))
         Vector3 = typestore.types["geometry_msgs/msg/Vector3"]
         Quaternion = typestore.types["geometry_msgs/msg/Quaternion"]
         Imu = typestore.types["sensor_msgs/msg/Imu"]
@@ -194,7 +238,7 @@ def test_cli_run_and_info_on_a_bag(asl, folder_run, tmp_path):
     assert done.exit_code == 0, done.output
     assert (tmp_path / "out" / "trajectory.tum").read_text() == folder_run
     missing = runner.invoke(app, ["run", str(bag), "--out", str(tmp_path / "o2")])
-    assert missing.exit_code != 0 and "--calib" in str(missing.exception)
+    assert missing.exit_code != 0 and "--left and --right" in str(missing.exception)
 
 
 def test_kalibr_camchain_gives_the_euroc_calibration(asl, tmp_path):
@@ -273,3 +317,29 @@ def test_image_encodings_decode_to_the_same_gray():
     msg.encoding = "yuv422"
     with pytest.raises(DatasetError, match="encoding 'yuv422' is not supported"):
         decode_image(msg, "sensor_msgs/msg/Image", "t")
+
+
+@pytest.mark.parametrize("storage", ["ros1", "mcap"])
+def test_calibration_from_camera_info(asl, tmp_path, storage):
+    """Without --calib the bag's CameraInfo gives the same cameras, rig and rectified pixels."""
+    suffix = ".bag" if storage == "ros1" else ""
+    bag = write_bag(asl, tmp_path / f"info{suffix}", storage, "mono8", camera_info=True)
+    folder = EurocSequence(asl)
+    with RosbagSequence(bag, LEFT, RIGHT, None) as seq:
+        for ours, theirs in ((seq.left_calibration, folder.left_calibration),
+                             (seq.right_calibration, folder.right_calibration)):  # fmt: skip
+            assert (ours.fx, ours.cy, ours.width, ours.distortion) == (
+                theirs.fx, theirs.cy, theirs.width, theirs.distortion)  # fmt: skip
+        T_right_left = invert_transform(seq.right_calibration.T_body_cam)  # body = left camera
+        expected = invert_transform(folder.right_calibration.T_body_cam) @ (
+            folder.left_calibration.T_body_cam
+        )
+        assert np.allclose(T_right_left, expected, atol=1e-9)
+        assert seq.camera.baseline_m == pytest.approx(folder.camera.baseline_m, abs=1e-9)
+        assert seq.camera.fx == pytest.approx(folder.camera.fx, abs=1e-6)
+        for i in (0, FRAMES - 1):
+            diff = seq[i].left.astype(int) - folder[i].left.astype(int)
+            assert np.abs(diff).max() <= 1
+    plain = write_bag(asl, tmp_path / f"plain{suffix}", storage, "mono8")
+    with pytest.raises(DatasetError, match=r"no sensor_msgs/msg/CameraInfo '/cam0/camera_info'"):
+        RosbagSequence(plain, LEFT, RIGHT, None)

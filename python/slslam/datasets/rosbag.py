@@ -9,9 +9,12 @@ Stereo pairs are matched by the messages' ``header.stamp`` (exactly, or within
 ``stereo_tolerance_ns``); a left image without a right one is dropped with one warning. The
 calibration comes from YAML (:func:`load_stereo_calibration`): a Kalibr camchain (``cam0``,
 ``cam1`` with ``T_cn_cnm1``), or EuRoC ``sensor.yaml`` files (two files, or a folder holding
-``cam0/sensor.yaml`` and ``cam1/sensor.yaml``). Images are converted to 8-bit gray as
-:class:`~slslam.datasets.images.GrayImageReader` does and rectified as :class:`EurocSequence`
-rectifies, so a bag and the ASL folder it was made from give the tracker the same pixels.
+``cam0/sensor.yaml`` and ``cam1/sensor.yaml``); without YAML, from the bag's
+``sensor_msgs/CameraInfo`` next to each image topic (``<namespace>/camera_info``, plumb_bob,
+the stereo extrinsics from ``R`` and the right camera's ``P``: :func:`camera_info_calibration`).
+Images are converted to 8-bit gray as :class:`~slslam.datasets.images.GrayImageReader` does and
+rectified as :class:`EurocSequence` rectifies, so a bag and the ASL folder it was made from give
+the tracker the same pixels.
 
 :class:`RosbagSequence` offers what :class:`EurocSequence` offers the tracker (``camera``,
 ``len``, ``sequence[i]`` -> :class:`StereoFrame`, ``timestamps_ns``, ``imu()``); a bag has no
@@ -47,6 +50,8 @@ log = logging.getLogger(__name__)
 
 IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
 IMU_TYPE = "sensor_msgs/msg/Imu"
+CAMERA_INFO_TYPE = "sensor_msgs/msg/CameraInfo"
+MAX_K3 = 1e-9  # plumb_bob's k3 must vanish: the rectifier models k1 k2 p1 p2 only
 #: encoding -> (dtype, channels, channel order reversed from OpenCV's BGR)
 ENCODINGS = {
     "mono8": (np.uint8, 1, False),
@@ -103,8 +108,9 @@ def is_rosbag(path: str | Path) -> bool:
 def _open_reader(path: Path):
     from rosbags.highlevel import AnyReader, AnyReaderError
 
+    paths = _bag_paths(path)  # not a bag: its own message
     try:
-        reader = AnyReader(_bag_paths(path))
+        reader = AnyReader(paths)
         reader.open()
     except (AnyReaderError, OSError, ValueError, KeyError) as exc:
         raise DatasetError(path, f"cannot read the bag ({exc})") from None
@@ -225,6 +231,102 @@ def kalibr_topics(path: str | Path) -> tuple[str | None, str | None]:
     return topics[0], topics[1]
 
 
+def _info_field(msg, name: str, count: int, where: str) -> np.ndarray:
+    """A CameraInfo array (ROS1 spells them D K R P, ROS2 d k r p)."""
+    value = getattr(msg, name.lower(), None)
+    value = getattr(msg, name.upper(), None) if value is None else value
+    array = np.asarray(value, dtype=np.float64).reshape(-1)
+    if array.size != count or not np.all(np.isfinite(array)):
+        raise CalibrationError(where, f"'{name}' must hold {count} finite numbers")
+    return array
+
+
+def _distortion(msg, where: str) -> np.ndarray:
+    """plumb_bob k1 k2 p1 p2 (k3 must be 0; an empty D means no distortion)."""
+    raw = getattr(msg, "d", None)
+    raw = getattr(msg, "D", None) if raw is None else raw
+    D = np.zeros(5) if raw is None or len(raw) == 0 else _info_field(msg, "D", 5, where)
+    if abs(D[4]) > MAX_K3:
+        raise CalibrationError(where, f"'D' has k3 = {D[4]:g}: only k1 k2 p1 p2 are modelled")
+    return D[:4]
+
+
+def camera_info_calibration(
+    bag: str | Path, left_topic: str, right_topic: str
+) -> tuple[CameraCalibration, CameraCalibration]:
+    """(left, right) calibration from the bag's ``CameraInfo`` beside each image topic.
+
+    Intrinsics and plumb_bob distortion from ``K`` and ``D`` (k3 must be 0); the stereo
+    extrinsics from the rectification rotations ``R`` (rectified <- camera) and the right
+    camera's ``P[0, 3] = -fx * baseline``: ``T_right_left = (R_right^T R_left, -R_right^T
+    [baseline, 0, 0])``. The body frame is the left camera. Errors name the bag and topic."""
+    bag = Path(bag)
+    reader = _open_reader(bag)
+    try:
+        infos = {c.topic: c for c in reader.connections if c.msgtype == CAMERA_INFO_TYPE}
+        messages = []
+        for image_topic in (left_topic, right_topic):
+            topic = image_topic.rsplit("/", 1)[0] + "/camera_info"
+            where = f"{bag}:{topic}"
+            if topic not in infos:
+                raise DatasetError(
+                    bag,
+                    f"no {CAMERA_INFO_TYPE} {topic!r} beside {image_topic!r}: give the "
+                    "calibration as YAML (--calib)",
+                )
+            _, _, raw = next(iter(reader.messages(connections=[infos[topic]])))
+            messages.append((where, reader.deserialize(raw, CAMERA_INFO_TYPE)))
+    finally:
+        reader.close()
+    cameras = []
+    for where, msg in messages:
+        if msg.distortion_model not in ("plumb_bob", "radtan", ""):
+            raise CalibrationError(
+                where, f"distortion_model {msg.distortion_model!r} is not supported (plumb_bob)"
+            )
+        K = _info_field(msg, "K", 9, where).reshape(3, 3)
+        D = _distortion(msg, where)
+        cameras.append(
+            (
+                where,
+                K,
+                D,
+                _info_field(msg, "R", 9, where).reshape(3, 3),
+                _info_field(msg, "P", 12, where).reshape(3, 4),
+                msg,
+            )
+        )
+    (_, _, _, R_left, _, _), (where_right, _, _, R_right, P_right, _) = cameras
+    baseline_m = -P_right[0, 3] / P_right[0, 0] if P_right[0, 0] > 0 else 0.0
+    if baseline_m <= 0:
+        raise CalibrationError(
+            where_right,
+            "'P'[0, 3] gives no stereo baseline (-fx * baseline expected): give --calib",
+        )
+    T_right_left = np.eye(4)
+    T_right_left[:3, :3] = R_right.T @ R_left
+    T_right_left[:3, 3] = -R_right.T @ np.array([baseline_m, 0.0, 0.0])
+    poses = (np.eye(4), invert_transform(T_right_left))
+    result = []
+    for (where, K, D, _, _, msg), T_body_cam in zip(cameras, poses, strict=True):
+        if K[0, 0] <= 0 or K[1, 1] <= 0 or int(msg.width) <= 0 or int(msg.height) <= 0:
+            raise CalibrationError(where, "'K' focal lengths and the image size must be positive")
+        result.append(
+            CameraCalibration(
+                path=Path(where),
+                T_body_cam=T_body_cam,
+                width=int(msg.width),
+                height=int(msg.height),
+                fx=float(K[0, 0]),
+                fy=float(K[1, 1]),
+                cx=float(K[0, 2]),
+                cy=float(K[1, 2]),
+                distortion=tuple(float(d) for d in D),  # type: ignore[arg-type]
+            )
+        )
+    return result[0], result[1]
+
+
 # -- messages ---------------------------------------------------------------------------------
 def _stamp_ns(msg) -> int:
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
@@ -276,7 +378,8 @@ class RosbagSequence:
     Args:
         path: ROS1 ``.bag`` file, or ROS2 bag folder (or its ``.db3`` / ``.mcap`` file).
         left_topic, right_topic: the two cameras' image topics.
-        calibration: path(s) for :func:`load_stereo_calibration`.
+        calibration: path(s) for :func:`load_stereo_calibration`; None: the bag's CameraInfo
+            (:func:`camera_info_calibration`).
         imu_topic: an ``Imu`` topic for :meth:`imu` (optional).
         stereo_tolerance_ns: largest header-stamp difference accepted as one pair.
         rectify: return rectified images (default) or the raw distorted ones.
@@ -287,7 +390,7 @@ class RosbagSequence:
         path: str | Path,
         left_topic: str,
         right_topic: str,
-        calibration: Sequence[str | Path],
+        calibration: Sequence[str | Path] | None,
         imu_topic: str | None = None,
         stereo_tolerance_ns: int = 0,
         rectify: bool = True,
@@ -295,7 +398,6 @@ class RosbagSequence:
         self.path = Path(path)
         self.rectify = rectify
         self.imu_topic = imu_topic
-        self.left_calibration, self.right_calibration = load_stereo_calibration(calibration)
         self._local = threading.local()
         reader = self._reader()
         self._topics = {c.topic: c.msgtype for c in reader.connections}
@@ -316,6 +418,11 @@ class RosbagSequence:
                 self.path, f"no {IMU_TYPE} topic {imu_topic!r} ({', '.join(sorted(self._topics))})"
             )
         self.left_topic, self.right_topic = left_topic, right_topic
+        self.left_calibration, self.right_calibration = (
+            load_stereo_calibration(calibration)
+            if calibration
+            else camera_info_calibration(self.path, left_topic, right_topic)
+        )
         self._pairs, self.timestamps_ns = self._index(reader, stereo_tolerance_ns)
         self._gray = GrayImageReader()
         self._rectifier = stereo_rectifier(self.left_calibration, self.right_calibration, path)
