@@ -395,7 +395,7 @@ def run_command(
         try:
             shown = RerunLogger(sequence.camera, recording=rerun, spawn=viewer)
         except ValueError as exc:
-            raise InputError(rerun, str(exc)) from None
+            raise InputError(rerun or "--viewer", str(exc)) from None
     try:
         summary = run_sequence(
             sequence if sequence is not None else dataset,

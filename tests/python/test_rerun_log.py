@@ -4,8 +4,10 @@ the logged entities are there with one row per frame where they should be."""
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections import Counter
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -120,3 +122,20 @@ def test_cli_records_a_run(sim_sequence, tmp_path):
     bad = CliRunner().invoke(app, ["run", str(sim_sequence), "--out", str(tmp_path / "o2"),
                                    "--rerun", str(tmp_path / "run.txt")])  # fmt: skip
     assert bad.exit_code != 0 and "ends in .rrd" in str(bad.exception)
+
+
+@pytest.mark.skipif(
+    bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
+    reason="a display is present: the spawned viewer would open a window",
+)
+def test_viewer_without_a_display_falls_back_to_the_file(tmp_path):
+    """--viewer on a machine without a display: the recording still goes to the file (one
+    warning); without a file it is a clear error, not a crash at the end of the run."""
+    camera = SimpleNamespace(fx=100.0, fy=100.0, cx=50.0, cy=40.0, width=100, height=80)
+    rrd = tmp_path / "run.rrd"
+    with RerunLogger(camera, rrd, spawn=True) as viewer:
+        viewer.log_map(SimpleNamespace(points=np.zeros((4, 3)), lines=np.zeros((1, 6))))
+    rows, _ = read_rrd(rrd)
+    assert rows["/world/map/points"] == 1
+    with pytest.raises(ValueError, match="viewer is not reachable"):
+        RerunLogger(camera, spawn=True)

@@ -48,6 +48,7 @@ STATE_COLOURS: dict[str, tuple[int, int, int]] = {
 }
 TRACKED = ("OK", "RELOCALISED", "NEW_MAP")
 COUNT_PLOTS = ("keypoints", "inlier_points", "inlier_lines")
+VIEWER_TIMEOUT_S = 5.0  # how long a spawned viewer may take to accept the first data
 
 
 class RerunLogger:
@@ -80,17 +81,11 @@ class RerunLogger:
             raise ValueError(f"jpeg_quality {jpeg_quality} not in [0, 100]")
         self._rr = rr
         self.rec = rr.RecordingStream(application_id)
-        sinks = []
-        if recording is not None:
-            path = Path(recording)
+        path = None if recording is None else Path(recording)
+        if path is not None:
             if path.suffix != ".rrd":
                 raise ValueError(f"{path}: a rerun recording file ends in .rrd")
             path.parent.mkdir(parents=True, exist_ok=True)
-            sinks.append(rr.FileSink(str(path)))
-        if spawn:
-            self.rec.spawn(connect=False)
-            sinks.append(rr.GrpcSink())
-        self.rec.set_sinks(*sinks)
         self.camera = camera
         self.jpeg_quality = jpeg_quality
         self.lines = lines
@@ -98,6 +93,19 @@ class RerunLogger:
         self._t0: float | None = None
         self._path: list[np.ndarray] = []
         self._keyframes: list[np.ndarray] = []
+        file_sink = [] if path is None else [rr.FileSink(str(path))]
+        if spawn:
+            self.rec.spawn(connect=False)
+            self.rec.set_sinks(*file_sink, rr.GrpcSink())
+            self._log_static()
+            try:  # a viewer that cannot open a window (no display) is gone by now
+                self.rec.flush(timeout_sec=VIEWER_TIMEOUT_S)
+                return
+            except RuntimeError as exc:
+                if path is None:
+                    raise ValueError(f"the rerun viewer is not reachable ({exc})") from None
+                log.warning("the rerun viewer is not reachable; recording to %s only", path)
+        self.rec.set_sinks(*file_sink)
         self._log_static()
 
     def _log_static(self) -> None:
@@ -208,8 +216,12 @@ class RerunLogger:
         self.rec.log("summary", self._rr.TextLog(", ".join(parts)), static=True)
 
     def close(self) -> None:
-        """Flushes the recording (the .rrd file is complete afterwards)."""
-        self.rec.flush()
+        """Flushes the recording (the .rrd file is complete afterwards); a viewer that went away
+        is reported, not raised."""
+        try:
+            self.rec.flush()
+        except RuntimeError as exc:
+            log.warning("rerun viewer: %s", exc)
         self.rec.disconnect()
 
     def __enter__(self) -> RerunLogger:
