@@ -39,7 +39,10 @@ PointMatrix ToPoints(const py::array& array, const char* name) {
 
 }  // namespace
 
+void BindLidarSlam(py::module_& m);  // bind_lidar_slam.cpp
+
 void BindLidar(py::module_& m) {
+  BindLidarSlam(m);
   py::enum_<Method>(m, "RegistrationMethod", "LiDAR registration method.")
       .value("FPFH_SAC_IA_ICP", Method::kFpfhSacIaIcp)
       .value("NDT", Method::kNdt)

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'KeyframeDatabase', 'LineMatchOptions', 'LinePreprocessOptions', 'LocalMapperOptions', 'MatchOptions', 'Material', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_stereo_lines', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -1203,6 +1203,439 @@ class KeyframeDatabase:
         """
     def remove(self, keyframe_id: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class ImuNoiseOptions:
+    """
+    Continuous-time IMU noise (Kalibr units).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def acc_noise_density(self) -> float:
+        ...
+    @acc_noise_density.setter
+    def acc_noise_density(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def acc_random_walk(self) -> float:
+        ...
+    @acc_random_walk.setter
+    def acc_random_walk(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gravity_mps2(self) -> float:
+        ...
+    @gravity_mps2.setter
+    def gravity_mps2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gyro_noise_density(self) -> float:
+        ...
+    @gyro_noise_density.setter
+    def gyro_noise_density(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gyro_random_walk(self) -> float:
+        ...
+    @gyro_random_walk.setter
+    def gyro_random_walk(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class VoxelMapOptions:
+    """
+    Local map of LiDAR odometry.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def max_distance_m(self) -> float:
+        ...
+    @max_distance_m.setter
+    def max_distance_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_points_per_voxel(self) -> int:
+        ...
+    @max_points_per_voxel.setter
+    def max_points_per_voxel(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_point_spacing_m(self) -> float:
+        ...
+    @min_point_spacing_m.setter
+    def min_point_spacing_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def voxel_m(self) -> float:
+        ...
+    @voxel_m.setter
+    def voxel_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class ScanMatchOptions:
+    """
+    Scan-to-map point-to-plane registration.
+    """
+    point_to_plane: bool
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def convergence_rotation_rad(self) -> float:
+        ...
+    @convergence_rotation_rad.setter
+    def convergence_rotation_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def convergence_translation_m(self) -> float:
+        ...
+    @convergence_translation_m.setter
+    def convergence_translation_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def inlier_m(self) -> float:
+        ...
+    @inlier_m.setter
+    def inlier_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_correspondence_m(self) -> float:
+        ...
+    @max_correspondence_m.setter
+    def max_correspondence_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_iterations(self) -> int:
+        ...
+    @max_iterations.setter
+    def max_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def num_threads(self) -> int:
+        ...
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def plane_max_planarity(self) -> float:
+        ...
+    @plane_max_planarity.setter
+    def plane_max_planarity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def plane_neighbours(self) -> int:
+        ...
+    @plane_neighbours.setter
+    def plane_neighbours(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def prior_rotation_sigma_rad(self) -> float:
+        ...
+    @prior_rotation_sigma_rad.setter
+    def prior_rotation_sigma_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def prior_translation_sigma_m(self) -> float:
+        ...
+    @prior_translation_sigma_m.setter
+    def prior_translation_sigma_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def robust_scale_m(self) -> float:
+        ...
+    @robust_scale_m.setter
+    def robust_scale_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class LioSmootherOptions:
+    """
+    Fixed-lag LiDAR-inertial smoother.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def initial_acc_bias_sigma(self) -> float:
+        ...
+    @initial_acc_bias_sigma.setter
+    def initial_acc_bias_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def initial_gyro_bias_sigma(self) -> float:
+        ...
+    @initial_gyro_bias_sigma.setter
+    def initial_gyro_bias_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def initial_tilt_sigma_rad(self) -> float:
+        ...
+    @initial_tilt_sigma_rad.setter
+    def initial_tilt_sigma_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def initial_velocity_sigma_mps(self) -> float:
+        ...
+    @initial_velocity_sigma_mps.setter
+    def initial_velocity_sigma_mps(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_iterations(self) -> int:
+        ...
+    @max_iterations.setter
+    def max_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def window(self) -> int:
+        ...
+    @window.setter
+    def window(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class LidarOdometryOptions:
+    """
+    LiDAR(-inertial) odometry; nested option groups by name.
+    """
+    deskew: bool
+    imu: ImuNoiseOptions
+    map: VoxelMapOptions
+    match: ScanMatchOptions
+    smoother: LioSmootherOptions
+    use_imu: bool
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def T_body_sensor(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        ...
+    @T_body_sensor.setter
+    def T_body_sensor(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
+        ...
+    @property
+    def gravity_window_s(self) -> float:
+        ...
+    @gravity_window_s.setter
+    def gravity_window_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def map_voxel_m(self) -> float:
+        ...
+    @map_voxel_m.setter
+    def map_voxel_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_range_m(self) -> float:
+        ...
+    @max_range_m.setter
+    def max_range_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_range_m(self) -> float:
+        ...
+    @min_range_m.setter
+    def min_range_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def scan_information_scale(self) -> float:
+        ...
+    @scan_information_scale.setter
+    def scan_information_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def scan_period_s(self) -> float:
+        ...
+    @scan_period_s.setter
+    def scan_period_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def source_voxel_m(self) -> float:
+        ...
+    @source_voxel_m.setter
+    def source_voxel_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class OdometryResult:
+    """
+    One sweep's pose, state, quality and timing.
+    """
+    @property
+    def T_world_body(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        ...
+    @property
+    def T_world_sensor(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        ...
+    @property
+    def acc_bias(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        ...
+    @property
+    def correspondences(self) -> int:
+        ...
+    @property
+    def degeneracy(self) -> float:
+        ...
+    @property
+    def deskew_ms(self) -> float:
+        ...
+    @property
+    def fitness(self) -> float:
+        ...
+    @property
+    def gyro_bias(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        ...
+    @property
+    def inlier_rmse_m(self) -> float:
+        ...
+    @property
+    def map_ms(self) -> float:
+        ...
+    @property
+    def map_points(self) -> int:
+        ...
+    @property
+    def match_ms(self) -> float:
+        ...
+    @property
+    def matched(self) -> bool:
+        ...
+    @property
+    def smoother_ms(self) -> float:
+        ...
+    @property
+    def source_points(self) -> int:
+        ...
+    @property
+    def t_ns(self) -> int:
+        ...
+    @property
+    def total_ms(self) -> float:
+        ...
+    @property
+    def velocity_world(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        ...
+class LidarOdometry:
+    """
+    LiDAR(-inertial) odometry, one sweep at a time.
+    """
+    def __init__(self, options: LidarOdometryOptions = ...) -> None:
+        ...
+    def add_imu(self, t_ns: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], gyro: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], acc: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> None:
+        """
+        Append IMU samples: t_ns (N,) int64 increasing, gyro (N, 3) [rad/s], acc (N, 3) [m/s^2], body frame.
+        """
+    def last_scan(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 3]"]:
+        """
+        The last sweep deskewed to its start, voxelised, sensor frame (N, 3) [m].
+        """
+    def map_points(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 3]"]:
+        """
+        Points of the local map (N, 3), world frame [m].
+        """
+    def process_scan(self, t_ns: typing.SupportsInt | typing.SupportsIndex, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, n]"], point_time_s: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = []) -> OdometryResult:
+        """
+        One sweep: points float32 (N, 3|4) in the sensor frame, per-point time after t_ns [s] (empty: no deskewing). Returns an OdometryResult.
+        """
+class ScanContextOptions:
+    """
+    Scan Context descriptor and search.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def candidates(self) -> int:
+        ...
+    @candidates.setter
+    def candidates(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def exclude_recent(self) -> int:
+        ...
+    @exclude_recent.setter
+    def exclude_recent(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def height_offset_m(self) -> float:
+        ...
+    @height_offset_m.setter
+    def height_offset_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_distance(self) -> float:
+        ...
+    @max_distance.setter
+    def max_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_radius_m(self) -> float:
+        ...
+    @max_radius_m.setter
+    def max_radius_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def rings(self) -> int:
+        ...
+    @rings.setter
+    def rings(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sectors(self) -> int:
+        ...
+    @sectors.setter
+    def sectors(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class ScanContextMatch:
+    """
+    Best loop candidate of a query.
+    """
+    @property
+    def distance(self) -> float:
+        ...
+    @property
+    def index(self) -> int:
+        ...
+    @property
+    def shift(self) -> int:
+        ...
+    @property
+    def yaw_rad(self) -> float:
+        ...
+class ScanContextDatabase:
+    """
+    Scan Context keyframe database.
+    """
+    def __init__(self, options: ScanContextOptions = ...) -> None:
+        ...
+    def __len__(self) -> int:
+        ...
+    def add(self, points_sensor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> int:
+        """
+        Add a keyframe's points (N, 3), sensor frame; its index.
+        """
+    def context(self, index: typing.SupportsInt | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]"]:
+        ...
+    def query(self, index: typing.SupportsInt | typing.SupportsIndex) -> ScanContextMatch:
+        """
+        Best older keyframe for keyframe `index` (index -1: none below max_distance).
+        """
+class LidarPoseGraphOptions:
+    """
+    Keyframe pose graph solver.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def loop_cauchy_scale(self) -> float:
+        ...
+    @loop_cauchy_scale.setter
+    def loop_cauchy_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_iterations(self) -> int:
+        ...
+    @max_iterations.setter
+    def max_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class RegistrationMethod:
     """
     LiDAR registration method.
@@ -1507,8 +1940,16 @@ def match_descriptors(query: numpy.ndarray, train: numpy.ndarray, options: Match
     """
 def match_lines_by_points(lines_a: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], points_a: collections.abc.Sequence[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]], lbd_a: numpy.ndarray, lines_b: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], points_b: collections.abc.Sequence[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]], lbd_b: numpy.ndarray, point_matches: typing.Annotated[numpy.typing.ArrayLike, numpy.int32, "[m, 2]"], options: LineMatchOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
     ...
+def match_scan_to_points(source: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], T_target_source: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"], options: ScanMatchOptions = ..., voxel_m: typing.SupportsFloat | typing.SupportsIndex = 0.5) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"], float, float, typing.Annotated[numpy.typing.NDArray[numpy.float64], "[6, 6]"]]:
+    """
+    Point-to-plane registration of source (N, 3) onto target (M, 3) from an initial T_target_source; returns (T_target_source, fitness, inlier_rmse_m, information 6x6).
+    """
 def match_stereo_lines(left: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_left: numpy.ndarray, right: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_right: numpy.ndarray, options: StereoLineOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
     ...
+def optimize_lidar_pose_graph(T_world_keyframe: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], a: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], b: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], T_a_b: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], information: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[6, 6]"]], loop: collections.abc.Sequence[bool], options: LidarPoseGraphOptions = ...) -> list[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]]:
+    """
+    Optimise keyframe poses (list of 4x4) under relative-pose edges a -> b (T_a_b, 6x6 information on translation then rotation, loop flag for the Cauchy loss); the first keyframe is held. Returns the poses.
+    """
 def predict_with_robust_pose(points_prev: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], observed: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], camera: PinholeCamera, threshold_px: typing.SupportsFloat | typing.SupportsIndex = 2.0) -> tuple[bool, typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 2]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"], list[bool]]:
     """
     RANSAC PnP pose from 3-D points (previous camera frame) and their current pixels; returns (ok, predicted uv N x 2, T_cur_prev 4 x 4, inlier flags).

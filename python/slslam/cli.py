@@ -516,6 +516,10 @@ vocab_app = typer.Typer(
 )
 app.add_typer(vocab_app, name="vocab")
 
+from slslam.lidar.cli import lidar_app  # noqa: E402  (its own module: the LiDAR commands)
+
+app.add_typer(lidar_app, name="lidar")
+
 
 @vocab_app.command("train")
 def vocab_train_command(

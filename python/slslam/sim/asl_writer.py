@@ -6,6 +6,7 @@
     <out>/mav0/imu0/{data.csv, sensor.yaml}
     <out>/mav0/state_groundtruth_estimate0/data.csv      body poses (ASL ground-truth columns)
     <out>/mav0/lidar0/{data/<t_ns>.bin, data.csv, sensor.yaml, poses_kitti.txt, times.txt}
+    <out>/mav0/lidar0/point_time/<t_ns>.bin              per-point time after t_ns [s], float32
     <out>/groundtruth_cam0.tum, groundtruth_body.tum     the same ground truth in TUM format
     <out>/manifest.json                                  preset, seed, parameters, status
 
@@ -63,6 +64,11 @@ T_BS:
   data: [{T}]
 rate_hz: {rate}
 beams: {beams}
+# Each scan is one counter-clockwise sweep starting at its timestamp and lasting 1 / rate_hz; the
+# sweep is ray cast in {blocks} azimuth blocks, each from the sensor pose at the block's mid-time,
+# and point_time/<t_ns>.bin holds that mid-time after the timestamp [s] for every point.
+scan_period_s: {period}
+point_time: point_time
 """
 
 
@@ -78,17 +84,18 @@ def quat_wxyz(R: np.ndarray) -> np.ndarray:
 class AslWriter:
     """Creates the folders and writes each record as it comes."""
 
-    def __init__(self, out: str | Path, lidar: bool):
+    def __init__(self, out: str | Path, lidar: bool, cameras: bool = True):
         self.out = Path(out)
         self.mav0 = self.out / "mav0"
-        for sub in ("cam0/data", "cam1/data", "imu0", "state_groundtruth_estimate0"):
+        for sub in ("imu0", "state_groundtruth_estimate0"):
             (self.mav0 / sub).mkdir(parents=True, exist_ok=True)
-        self._files = {
-            "cam0": self._open(self.mav0 / "cam0" / "data.csv", "#timestamp [ns],filename"),
-            "cam1": self._open(self.mav0 / "cam1" / "data.csv", "#timestamp [ns],filename"),
-        }
+        self._files = {}
+        for cam in ("cam0", "cam1") if cameras else ():
+            (self.mav0 / cam / "data").mkdir(parents=True, exist_ok=True)
+            self._files[cam] = self._open(self.mav0 / cam / "data.csv", "#timestamp [ns],filename")
         if lidar:
             (self.mav0 / "lidar0" / "data").mkdir(parents=True, exist_ok=True)
+            (self.mav0 / "lidar0" / "point_time").mkdir(parents=True, exist_ok=True)
             self._files["lidar0"] = self._open(
                 self.mav0 / "lidar0" / "data.csv", "#timestamp [ns],filename"
             )
@@ -127,6 +134,8 @@ class AslWriter:
         lidar_rate_hz=10.0,
     ) -> None:
         for name, T in (("cam0", T_body_cam0), ("cam1", T_body_cam1)):
+            if not (self.mav0 / name).is_dir():
+                continue
             (self.mav0 / name / "sensor.yaml").write_text(
                 CAMERA_YAML.format(
                     version=__version__,
@@ -159,6 +168,8 @@ class AslWriter:
                     T=_flat(lidar.T_body_lidar),
                     rate=lidar_rate_hz,
                     beams=lidar.beams,
+                    blocks=lidar.sweep_blocks,
+                    period=1.0 / lidar_rate_hz,
                 )
             )
 
@@ -178,8 +189,14 @@ class AslWriter:
             f"{q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}",
         )
 
-    def write_lidar(self, t_ns: int, points: np.ndarray, T_world_lidar: np.ndarray) -> None:
-        points.astype(np.float32).tofile(self.mav0 / "lidar0" / "data" / f"{t_ns}.bin")
+    def write_lidar(
+        self, t_ns: int, points: np.ndarray, T_world_lidar: np.ndarray, point_time_s: np.ndarray
+    ) -> None:
+        """A sweep starting at t_ns: KITTI .bin points, their times after t_ns [s] (float32, same
+        order) and the sensor pose at t_ns."""
+        lidar0 = self.mav0 / "lidar0"
+        np.asarray(point_time_s, np.float32).tofile(lidar0 / "point_time" / f"{t_ns}.bin")
+        points.astype(np.float32).tofile(lidar0 / "data" / f"{t_ns}.bin")
         self._row("lidar0", f"{t_ns},{t_ns}.bin")
         self._row("lidar_poses", " ".join(f"{v:.9e}" for v in T_world_lidar[:3].ravel()))
         self._row("lidar_times", f"{t_ns * 1e-9:.9f}")

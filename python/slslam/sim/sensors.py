@@ -78,6 +78,7 @@ class Lidar:
     max_range_m: float = 100.0
     min_range_m: float = 0.4
     range_noise_m: float = 0.02  # 1 sigma
+    sweep_blocks: int = 60  # a sweep is ray cast in this many azimuth blocks (6 deg each)
     mount_xyz_m: tuple[float, float, float] = (0.1, 0.0, 1.4)
     directions: np.ndarray = field(init=False, repr=False, compare=False)
 
@@ -107,12 +108,49 @@ class Lidar:
         The scan is taken at one instant (no motion distortion within the sweep); ``movers``
         (moving objects at that instant) are seen like the walls.
         """
-        R, origin = T_world_lidar[:3, :3], T_world_lidar[:3, 3]
-        hits = scene.cast(origin, self.directions @ R.T, movers)
-        r = hits.t.copy()
+        return self.sweep(scene, T_world_lidar[None], rng, noise, movers)[0]
+
+    def sweep_block(self) -> np.ndarray:
+        """Index of the azimuth block of every ray (row of ``directions``) of a sweep."""
+        azimuth = np.arange(len(self.directions)) % self.azimuth_steps
+        return azimuth * self.sweep_blocks // self.azimuth_steps
+
+    def block_times_s(self, period_s: float) -> np.ndarray:
+        """Mid-times of the azimuth blocks after the sweep's start [s] (a sweep lasts
+        ``period_s`` and turns counter-clockwise from azimuth 0, like a Velodyne/RoboSense)."""
+        return (np.arange(self.sweep_blocks) + 0.5) * (period_s / self.sweep_blocks)
+
+    def sweep(
+        self,
+        scene: RaycastScene,
+        T_world_lidar: np.ndarray,
+        rng: np.random.Generator,
+        noise: bool = True,
+        movers: Mesh | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A spinning sweep with motion distortion: points (N, 4) as ``scan`` and each point's
+        block index (N,).
+
+        ``T_world_lidar`` is (B, 4, 4): the sensor pose at each block's time (B = 1: one instant,
+        B = ``sweep_blocks``: block b covers azimuths [b, b + 1) * 360 / B deg). Each point is in
+        the LiDAR frame of its own block's pose, as a real spinning sensor reports it.
+        """
+        poses = np.asarray(T_world_lidar, dtype=float)
+        blocks = np.zeros(len(self.directions), int) if len(poses) == 1 else self.sweep_block()
+        if len(poses) not in (1, self.sweep_blocks):
+            raise ValueError(f"expected 1 or {self.sweep_blocks} poses, got {len(poses)}")
+        r = np.empty(len(self.directions))
+        cos_incidence = np.empty(len(self.directions))
+        for b, T in enumerate(poses):
+            rays = np.flatnonzero(blocks == b)
+            dirs_world = self.directions[rays] @ T[:3, :3].T
+            hits = scene.cast(T[:3, 3], dirs_world, movers)
+            r[rays] = hits.t
+            cos_incidence[rays] = np.abs(np.einsum("ij,ij->i", hits.normal, dirs_world))
+        hit = np.isfinite(r)
         if noise:
             r += rng.normal(0.0, self.range_noise_m, r.shape)
-        keep = np.isfinite(hits.t) & (r > self.min_range_m) & (r < self.max_range_m)
-        cos_incidence = np.abs(np.einsum("ij,ij->i", hits.normal, self.directions @ R.T))
+        keep = hit & (r > self.min_range_m) & (r < self.max_range_m)
         points = self.directions[keep] * r[keep, None]
-        return np.column_stack([points, cos_incidence[keep]]).astype(np.float32)
+        scan = np.column_stack([points, cos_incidence[keep]]).astype(np.float32)
+        return scan, blocks[keep]

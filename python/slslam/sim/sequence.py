@@ -58,6 +58,7 @@ class SimOptions:
     roof_lamps: bool = False  # a roof lamp every roof_lamp_spacing_m
     roof_lamp_spacing_m: float = 20.0
     lidar: bool = True  # write 16-beam LiDAR scans
+    cameras: bool = True  # render and write the stereo images (off: LiDAR + IMU only, fast)
     lidar_rate_hz: float = 10.0
     imu_rate_hz: float = 200.0
     noise: bool = True  # image, IMU and LiDAR noise (off: exact measurements)
@@ -251,34 +252,42 @@ class Simulator:
         """Everything written for one frame: images, camera pose, LiDAR scan when due."""
         opts = self.options
         t = frame / opts.rate_hz
-        left, right, _ = self.render_stereo(frame)
         T_world_body = self.trajectory.pose(np.array([t]))[0]
-        record = {
-            "t_ns": T0_NS + round(t * 1e9),
-            "left": left,
-            "right": right,
-            "T_world_cam0": T_world_body @ self.camera.T_body_cam0,
-        }
+        record = {"t_ns": T0_NS + round(t * 1e9)}
+        if opts.cameras:
+            record["left"], record["right"], _ = self.render_stereo(frame)
+            record["T_world_cam0"] = T_world_body @ self.camera.T_body_cam0
         lidar_every = max(round(opts.rate_hz / opts.lidar_rate_hz), 1)
         if opts.lidar and frame % lidar_every == 0:
-            T_world_lidar = T_world_body @ self.lidar.T_body_lidar
-            scan = self.lidar.scan(
-                self.scene, T_world_lidar, rng, noise=opts.noise, movers=self.movers_mesh(t)
-            )
-            record["lidar"] = (scan, T_world_lidar)
+            record["lidar"] = self._render_sweep(t, rng)
         return record
+
+    def _render_sweep(self, t: float, rng: np.random.Generator) -> tuple:
+        """A LiDAR sweep starting at t [s]: points in the sensor frame of their azimuth block,
+        the sensor pose at t, and each point's time after t [s] (its block's mid-time; blocks
+        past the end of the run are clipped to it)."""
+        block_t = t + self.lidar.block_times_s(1.0 / self.options.lidar_rate_hz)
+        block_t = np.minimum(block_t, self.trajectory.duration_s)
+        T_body_lidar = self.lidar.T_body_lidar
+        poses = self.trajectory.pose(block_t) @ T_body_lidar
+        scan, block = self.lidar.sweep(
+            self.scene, poses, rng, noise=self.options.noise, movers=self.movers_mesh(t)
+        )
+        T_world_lidar = self.trajectory.pose(np.array([t]))[0] @ T_body_lidar
+        return scan, T_world_lidar, (block_t[block] - t).astype(np.float32)
 
     @staticmethod
     def _write_record(writer: AslWriter, record: dict) -> None:
-        writer.write_stereo(record["t_ns"], record["left"], record["right"], _core.write_image)
-        writer.write_camera_pose(record["t_ns"], record["T_world_cam0"])
+        if "left" in record:
+            writer.write_stereo(record["t_ns"], record["left"], record["right"], _core.write_image)
+            writer.write_camera_pose(record["t_ns"], record["T_world_cam0"])
         if "lidar" in record:
             writer.write_lidar(record["t_ns"], *record["lidar"])
 
     def write(self, out: str | Path, progress: bool = True) -> dict:
         """Write the whole sequence (EuRoC ASL layout); returns the manifest."""
         opts = self.options
-        writer = AslWriter(out, lidar=opts.lidar)
+        writer = AslWriter(out, lidar=opts.lidar, cameras=opts.cameras)
         manifest = {
             "status": "running",
             "preset": opts.preset,

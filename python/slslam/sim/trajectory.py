@@ -249,8 +249,9 @@ class RobotTrajectory:
         if duration_s is None:
             return full
         _require(bool(np.isfinite(duration_s) and duration_s > 0), "duration_s", "must be > 0")
+        # a closed loop can be driven lap after lap: the periodic spline continues past its length
         _require(
-            duration_s <= full + 1e-9,
+            self.closed or duration_s <= full + 1e-9,
             "duration_s",
             f"{duration_s} s needs more than the {self.length_m:.2f} m path "
             f"(at most {full:.2f} s at {o.speed_mps} m/s)",
