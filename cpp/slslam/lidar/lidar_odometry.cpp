@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "slslam/core/check.h"
 
 namespace slslam::lidar {
 
 namespace {
+
+// A sweep-to-sweep jump beyond this means registration diverged (100 m/s at 10 Hz) [m].
+constexpr double kMaxJumpM = 10.0;
 
 double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -243,6 +247,13 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
   result.map_points = static_cast<int>(map_.num_points());
   result.map_ms = MsSince(t0);
 
+  if (!T_world_sensor.matrix().allFinite() ||
+      (scans_ > 0 &&
+       (T_world_sensor.translation() - T_world_sensor_.translation()).norm() > kMaxJumpM)) {
+    throw std::runtime_error(Message("LiDAR odometry lost track at the sweep of ", t_ns,
+                                     " ns: the pose is not finite or jumped more than ", kMaxJumpM,
+                                     " m"));
+  }
   if (scans_ > 0) T_prev_curr_ = T_world_sensor_.inverse() * T_world_sensor;
   T_world_sensor_ = T_world_sensor;
   last_t_ns_ = t_ns;

@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from slslam._version import __version__
 from slslam.datasets.trajectory_io import write_trajectory
+from slslam.errors import InputError
 from slslam.eval.metrics import compute_ape, compute_rpe
 from slslam.lidar.datasets import LidarSequence
 from slslam.lidar.slam import LidarSlamResult, _rigid_inverse
@@ -89,8 +90,11 @@ def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
     for name, T in (("odometry", result.T_world_body_odometry), ("slam", result.T_world_body)):
         est = to_trajectory(result.t_ns, T)
         ape = compute_ape(gt, est, align="se3", max_diff_s=0.003)
-        rpe = compute_rpe(gt, est, delta=1.0, delta_unit="m", align="se3", max_diff_s=0.003)
-        out[name] = {"ape_m": ape.stats, "rpe_1m_m": rpe.stats}
+        try:
+            rpe = compute_rpe(gt, est, delta=1.0, delta_unit="m", align="se3", max_diff_s=0.003)
+        except InputError:  # a run shorter than 1 m of travel has no pose pair to compare
+            rpe = None
+        out[name] = {"ape_m": ape.stats, "rpe_1m_m": None if rpe is None else rpe.stats}
         out[name]["_ape"] = ape
     return out
 

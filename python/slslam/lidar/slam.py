@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from slslam import _core
-from slslam.errors import InputError
+from slslam.errors import InputError, SlslamError
 from slslam.lidar.datasets import LidarSequence
 from slslam.progress import progress_bar
 
@@ -190,7 +190,10 @@ class LidarSlam:
         for k in progress_bar(range(n), desc="lidar", unit="sweep", enabled=progress, total=n):
             sweep = sequence.sweep(k)
             times = [] if sweep.point_time_s is None else sweep.point_time_s
-            r = odometry.process_scan(sweep.t_ns, sweep.points, times)
+            try:
+                r = odometry.process_scan(sweep.t_ns, sweep.points, times)
+            except RuntimeError as exc:
+                raise SlslamError(f"{sequence.name}: {exc}") from None
             poses[k] = r.T_world_body
             for key in stages:
                 per_sweep[key][k] = getattr(r, key)
