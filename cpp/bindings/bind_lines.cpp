@@ -74,9 +74,11 @@ void BindLines(py::module_& m) {
 
   m.def(
       "extract_lines",
-      [](const py::array& image, const LinePreprocessOptions& preprocess, bool run_preprocess) {
+      [](const py::array& image, const LinePreprocessOptions& preprocess, bool run_preprocess,
+         const std::string& detector) {
         const cv::Mat img = WrapGray(image, "image");
         LineExtractorOptions options{preprocess, run_preprocess};
+        options.detector = ParseLineDetector(detector);
         LineFeatures f;
         {
           py::gil_scoped_release release;
@@ -85,9 +87,9 @@ void BindLines(py::module_& m) {
         return py::make_tuple(ToArray(f.segments), ToNumpy(f.descriptors), f.raw_count);
       },
       py::arg("image"), py::arg("preprocess") = LinePreprocessOptions{},
-      py::arg("run_preprocess") = true,
-      "LSD + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), "
-      "number of raw LSD segments).");
+      py::arg("run_preprocess") = true, py::arg("detector") = "lsd",
+      "Segments (detector: lsd or fld) + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 "
+      "u1 v1, LBD uint8 (N, 32), number of raw segments).");
   m.def(
       "preprocess_lines",
       [](const SegmentArray& segments, int width, int height,

@@ -249,11 +249,13 @@ void BindTracking(py::module_& m) {
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
       .def(py::init([](const TrackerOptions& options, const LinePreprocessOptions& preprocess,
-                       float line_detection_scale) {
-             LineExtractorOptions lines{preprocess, true, line_detection_scale};
+                       float line_detection_scale, const std::string& line_detector) {
+             LineExtractorOptions lines{preprocess, true, line_detection_scale,
+                                        ParseLineDetector(line_detector)};
              return std::make_unique<TrackerSession>(options, lines);
            }),
-           py::arg("options"), py::arg("line_preprocess"), py::arg("line_detection_scale") = 1.0f)
+           py::arg("options"), py::arg("line_preprocess"), py::arg("line_detection_scale") = 1.0f,
+           py::arg("line_detector") = "lsd")
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),

@@ -1054,7 +1054,7 @@ class TrackerCore:
     """
     Stereo point-line tracker with local mapping (use slslam.Tracker).
     """
-    def __init__(self, options: TrackerOptions, line_preprocess: LinePreprocessOptions, line_detection_scale: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> None:
+    def __init__(self, options: TrackerOptions, line_preprocess: LinePreprocessOptions, line_detection_scale: typing.SupportsFloat | typing.SupportsIndex = 1.0, line_detector: str = 'lsd') -> None:
         ...
     def flush(self) -> None:
         ...
@@ -1918,9 +1918,9 @@ def associate_points_to_lines(keypoints: typing.Annotated[numpy.typing.ArrayLike
     """
     For every segment, the indices of its associated keypoints.
     """
-def extract_lines(image: numpy.ndarray, preprocess: LinePreprocessOptions = ..., run_preprocess: bool = True) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
+def extract_lines(image: numpy.ndarray, preprocess: LinePreprocessOptions = ..., run_preprocess: bool = True, detector: str = 'lsd') -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
     """
-    LSD + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw LSD segments).
+    Segments (detector: lsd or fld) + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw segments).
     """
 def extract_orb(image: numpy.ndarray, options: OrbOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 2]"], typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 1]"], numpy.ndarray]:
     """

@@ -181,6 +181,8 @@ class TrackingConfig:
     line_sigma_px: float = _option(3.0, "[0.01, 1000]")
     # LSD runs on the image scaled by this (segments mapped back; LBD at full resolution)
     line_detection_scale: float = _option(1.0, "[0.1, 1]")
+    # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
+    line_detector: Literal["lsd", "fld"] = "lsd"
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
     line_inlier_weight: float = _option(1.0, "[0, 100]")

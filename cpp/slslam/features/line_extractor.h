@@ -2,6 +2,8 @@
 // contrib line_descriptor).
 #pragma once
 
+#include <string>
+
 #include <opencv2/core.hpp>
 
 #include "slslam/features/line_preprocess.h"
@@ -15,6 +17,14 @@ struct LineFeatures {
   int raw_count = 0;    ///< LSD segments before preprocessing
 };
 
+/// The segment detector. LSD (OpenCV's LineSegmentDetector, LSD_REFINE_STD) is the paper's; FLD
+/// (OpenCV contrib ximgproc's FastLineDetector: Canny edges fitted by lines, no merging) took
+/// about half LSD's time on simulated mine frames (benchmarks/README.md).
+enum class LineDetector { kLsd, kFld };
+
+/// "lsd" or "fld"; anything else throws std::invalid_argument naming the choices.
+LineDetector ParseLineDetector(const std::string& name);
+
 struct LineExtractorOptions {
   LinePreprocessOptions preprocess;
   bool run_preprocess = true;  ///< false: LSD segments as they come (for comparisons)
@@ -22,12 +32,13 @@ struct LineExtractorOptions {
   /// full resolution; LBD and everything after work at full resolution. 0.5 cuts LSD's time about
   /// 4x (benchmarks/README.md) and keeps the long segments preprocessing keeps anyway [-], (0, 1]
   float detection_scale = 1.0f;
+  LineDetector detector = LineDetector::kLsd;
 
   void Check() const;
 };
 
-// LSD (cv::createLineSegmentDetector, LSD_REFINE_STD) on an 8-bit gray image, then preprocessing
-// and LBD descriptors. A textureless image yields no segments, not an error.
+// Segments (LSD or FLD, options.detector) on an 8-bit gray image, then preprocessing and LBD
+// descriptors. A textureless image yields no segments, not an error.
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options = {});
 
 // LBD descriptors (32 bytes each) of given segments on an image.

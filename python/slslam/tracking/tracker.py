@@ -231,6 +231,7 @@ class Tracker:
             _core_options(camera, self.config, self.vocabulary),
             _core.LinePreprocessOptions(),
             self.config.tracking.line_detection_scale,
+            self.config.tracking.line_detector,
         )
         self._results: list[TrackResult] = []
         self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")

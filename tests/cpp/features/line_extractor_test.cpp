@@ -15,34 +15,58 @@ float DistanceToLine(const LineSegment& s, const Eigen::Vector2f& p) {
   return std::abs(n.dot(p - s.start));
 }
 
-TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
-  // Dark rectangles with straight edges (arches, pipes) on a mid-gray wall, slightly blurred.
+// Dark rectangles with straight edges (arches, pipes) on a mid-gray wall, slightly blurred.
+cv::Mat Rectangles() {
   cv::Mat image(480, 752, CV_8U, cv::Scalar(120));
   cv::rectangle(image, cv::Rect(100, 60, 200, 300), cv::Scalar(40), cv::FILLED);
   cv::rectangle(image, cv::Rect(420, 120, 250, 80), cv::Scalar(200), cv::FILLED);
   cv::line(image, cv::Point(380, 300), cv::Point(700, 440), cv::Scalar(30), 5);
   cv::GaussianBlur(image, image, cv::Size(), 1.0);
+  return image;
+}
+
+// Every segment of b lies on a segment of a: both endpoints within tolerance_px of the same
+// line, at an angle below 1 degree.
+void ExpectOnTheSameLines(const Segments& a, const Segments& b, float tolerance_px) {
+  for (const LineSegment& s : b) {
+    float best = 1e9f;
+    for (const LineSegment& t : a) {
+      if (AngleDifference(s.Angle(), t.Angle()) > 1.0f * static_cast<float>(M_PI) / 180.0f)
+        continue;
+      best = std::min(best, std::max(DistanceToLine(t, s.start), DistanceToLine(t, s.end)));
+    }
+    EXPECT_LT(best, tolerance_px) << "segment (" << s.start.transpose() << ") - ("
+                                  << s.end.transpose() << ")";
+  }
+}
+
+TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
+  const cv::Mat image = Rectangles();
   LineExtractorOptions full, half;
   half.detection_scale = 0.5f;
   const LineFeatures a = ExtractLines(image, full), b = ExtractLines(image, half);
   ASSERT_GE(a.segments.size(), 6u);
   ASSERT_GE(b.segments.size(), 6u);
   EXPECT_EQ(b.descriptors.rows, static_cast<int>(b.segments.size()));
-  // Every half-resolution segment lies on a full-resolution one: both endpoints within 1 px of
-  // the same line, at an angle below 1 degree.
-  for (const LineSegment& s : b.segments) {
-    float best = 1e9f;
-    for (const LineSegment& t : a.segments) {
-      if (AngleDifference(s.Angle(), t.Angle()) > 1.0f * static_cast<float>(M_PI) / 180.0f)
-        continue;
-      best = std::min(best, std::max(DistanceToLine(t, s.start), DistanceToLine(t, s.end)));
-    }
-    EXPECT_LT(best, 1.0f) << "segment (" << s.start.transpose() << ") - (" << s.end.transpose()
-                          << ")";
-  }
+  ExpectOnTheSameLines(a.segments, b.segments, 1.0f);
   LineExtractorOptions bad;
   bad.detection_scale = 0.0f;
   EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
+TEST(LineExtractor, FastLineDetectorFindsTheLinesLsdFinds) {
+  const cv::Mat image = Rectangles();
+  LineExtractorOptions lsd, fld;
+  fld.detector = LineDetector::kFld;
+  const LineFeatures a = ExtractLines(image, lsd), b = ExtractLines(image, fld);
+  ASSERT_GE(b.segments.size(), 6u);
+  EXPECT_EQ(b.descriptors.rows, static_cast<int>(b.segments.size()));
+  ExpectOnTheSameLines(a.segments, b.segments, 1.0f);  // no FLD segment off LSD's lines
+  ExpectOnTheSameLines(b.segments, a.segments, 1.0f);  // and none of LSD's missed
+  EXPECT_TRUE(ExtractLines(cv::Mat(480, 752, CV_8U, cv::Scalar(0)), fld).segments.empty());
+  EXPECT_EQ(ParseLineDetector("fld"), LineDetector::kFld);
+  EXPECT_EQ(ParseLineDetector("lsd"), LineDetector::kLsd);
+  EXPECT_THROW(ParseLineDetector("hough"), std::invalid_argument);
 }
 
 }  // namespace
