@@ -24,8 +24,10 @@ struct LioSmootherOptions {
                     ///< tilt and biases); the oldest is held fixed
   int max_iterations = 10;                   ///< Levenberg-Marquardt iterations per update [-]
   double initial_velocity_sigma_mps = 0.05;  ///< prior on the first state's velocity [m/s]
-  double initial_gyro_bias_sigma = 0.01;     ///< prior on the first gyro bias [rad/s]
-  double initial_acc_bias_sigma = 0.1;       ///< prior on the first accelerometer bias [m/s^2]
+  double initial_gyro_bias_sigma = 0.001;    ///< prior on the first gyro bias [rad/s]
+  double initial_acc_bias_sigma = 0.01;      ///< prior on the first accelerometer bias [m/s^2]: a
+                                             ///< loose one lets the bias absorb a roll error in a
+                                             ///< corridor, where scans see roll weakly
   double initial_tilt_sigma_rad = 0.02;      ///< prior on the first roll and pitch (from gravity
                                              ///< alignment during a vibrating start) [rad]
   void Check() const;
