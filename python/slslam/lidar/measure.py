@@ -3,8 +3,9 @@ width on its map against a laser range finder).
 
 Cross-sections are cut perpendicular to the driven path (the robot drives along the roadway): the
 map points within ``slab_m`` of each section plane, in the band of heights where the walls are
-vertical, give the width as the distance between the outermost wall points (2nd / 98th
-percentiles of the lateral coordinate, robust to noise, pipes and cables standing off the walls).
+vertical, give the width as the distance between the two walls, each taken as the median of the
+outermost band of lateral coordinates (robust to range noise and to the arches, pipe and cables
+standing off the walls).
 The length of a straight roadway is the extent of the map along its axis.
 """
 
@@ -25,6 +26,7 @@ def cross_section_widths(
     slab_m: float = 0.1,
     band_m: tuple[float, float] = (0.3, 1.8),
     min_points: int = 20,
+    outer_m: float = 0.1,
 ) -> np.ndarray:
     """Roadway width [m] at stations every ``spacing_m`` along the path (NaN where a section
     has fewer than ``min_points`` wall points). ``band_m``: heights above the floor (the lowest
@@ -52,7 +54,13 @@ def cross_section_widths(
         if len(wall) < min_points:
             continue
         lateral = wall @ left
-        widths[k] = np.percentile(lateral, 98) - np.percentile(lateral, 2)
+        # Each wall at the median of its outermost points (within outer_m of the 98th / 2nd
+        # percentile): range noise spreads a wall symmetrically about it; arches, the pipe and
+        # the cables stand inside and stay out of the band.
+        hi, lo = np.percentile(lateral, 98), np.percentile(lateral, 2)
+        widths[k] = np.median(lateral[lateral > hi - outer_m]) - np.median(
+            lateral[lateral < lo + outer_m]
+        )
     return widths
 
 
