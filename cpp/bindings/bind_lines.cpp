@@ -62,7 +62,8 @@ void BindLines(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("min_votes", &LineMatchOptions::min_votes)
       .def_readwrite("max_lbd_distance", &LineMatchOptions::max_lbd_distance)
-      .def_readwrite("max_angle_rad", &LineMatchOptions::max_angle_rad);
+      .def_readwrite("max_angle_rad", &LineMatchOptions::max_angle_rad)
+      .def("check", &LineMatchOptions::Check);
   py::class_<StereoLineOptions>(m, "StereoLineOptions", "Stereo line matching.")
       .def(py::init<>())
       .def_readwrite("min_row_overlap", &StereoLineOptions::min_row_overlap)
@@ -70,7 +71,8 @@ void BindLines(py::module_& m) {
       .def_readwrite("max_angle_rad", &StereoLineOptions::max_angle_rad)
       .def_readwrite("min_angle_from_horizontal_rad",
                      &StereoLineOptions::min_angle_from_horizontal_rad)
-      .def_readwrite("min_disparity_px", &StereoLineOptions::min_disparity_px);
+      .def_readwrite("min_disparity_px", &StereoLineOptions::min_disparity_px)
+      .def("check", &StereoLineOptions::Check);
 
   m.def(
       "extract_lines",

@@ -173,13 +173,15 @@ void BindTracking(py::module_& m) {
       .def_readwrite("rounds", &PoseOptimizerOptions::rounds)
       .def_readwrite("iterations_per_round", &PoseOptimizerOptions::iterations_per_round)
       .def_readwrite("line_angle_weight", &PoseOptimizerOptions::line_angle_weight)
-      .def_readwrite("line_weight", &PoseOptimizerOptions::line_weight);
+      .def_readwrite("line_weight", &PoseOptimizerOptions::line_weight)
+      .def("check", &PoseOptimizerOptions::Check);
   py::class_<BundleAdjustmentOptions>(m, "BundleAdjustmentOptions", "Local bundle adjustment.")
       .def(py::init<>())
       .def_readwrite("robust_iterations", &BundleAdjustmentOptions::robust_iterations)
       .def_readwrite("refine_iterations", &BundleAdjustmentOptions::refine_iterations)
       .def_readwrite("line_angle_weight", &BundleAdjustmentOptions::line_angle_weight)
-      .def_readwrite("line_weight", &BundleAdjustmentOptions::line_weight);
+      .def_readwrite("line_weight", &BundleAdjustmentOptions::line_weight)
+      .def("check", &BundleAdjustmentOptions::Check);
   py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
       .def(py::init<>())
       .def_readwrite("local_keyframes", &LocalMapperOptions::local_keyframes)
@@ -187,7 +189,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("cull_keyframes", &LocalMapperOptions::cull_keyframes)
       .def_readwrite("redundant_ratio", &LocalMapperOptions::redundant_ratio)
       .def_readwrite("triangulate", &LocalMapperOptions::triangulate)
-      .def_readwrite("ba", &LocalMapperOptions::ba);
+      .def_readwrite("ba", &LocalMapperOptions::ba)
+      .def("check", &LocalMapperOptions::Check);
   py::class_<StereoMatchOptions>(m, "StereoMatchOptions", "Stereo keypoint matching.")
       .def(py::init<>())
       .def_readwrite("max_row_offset_px", &StereoMatchOptions::max_row_offset_px)
@@ -197,7 +200,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("ratio", &StereoMatchOptions::ratio)
       .def_readwrite("max_depth_baselines", &StereoMatchOptions::max_depth_baselines)
       .def_readwrite("subpixel_window", &StereoMatchOptions::subpixel_window)
-      .def_readwrite("subpixel_search", &StereoMatchOptions::subpixel_search);
+      .def_readwrite("subpixel_search", &StereoMatchOptions::subpixel_search)
+      .def("check", &StereoMatchOptions::Check);
 
   py::class_<RelocalisationOptions>(m, "RelocalisationOptions",
                                     "Relocalisation by bag of words, PnP RANSAC and the local map.")

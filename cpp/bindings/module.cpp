@@ -1,4 +1,7 @@
 // slslam._core: the compiled half of slslam. One bind_<module>.cpp per C++ module.
+#include <exception>
+#include <stdexcept>
+
 #include <pybind11/pybind11.h>
 
 namespace py = pybind11;
@@ -11,6 +14,7 @@ void BindRayCaster(py::module_& m);
 void BindLines(py::module_& m);
 void BindTracking(py::module_& m);
 void BindPlace(py::module_& m);
+void BindMapIo(py::module_& m);
 #ifdef SLSLAM_WITH_PCL
 void BindLidar(py::module_& m);
 #endif
@@ -19,6 +23,18 @@ void BindLidar(py::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "slslam C++ core (camera geometry, rectification, features)";
   m.attr("__version__") = SLSLAM_VERSION;
+  // A failed check (std::invalid_argument: an option's Check(), a Require on an input) reaches
+  // Python as slslam.errors.InputError, the project's error type (a ValueError): one line that
+  // names the option or input, which the command line prints without a traceback.
+  static py::handle input_error =
+      py::object(py::module_::import("slslam.errors").attr("InputError")).release();
+  py::register_exception_translator([](std::exception_ptr error) {
+    try {
+      if (error) std::rethrow_exception(error);
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetObject(input_error.ptr(), py::make_tuple(py::none(), e.what()).ptr());
+    }
+  });
   slslam::bindings::BindCore(m);
   slslam::bindings::BindFeatures(m);
   slslam::bindings::BindSim(m);
@@ -26,6 +42,7 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindLines(m);
   slslam::bindings::BindTracking(m);
   slslam::bindings::BindPlace(m);
+  slslam::bindings::BindMapIo(m);
 #ifdef SLSLAM_WITH_PCL
   slslam::bindings::BindLidar(m);
 #endif

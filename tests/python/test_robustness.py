@@ -27,7 +27,7 @@ from slslam.cli import main
 from slslam.config import Config, ConfigError, check_config, load_config, option_range
 from slslam.datasets import CameraCalibration
 from slslam.datasets.trajectory_io import read_trajectory
-from slslam.errors import CalibrationError, TrajectoryFileError
+from slslam.errors import CalibrationError, InputError, TrajectoryFileError
 
 from conftest import camera_yaml
 
@@ -664,6 +664,204 @@ def test_scoring_failures_are_recorded_not_raised(tmp_path):
     short = PoseTrajectory3D(poses_se3=[np.eye(4)] * 2, timestamps=np.arange(2.0))
     assert "evaluation_error" in _score(short, still, tmp_path)
     assert not (tmp_path / "metrics.json").exists()  # only run_sequence writes it
+
+
+# ----------------------------------------------------------------------------------------------
+# C++ option structs through the bindings (the gtests in tests/cpp/tracking/options_check_test.cpp
+# walk every field's range; here: every bound field reaches Python as InputError naming it)
+
+#: (class, field): the non-finite or extreme values its range allows on purpose.
+CPP_ALLOWED = {
+    ("LinePreprocessOptions", "max_gap_px"): {math.inf, 1e30},  # inf: the paper's rule, no gap
+    ("GridLimitOptions", "strong_score"): {math.inf, -math.inf, 1e30, -1e30},  # -inf: off
+    ("OrbOptions", "denoise_above_noise"): {1e30, -1e30},  # <= 0: never; any finite level
+}
+#: Structs whose every field has a finite range (tests/cpp/tracking/options_check_test.cpp walks
+#: them): +-1e30 and the extremes of int must fail too. In the others (LiDAR: "finite", ">= n")
+#: a huge value is slow, not wrong, so only non-finite values and INT_MIN must fail.
+CPP_BOUNDED = {
+    "AssociationOptions",
+    "BundleAdjustmentOptions",
+    "DynamicCellOptions",
+    "GridLimitOptions",
+    "GuidedMatchOptions",
+    "LineMatchOptions",
+    "LinePreprocessOptions",
+    "LocalMapperOptions",
+    "MatchOptions",
+    "OrbOptions",
+    "PoseOptimizerOptions",
+    "RelocalisationOptions",
+    "StereoLineOptions",
+    "StereoMatchOptions",
+    "TrackerOptions",
+    "VocabularyOptions",
+}
+
+
+#: The option structs this family walks (a new struct joins the list once its check() names its
+#: fields and refuses non-finite values).
+CPP_CHECKED = CPP_BOUNDED | {"RegistrationOptions"}
+
+
+def cpp_option_fields() -> list[tuple[str, str, type]]:
+    from slslam import _core
+
+    fields = []
+    for name in sorted(dir(_core)):
+        cls = getattr(_core, name)
+        if name not in CPP_CHECKED:
+            continue
+        obj = cls()
+        for attr in sorted(dir(obj)):
+            value = None if attr.startswith("_") else getattr(obj, attr)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                fields.append((name, attr, type(value)))
+    return fields
+
+
+CPP_FIELDS = cpp_option_fields()
+
+
+def test_every_cpp_option_struct_is_checked():
+    from slslam import _core
+
+    for name in sorted(CPP_CHECKED):
+        if name == "RegistrationOptions" and not hasattr(_core, name):
+            continue  # built without PCL
+        assert hasattr(getattr(_core, name), "check"), name
+    assert len(CPP_FIELDS) >= 100, len(CPP_FIELDS)
+
+
+@pytest.mark.parametrize(
+    ("cls_name", "field", "kind"), CPP_FIELDS, ids=[f"{c}.{f}" for c, f, _ in CPP_FIELDS]
+)
+def test_cpp_options_refuse_what_cannot_be_meant(cls_name, field, kind):
+    """NaN, infinities, +-1e30 and the extremes of int fail check() with the project's error
+    type naming the field, unless the field's documented range takes them."""
+    from slslam import _core
+    from slslam.errors import InputError
+
+    cls = getattr(_core, cls_name)
+    try:
+        setattr(cls(), field, -1)
+    except TypeError:  # an unsigned field (a seed): any value it holds is meant
+        return
+    bounded = cls_name in CPP_BOUNDED
+    if kind is float:
+        values = [math.nan, math.inf, -math.inf] + ([1e30, -1e30] if bounded else [])
+    else:
+        values = [-(2**31)] + ([2**31 - 1] if bounded else [])
+    allowed = CPP_ALLOWED.get((cls_name, field), set())
+    for value in values:
+        obj = cls()
+        if cls_name == "TrackerOptions":  # its default camera is empty: give it a valid one
+            obj.rig = _core.StereoRig(
+                _core.PinholeCamera(400.0, 400.0, 320.0, 240.0, 640, 480), 0.1
+            )
+        setattr(obj, field, value)
+        CASES["C++ options"] += 1
+        try:
+            obj.check()
+        except InputError as exc:
+            message = str(exc)
+            assert field in message, (cls_name, field, message)
+            assert "\n" not in message and len(message) < 300
+            continue
+        assert value in allowed, f"{cls_name}.{field} = {value} accepted"
+
+
+def test_cpp_failures_arrive_as_input_error():
+    from slslam import _core
+    from slslam.errors import InputError
+
+    options = _core.TrackerOptions()
+    options.rig = _core.StereoRig(_core.PinholeCamera(400.0, 400.0, 320.0, 240.0, 640, 480), 0.1)
+    options.mapping.ba.line_weight = math.nan  # aborted the process inside Ceres before
+    with pytest.raises(InputError, match=r"ba\.line_weight"):
+        _core.TrackerCore(options, _core.LinePreprocessOptions())
+    with pytest.raises(InputError, match="baseline"):
+        _core.StereoRig(_core.PinholeCamera(400.0, 400.0, 320.0, 240.0, 640, 480), 0.0)
+    CASES["C++ options"] += 2
+
+
+# ----------------------------------------------------------------------------------------------
+# LiDAR files
+
+
+def write_cloud(path: Path, xyz: np.ndarray, names=("x", "y", "z"), height: int = 1) -> Path:
+    """A binary PCD or PLY of float32 rows with the given field names."""
+    data = np.ascontiguousarray(xyz, dtype="<f4").tobytes()
+    n = len(xyz)
+    if path.suffix == ".pcd":
+        header = (
+            f"VERSION 0.7\nFIELDS {' '.join(names)}\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            f"WIDTH {n // height}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\n"
+            "DATA binary\n"
+        )
+    else:
+        header = f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\n"
+        header += "".join(f"property float {name}\n" for name in names) + "end_header\n"
+    path.write_bytes(header.encode() + data)
+    return path
+
+
+@pytest.fixture
+def lidar_module():
+    import slslam.lidar
+
+    if not slslam.lidar.available():
+        pytest.skip("slslam._core was built without PCL")
+    return slslam.lidar
+
+
+@SETTINGS
+@given(
+    suffix=st.sampled_from([".pcd", ".ply"]),
+    row=st.integers(0, 5),
+    column=st.integers(0, 2),
+    value=st.sampled_from([math.nan, math.inf, -math.inf]),
+)
+def test_non_finite_points_are_named(lidar_module, tmp_path, suffix, row, column, value):
+    CASES["LiDAR files"] += 1
+    xyz = np.arange(18, dtype=np.float32).reshape(6, 3)
+    xyz[row, column] = value
+    path = write_cloud(tmp_path / f"c{suffix}", xyz)
+    with pytest.raises(InputError) as info:
+        lidar_module.read_points(path)
+    assert f"point {row} " in str(info.value)
+    assert_one_line_error(info.value, path)
+
+
+@pytest.mark.parametrize("suffix", [".pcd", ".ply"])
+@pytest.mark.parametrize(
+    "names", [("a", "y", "z"), ("x", "b", "z"), ("x", "y", "c"), ("X", "Y", "Z")]
+)
+def test_clouds_without_coordinates_are_refused(lidar_module, tmp_path, suffix, names):
+    CASES["LiDAR files"] += 1
+    path = write_cloud(tmp_path / f"c{suffix}", np.ones((4, 3)), names)
+    missing = next(axis for axis in "xyz" if axis not in names)
+    with pytest.raises(InputError, match=f"no '{missing}' field"):
+        lidar_module.read_points(path)
+    good = lidar_module.read_points(write_cloud(tmp_path / f"g{suffix}", np.ones((4, 3))))
+    assert good.shape == (4, 4) and np.all(good[:, :3] == 1.0)
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        ({"fine_voxel_m": 1e-7}, "fine_voxel_m"),
+        ({"fine_voxel_m": 1e-3, "coarse_voxel_m": 1e-3}, "coarse_voxel_m"),
+        ({"fine_voxel_m": math.inf}, "fine_voxel_m"),
+        ({"fine_voxel_m": math.nan}, "fine_voxel_m"),
+    ],
+)
+def test_voxel_sizes_too_small_for_the_cloud(lidar_module, options, named):
+    CASES["LiDAR files"] += 1
+    cloud = np.random.default_rng(0).uniform(-20, 20, (3000, 3)).astype(np.float32)
+    with pytest.raises(InputError, match=named) as info:
+        lidar_module.register(cloud, cloud, min_range_m=0.0, **options)
+    assert "_M_range_check" not in str(info.value)
 
 
 def test_case_count_reaches_the_goal(capsys):

@@ -5,6 +5,7 @@
 // condition fails, and Require with a string literal allocates nothing.
 #pragma once
 
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,42 @@ std::string Message(const Parts&... parts) {
 
 [[noreturn]] inline void ThrowInvalidArgument(const std::string& message) {
   throw std::invalid_argument(message);
+}
+
+// Practical ceilings shared by the options' Check()s: far above any sensible value, low enough
+// that no allocation, cast to int or product of two of them overflows.
+namespace limits {
+inline constexpr int kMaxKeypoints = 1'000'000;        ///< per image, per cell, per vote [-]
+inline constexpr int kMaxCellSizePx = 1 << 16;         ///< grid cells [px]
+inline constexpr float kMaxImageDistancePx = 1e5f;     ///< windows and distances in an image [px]
+inline constexpr float kMaxDescriptorDistance = 1e6f;  ///< Hamming bits or L2 [-]
+inline constexpr float kLbdBits = 256.0f;              ///< length of an LBD descriptor [bits]
+inline constexpr float kPi = 3.14159265358979f;
+}  // namespace limits
+
+// Option range checks, called by the options' Check(): each names the option ("orb.num_levels
+// must be in [1, 32], got 0") and builds its message only on failure. NaN fails every check; an
+// infinity fails unless the bound it meets is itself infinite.
+template <typename T, typename Low, typename High>
+void CheckInRange(const char* name, T value, Low low, High high) {
+  if (!(value >= static_cast<T>(low) && value <= static_cast<T>(high))) {
+    ThrowInvalidArgument(Message(name, " must be in [", low, ", ", high, "], got ", value));
+  }
+}
+
+// (low, high]: sizes, sigmas, ratios that must stay above a bound they may not reach.
+template <typename T, typename Low, typename High>
+void CheckAboveInRange(const char* name, T value, Low low, High high) {
+  if (!(value > static_cast<T>(low) && value <= static_cast<T>(high))) {
+    ThrowInvalidArgument(Message(name, " must be in (", low, ", ", high, "], got ", value));
+  }
+}
+
+// Any finite value (an option whose sign carries a meaning, e.g. "<= 0: off").
+template <typename T>
+void CheckFinite(const char* name, T value) {
+  if (!std::isfinite(static_cast<double>(value)))
+    ThrowInvalidArgument(Message(name, " must be finite, got ", value));
 }
 
 }  // namespace slslam

@@ -5,13 +5,22 @@
 #include "slslam/core/check.h"
 
 namespace slslam {
+namespace {
+// What can still be a camera: a side OpenCV maps and remaps without overflow, a focal length
+// below a 1e-7 rad pixel, radial-tangential coefficients an order beyond any real lens (a
+// coefficient of 1e6 folds the image onto itself: nothing would be tracked).
+constexpr int kMaxImageSidePx = 1 << 15;
+constexpr double kMaxFocalPx = 1e7;
+constexpr double kMaxDistortion = 100.0;
+}  // namespace
 
 void PinholeCamera::Check() const {
-  SLSLAM_CHECK(std::isfinite(fx) && fx > 0.0, "camera fx must be finite and > 0, got ", fx);
-  SLSLAM_CHECK(std::isfinite(fy) && fy > 0.0, "camera fy must be finite and > 0, got ", fy);
+  CheckAboveInRange("camera fx", fx, 0.0, kMaxFocalPx);
+  CheckAboveInRange("camera fy", fy, 0.0, kMaxFocalPx);
   SLSLAM_CHECK(std::isfinite(cx) && std::isfinite(cy),
                "camera principal point must be finite, got (", cx, ", ", cy, ")");
-  SLSLAM_CHECK(width > 0 && height > 0, "camera image size must be positive, got ", width, "x",
+  SLSLAM_CHECK(width > 0 && height > 0 && width <= kMaxImageSidePx && height <= kMaxImageSidePx,
+               "camera image size must be in [1, ", kMaxImageSidePx, "] per side, got ", width, "x",
                height);
 }
 
@@ -33,9 +42,8 @@ Eigen::Vector3d PinholeCamera::Unproject(const Eigen::Vector2d& pixel) const {
 
 void RadTanCamera::Check() const {
   pinhole.Check();
-  for (double k : distortion) {
-    Require(std::isfinite(k), "camera distortion coefficients must be finite");
-  }
+  for (double k : distortion)
+    CheckInRange("camera distortion coefficient", k, -kMaxDistortion, kMaxDistortion);
 }
 
 }  // namespace slslam

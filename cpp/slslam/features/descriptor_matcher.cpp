@@ -13,8 +13,8 @@
 namespace slslam {
 
 void MatchOptions::Check() const {
-  SLSLAM_CHECK(max_distance > 0.0f, "match.max_distance must be > 0, got ", max_distance);
-  SLSLAM_CHECK(ratio > 0.0f && ratio <= 1.0f, "match.ratio must be in (0, 1], got ", ratio);
+  CheckAboveInRange("match.max_distance", max_distance, 0.0f, limits::kMaxDescriptorDistance);
+  CheckAboveInRange("match.ratio", ratio, 0.0f, 1.0f);
 }
 
 Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
@@ -58,9 +58,9 @@ Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> MatchDescriptors(
 }
 
 void GuidedMatchOptions::Check() const {
-  SLSLAM_CHECK(radius_px > 0.0f, "guided.radius_px must be > 0, got ", radius_px);
-  SLSLAM_CHECK(max_distance > 0.0f, "guided.max_distance must be > 0, got ", max_distance);
-  SLSLAM_CHECK(ratio > 0.0f && ratio <= 1.0f, "guided.ratio must be in (0, 1], got ", ratio);
+  CheckAboveInRange("guided.radius_px", radius_px, 0.0f, limits::kMaxImageDistancePx);
+  CheckAboveInRange("guided.max_distance", max_distance, 0.0f, limits::kMaxDescriptorDistance);
+  CheckAboveInRange("guided.ratio", ratio, 0.0f, 1.0f);
 }
 
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {

@@ -10,11 +10,10 @@
 namespace slslam {
 
 void DynamicCellOptions::Check() const {
-  SLSLAM_CHECK(cell_size_px >= 4, "dynamic.cell_size_px must be >= 4, got ", cell_size_px);
-  SLSLAM_CHECK(sigma_px > 0.0, "dynamic.sigma_px must be > 0, got ", sigma_px);
-  SLSLAM_CHECK(alpha > 0.0 && alpha <= 1.0, "dynamic.alpha must be in (0, 1], got ", alpha);
-  SLSLAM_CHECK(threshold >= 0.0 && threshold <= 1.0, "dynamic.threshold must be in [0, 1], got ",
-               threshold);
+  CheckInRange("dynamic.cell_size_px", cell_size_px, 4, limits::kMaxCellSizePx);
+  CheckAboveInRange("dynamic.sigma_px", sigma_px, 0.0, 1e6);
+  CheckAboveInRange("dynamic.alpha", alpha, 0.0, 1.0);
+  CheckInRange("dynamic.threshold", threshold, 0.0, 1.0);
 }
 
 DynamicCellFilter::DynamicCellFilter(int width, int height, const DynamicCellOptions& options)

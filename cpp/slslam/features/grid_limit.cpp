@@ -9,8 +9,8 @@
 namespace slslam {
 
 void GridLimitOptions::Check() const {
-  SLSLAM_CHECK(cell_size_px >= 4, "grid.cell_size_px must be >= 4, got ", cell_size_px);
-  SLSLAM_CHECK(max_per_cell >= 1, "grid.max_per_cell must be >= 1, got ", max_per_cell);
+  CheckInRange("grid.cell_size_px", cell_size_px, 4, limits::kMaxCellSizePx);
+  CheckInRange("grid.max_per_cell", max_per_cell, 1, limits::kMaxKeypoints);
   Require(!std::isnan(strong_score), "grid.strong_score must not be NaN");
 }
 

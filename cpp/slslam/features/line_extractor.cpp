@@ -70,8 +70,7 @@ LineDetector ParseLineDetector(const std::string& name) {
 
 void LineExtractorOptions::Check() const {
   preprocess.Check();
-  SLSLAM_CHECK(detection_scale > 0.0f && detection_scale <= 1.0f,
-               "lines.detection_scale must be in (0, 1], got ", detection_scale);
+  CheckAboveInRange("lines.detection_scale", detection_scale, 0.0f, 1.0f);
 }
 
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options) {

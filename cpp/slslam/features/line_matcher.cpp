@@ -9,14 +9,19 @@
 namespace slslam {
 
 void LineMatchOptions::Check() const {
-  SLSLAM_CHECK(min_votes >= 1, "line_match.min_votes must be >= 1, got ", min_votes);
-  Require(max_lbd_distance > 0, "line_match.max_lbd_distance must be > 0");
-  Require(max_angle_rad > 0, "line_match.max_angle_rad must be > 0");
+  CheckInRange("line_match.min_votes", min_votes, 1, limits::kMaxKeypoints);
+  CheckAboveInRange("line_match.max_lbd_distance", max_lbd_distance, 0.0f, limits::kLbdBits);
+  CheckAboveInRange("line_match.max_angle_rad", max_angle_rad, 0.0f, limits::kPi);
 }
 
 void StereoLineOptions::Check() const {
-  Require(min_row_overlap > 0 && min_row_overlap <= 1, "stereo_lines.min_row_overlap in (0, 1]");
-  Require(max_lbd_distance > 0 && max_angle_rad > 0, "stereo_lines bounds must be > 0");
+  CheckAboveInRange("stereo_lines.min_row_overlap", min_row_overlap, 0.0f, 1.0f);
+  CheckAboveInRange("stereo_lines.max_lbd_distance", max_lbd_distance, 0.0f, limits::kLbdBits);
+  CheckAboveInRange("stereo_lines.max_angle_rad", max_angle_rad, 0.0f, limits::kPi);
+  CheckInRange("stereo_lines.min_angle_from_horizontal_rad", min_angle_from_horizontal_rad, 0.0f,
+               limits::kPi / 2);
+  CheckInRange("stereo_lines.min_disparity_px", min_disparity_px, 0.0f,
+               limits::kMaxImageDistancePx);
 }
 
 namespace {

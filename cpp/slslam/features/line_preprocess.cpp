@@ -11,9 +11,10 @@ namespace slslam {
 void LinePreprocessOptions::Check() const {
   SLSLAM_CHECK(length_ratio > 0.0f && length_ratio < 1.0f,
                "lines.length_ratio must be in (0, 1), got ", length_ratio);
-  SLSLAM_CHECK(theta_min_rad > 0.0f, "lines.theta_min_rad must be > 0, got ", theta_min_rad);
-  SLSLAM_CHECK(xi_d_px > 0.0f, "lines.xi_d_px must be > 0, got ", xi_d_px);
-  SLSLAM_CHECK(max_gap_px >= 0.0f, "lines.max_gap_px must be >= 0, got ", max_gap_px);
+  CheckAboveInRange("lines.theta_min_rad", theta_min_rad, 0.0f, limits::kPi);
+  CheckAboveInRange("lines.xi_d_px", xi_d_px, 0.0f, limits::kMaxImageDistancePx);
+  // infinity allowed: the paper's rule without a gap limit
+  CheckInRange("lines.max_gap_px", max_gap_px, 0.0f, std::numeric_limits<float>::infinity());
 }
 
 float AngleGateFactor(float candidate_length, float length_threshold) {

@@ -165,15 +165,15 @@ Keypoints ExtractPlain(const cv::Mat& image, const OrbOptions& options) {
 }  // namespace
 
 void OrbOptions::Check() const {
-  SLSLAM_CHECK(max_features > 0, "orb.max_features must be > 0, got ", max_features);
-  SLSLAM_CHECK(scale_factor > 1.0f, "orb.scale_factor must be > 1, got ", scale_factor);
-  SLSLAM_CHECK(num_levels >= 1, "orb.num_levels must be >= 1, got ", num_levels);
-  SLSLAM_CHECK(fast_threshold > 0, "orb.fast_threshold must be > 0, got ", fast_threshold);
-  SLSLAM_CHECK(edge_threshold >= 0, "orb.edge_threshold must be >= 0, got ", edge_threshold);
+  CheckInRange("orb.max_features", max_features, 1, limits::kMaxKeypoints);
+  CheckAboveInRange("orb.scale_factor", scale_factor, 1.0f, 4.0f);
+  CheckInRange("orb.num_levels", num_levels, 1, 32);
+  CheckInRange("orb.fast_threshold", fast_threshold, 1, 255);
+  CheckInRange("orb.edge_threshold", edge_threshold, 0, 1000);
   SLSLAM_CHECK(min_fast_threshold > 0 && min_fast_threshold <= fast_threshold,
                "orb.min_fast_threshold must be in [1, fast_threshold], got ", min_fast_threshold);
-  SLSLAM_CHECK(cell_size_px >= 8, "orb.cell_size_px must be >= 8, got ", cell_size_px);
-  Require(std::isfinite(denoise_above_noise), "orb.denoise_above_noise must be finite");
+  CheckInRange("orb.cell_size_px", cell_size_px, 8, limits::kMaxCellSizePx);
+  CheckFinite("orb.denoise_above_noise", denoise_above_noise);
 }
 
 double EstimateNoiseSigma(const cv::Mat& image) {

@@ -8,10 +8,10 @@
 namespace slslam {
 
 void AssociationOptions::Check() const {
-  SLSLAM_CHECK(cell_size_px >= 4, "association.cell_size_px must be >= 4, got ", cell_size_px);
-  SLSLAM_CHECK(layers >= 0, "association.layers must be >= 0, got ", layers);
-  SLSLAM_CHECK(max_distance_px > 0.0f, "association.max_distance_px must be > 0, got ",
-               max_distance_px);
+  CheckInRange("association.cell_size_px", cell_size_px, 4, limits::kMaxCellSizePx);
+  CheckInRange("association.layers", layers, 0, 1000);
+  CheckAboveInRange("association.max_distance_px", max_distance_px, 0.0f,
+                    limits::kMaxImageDistancePx);
 }
 
 std::vector<std::vector<int>> AssociatePointsToLines(const PixelArray& keypoints,

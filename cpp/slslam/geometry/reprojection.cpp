@@ -9,8 +9,8 @@ namespace slslam {
 
 void StereoRig::Check() const {
   camera.Check();
-  SLSLAM_CHECK(std::isfinite(baseline_m) && baseline_m > 0.0,
-               "stereo baseline must be positive and finite, got ", baseline_m, " m");
+  SLSLAM_CHECK(baseline_m > 0.0 && baseline_m <= 1000.0,
+               "stereo baseline must be in (0, 1000] m, got ", baseline_m, " m");
 }
 
 namespace {

@@ -12,6 +12,7 @@
 #include <random>
 #include <tuple>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <omp.h>
@@ -157,6 +158,11 @@ CloudXYZ::Ptr CropToVoxelCentroids(const PointMatrix& points, const Registration
     std::array<std::int32_t, 3> ijk;
     std::uint64_t key = 0;
     for (int a = 0; a < 3; ++a) {
+      // beyond +-kOffset voxels the key would clamp and merge far points into one voxel
+      SLSLAM_CHECK(std::abs(p[a]) * inverse_leaf < kOffset - 1,
+                   "fine_voxel_m = ", options.fine_voxel_m, " m is too small for a point ",
+                   std::abs(p[a]), " m from the sensor along one axis (at most ", kOffset - 1,
+                   " voxels each way); raise fine_voxel_m or lower max_range_m");
       ijk[a] = static_cast<std::int32_t>(std::floor(p[a] * inverse_leaf));
       const std::int64_t shifted = std::clamp<std::int64_t>(ijk[a] + kOffset, 0, 2 * kOffset - 1);
       key = (key << 21) | static_cast<std::uint64_t>(shifted);
@@ -180,6 +186,25 @@ CloudXYZ::Ptr CropToVoxelCentroids(const PointMatrix& points, const Registration
                                    static_cast<float>(c.z())));
   }
   return cloud;
+}
+
+// pcl::VoxelGrid and NDT's voxel grid number voxels with a 32-bit int over the cloud's bounding
+// box. A leaf too small for the extent overflows it: PCL then only warns, returns the input
+// unfiltered, and a later vector::at fails with a message that names nothing. Checked here.
+void CheckVoxelCount(const CloudXYZ& cloud, double leaf_m, const char* option, const char* name) {
+  if (cloud.empty()) return;
+  Eigen::Array3d low = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Array3d high = -low;
+  for (const auto& p : cloud.points) {
+    const Eigen::Array3d q(p.x, p.y, p.z);
+    low = low.min(q);
+    high = high.max(q);
+  }
+  const Eigen::Array3d extent = high - low;
+  const double voxels = ((extent / leaf_m).floor() + 1.0).prod();
+  SLSLAM_CHECK(voxels <= std::numeric_limits<std::int32_t>::max(), name, ": ", option, " = ",
+               leaf_m, " m is too small for the cloud's ", extent.x(), " x ", extent.y(), " x ",
+               extent.z(), " m extent (", voxels, " voxels, PCL indexes at most 2^31)");
 }
 
 CloudXYZ::Ptr Downsample(pcl::VoxelGrid<pcl::PointXYZ>* grid, const CloudXYZ::ConstPtr& cloud,
@@ -252,6 +277,7 @@ Prepared Preprocess(const PointMatrix& points, const RegistrationOptions& option
                " points left after range crop and voxel grid (need more than normal_k = ",
                options.normal_k, ")");
   coarse_grid.setSaveLeafLayout(true);
+  CheckVoxelCount(*fine, options.coarse_voxel_m, "coarse_voxel_m", name);
   const CloudN::Ptr coarse =
       WithoutNormals(*Downsample(&coarse_grid, fine, options.coarse_voxel_m));
   const int n = static_cast<int>(coarse->size());
@@ -749,6 +775,8 @@ Eigen::Matrix4f NdtAlign(const Prepared& source, const Prepared& target,
     auto tgt = std::make_shared<CloudXYZ>();
     pcl::copyPointCloud(*sources[level], *src);
     pcl::copyPointCloud(*targets[level], *tgt);
+    CheckVoxelCount(*tgt, resolutions[level],
+                    level == 0 ? "ndt_resolution_m" : "ndt_resolution_m / 2", "target");
     pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ> ndt;
     ndt.setResolution(static_cast<float>(resolutions[level]));
     ndt.setStepSize(options.ndt_step_m);
@@ -863,6 +891,29 @@ void RegistrationOptions::Check() const {
   SLSLAM_CHECK(ndt_step_m > 0, "ndt_step_m must be > 0, got ", ndt_step_m);
   SLSLAM_CHECK(ndt_iterations >= 1, "ndt_iterations must be >= 1, got ", ndt_iterations);
   SLSLAM_CHECK(num_threads >= 0, "num_threads must be >= 0, got ", num_threads);
+  // Every real-valued option finite: an infinite voxel or radius leaves one point, or makes every
+  // point a neighbour of every other. Counts bounded where they size work or memory.
+  const std::pair<const char*, double> reals[] = {
+      {"min_range_m", min_range_m},
+      {"max_range_m", max_range_m},
+      {"fine_voxel_m", fine_voxel_m},
+      {"coarse_voxel_m", coarse_voxel_m},
+      {"outlier_std_mul", outlier_std_mul},
+      {"feature_radius_m", feature_radius_m},
+      {"sac_ia_min_sample_m", sac_ia_min_sample_m},
+      {"sac_ia_max_corr_m", sac_ia_max_corr_m},
+      {"icp_max_corr_coarse_m", icp_max_corr_coarse_m},
+      {"icp_max_corr_fine_m", icp_max_corr_fine_m},
+      {"icp_transformation_epsilon", icp_transformation_epsilon},
+      {"icp_fitness_epsilon", icp_fitness_epsilon},
+      {"ndt_resolution_m", ndt_resolution_m},
+      {"ndt_step_m", ndt_step_m}};
+  for (const auto& [option, value] : reals) CheckFinite(option, value);
+  CheckInRange("outlier_k", outlier_k, 0, 10000);
+  CheckInRange("normal_k", normal_k, 3, 10000);
+  CheckInRange("sac_ia_samples", sac_ia_samples, 3, 10000);
+  CheckInRange("sac_ia_randomness", sac_ia_randomness, 1, 10000);
+  CheckInRange("num_threads", num_threads, 0, 4096);
 }
 
 void CheckPoints(const PointMatrix& points, const std::string& name, int min_points) {

@@ -21,6 +21,7 @@ Eigen::Vector3d ProjectOntoLine(const PluckerLine& line, const Eigen::Vector3d& 
 
 LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential)
     : rig_(rig), options_(options), sequential_(sequential) {
+  options_.Check();
   if (!sequential_) worker_ = std::thread([this] { Run(); });
 }
 

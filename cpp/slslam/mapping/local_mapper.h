@@ -31,6 +31,8 @@ struct LocalMapperOptions {
   double point_sigma_px = 1.0;    ///< [px]
   double line_sigma_px = 3.0;     ///< [px]
   BundleAdjustmentOptions ba;
+
+  void Check() const;  ///< mapping_options_check.cpp
 };
 
 struct LocalMappingStats {

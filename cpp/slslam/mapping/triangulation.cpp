@@ -222,19 +222,6 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
 
 }  // namespace
 
-void TriangulationOptions::Check() const {
-  Require(neighbours >= 0, "triangulation.neighbours must be >= 0");
-  Require(epipolar_px > 0.0, "triangulation.epipolar_px must be > 0");
-  Require(max_distance_binary > 0.0f && max_distance_float > 0.0f,
-          "triangulation descriptor bounds must be > 0");
-  Require(ratio > 0.0f && ratio <= 1.0f && line_ratio > 0.0f && line_ratio <= 1.0f,
-          "triangulation ratios must be in (0, 1]");
-  Require(min_parallax_deg >= 0.0 && min_plane_angle_deg >= 0.0,
-          "triangulation angles must be >= 0");
-  Require(max_depth_baselines > 0.0 && chi2 > 0.0 && sigma_px > 0.0 && line_sigma_px > 0.0,
-          "triangulation depth, chi2 and sigma must be > 0");
-}
-
 bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
                       const Eigen::Vector3d& x1, const Eigen::Matrix3d& R2,
                       const Eigen::Vector3d& t2, const Eigen::Vector3d& x2, Eigen::Vector3d* p_w) {

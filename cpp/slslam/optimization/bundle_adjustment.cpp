@@ -53,9 +53,20 @@ double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservati
 
 }  // namespace
 
+void BundleAdjustmentOptions::Check() const {
+  CheckInRange("ba.robust_iterations", robust_iterations, 0, 10000);
+  CheckInRange("ba.refine_iterations", refine_iterations, 0, 10000);
+  CheckAboveInRange("ba.chi2_mono", chi2_mono, 0.0, 1e6);
+  CheckAboveInRange("ba.chi2_stereo", chi2_stereo, 0.0, 1e6);
+  CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
+  CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
+  CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
+}
+
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
                                              const BundleAdjustmentOptions& options) {
   rig.Check();
+  options.Check();
   Require(problem != nullptr, "bundle adjustment needs a problem");
   BaProblem& ba = *problem;
   for (const auto& o : ba.point_observations) {

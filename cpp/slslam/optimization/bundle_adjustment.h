@@ -50,6 +50,8 @@ struct BundleAdjustmentOptions {
   double chi2_line = 5.991;    ///< on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< [px]
   double line_weight = 1.0;         ///< [-]
+
+  void Check() const;
 };
 
 struct BundleAdjustmentReport {

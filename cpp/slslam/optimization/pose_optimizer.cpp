@@ -46,6 +46,17 @@ double LineChi2(const StereoRig& rig, const Eigen::Matrix3d& R, const Eigen::Vec
 
 }  // namespace
 
+void PoseOptimizerOptions::Check() const {
+  CheckInRange("pose.rounds", rounds, 1, 100);
+  CheckInRange("pose.iterations_per_round", iterations_per_round, 1, 10000);
+  CheckInRange("pose.robust_rounds", robust_rounds, 0, rounds);
+  CheckAboveInRange("pose.chi2_mono", chi2_mono, 0.0, 1e6);
+  CheckAboveInRange("pose.chi2_stereo", chi2_stereo, 0.0, 1e6);
+  CheckAboveInRange("pose.chi2_line", chi2_line, 0.0, 1e6);
+  CheckInRange("pose.line_angle_weight", line_angle_weight, 0.0, 1e6);
+  CheckInRange("pose.line_weight", line_weight, 0.0, 1e6);
+}
+
 PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
                                  const Eigen::Vector3d& t_cw,
                                  const std::vector<PointObservation>& points,
@@ -53,8 +64,7 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_
                                  const PoseOptimizerOptions& options) {
   rig.Check();
   Require(R_cw.allFinite() && t_cw.allFinite(), "initial pose is not finite");
-  Require(options.rounds >= 1 && options.iterations_per_round >= 1,
-          "pose optimiser needs at least one round and one iteration");
+  options.Check();
 
   PoseOptimizerResult result;
   result.R_cw = R_cw;

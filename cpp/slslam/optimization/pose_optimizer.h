@@ -36,6 +36,8 @@ struct PoseOptimizerOptions {
   double chi2_line = 5.991;       ///< inlier bound on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< scale of the bounded angle term e3 [px]
   double line_weight = 1.0;         ///< weight of the line terms against the point terms [-]
+
+  void Check() const;
 };
 
 struct PoseOptimizerResult {

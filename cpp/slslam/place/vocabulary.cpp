@@ -24,8 +24,7 @@ void VocabularyOptions::Check() const {
   SLSLAM_CHECK(std::pow(static_cast<double>(branching), levels) <= 1e8,
                "VocabularyOptions.branching^levels must be <= 1e8 words, got ", branching, "^",
                levels);
-  SLSLAM_CHECK(kmeans_iterations >= 1, "VocabularyOptions.kmeans_iterations must be >= 1, got ",
-               kmeans_iterations);
+  CheckInRange("VocabularyOptions.kmeans_iterations", kmeans_iterations, 1, 10000);
 }
 
 void Vocabulary::BuildIndex() {

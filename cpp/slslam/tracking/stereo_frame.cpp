@@ -8,19 +8,6 @@
 
 namespace slslam {
 
-void StereoMatchOptions::Check() const {
-  Require(max_row_offset_px >= 0.0f, "stereo.max_row_offset_px must be >= 0");
-  Require(min_disparity_px > 0.0f && max_disparity_px > min_disparity_px,
-          "stereo disparities must satisfy 0 < min_disparity_px < max_disparity_px");
-  Require(max_distance_binary > 0.0f && max_distance_float > 0.0f,
-          "stereo descriptor distance bounds must be > 0");
-  Require(ratio > 0.0f && ratio <= 1.0f, "stereo.ratio must be in (0, 1]");
-  Require(max_depth_baselines > 0.0f, "stereo.max_depth_baselines must be > 0");
-  Require(subpixel_window >= 0 && subpixel_search >= 1,
-          "stereo.subpixel_window must be >= 0 and stereo.subpixel_search >= 1");
-  lines.Check();
-}
-
 Eigen::Vector3d StereoFrame::Backproject(const PinholeCamera& camera, int i) const {
   return depth[i] * camera.Unproject(keypoints.uv.row(i).cast<double>().transpose());
 }

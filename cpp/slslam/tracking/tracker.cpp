@@ -49,47 +49,6 @@ const char* TrackingStateName(TrackingState state) {
   return "UNKNOWN";
 }
 
-void RelocalisationOptions::Check() const {
-  Require(candidates >= 1, "tracking.relocalisation.candidates must be >= 1");
-  Require(min_matches >= 6, "tracking.relocalisation.min_matches must be >= 6");
-  Require(match_ratio > 0.0f && match_ratio <= 1.0f,
-          "tracking.relocalisation.match_ratio must be in (0, 1]");
-  Require(ransac_error_px > 0.0 && std::isfinite(ransac_error_px),
-          "tracking.relocalisation.ransac_error_px must be > 0");
-  Require(ransac_iterations >= 1, "tracking.relocalisation.ransac_iterations must be >= 1");
-  Require(min_pnp_inliers >= 4, "tracking.relocalisation.min_pnp_inliers must be >= 4");
-  Require(min_inliers > 0.0 && std::isfinite(min_inliers),
-          "tracking.relocalisation.min_inliers must be > 0");
-  Require(vocabulary_levels_up >= 0, "tracking.relocalisation.vocabulary_levels_up must be >= 0");
-}
-
-void TrackerOptions::Check() const {
-  rig.Check();
-  stereo.Check();
-  relocalisation.Check();
-  Require(min_init_points >= 3, "tracker.min_init_points must be >= 3");
-  Require(min_inliers >= 3, "tracker.min_inliers must be >= 3");
-  Require(search_radius_px > 0.0f, "tracker.search_radius_px must be > 0");
-  Require(max_distance_binary > 0.0f && max_distance_float > 0.0f,
-          "tracker descriptor distance bounds must be > 0");
-  Require(match_ratio > 0.0f && match_ratio <= 1.0f, "tracker.match_ratio must be in (0, 1]");
-  Require(keyframe_max_frames >= 1, "tracker.keyframe_max_frames must be >= 1");
-  Require(keyframe_min_frames >= 0, "tracker.keyframe_min_frames must be >= 0");
-  Require(keyframe_track_ratio > 0.0 && keyframe_track_ratio <= 1.0,
-          "tracker.keyframe_track_ratio must be in (0, 1]");
-  Require(close_depth_baselines > 0.0, "tracker.close_depth_baselines must be > 0");
-  Require(point_sigma_px > 0.0 && line_sigma_px > 0.0, "measurement sigmas must be > 0");
-  Require(line_inlier_weight >= 0.0 && std::isfinite(line_inlier_weight),
-          "tracker.line_inlier_weight must be finite and >= 0");
-  Require(recently_lost_frames >= 0, "tracker.recently_lost_frames must be >= 0");
-  Require(lost_velocity_decay >= 0.0 && lost_velocity_decay <= 1.0,
-          "tracker.lost_velocity_decay must be in [0, 1]");
-  Require(lost_search_scale >= 1.0f && std::isfinite(lost_search_scale),
-          "tracker.lost_search_scale must be >= 1");
-  Require(weak_keyframe_inliers >= 0, "tracker.weak_keyframe_inliers must be >= 0");
-  Require(weak_keyframe_frames >= 1, "tracker.weak_keyframe_frames must be >= 1");
-}
-
 Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   options_.Check();
   if (!options_.vocabulary_path.empty()) {

@@ -1,0 +1,78 @@
+// Range checks of the tracking options (stereo matching, relocalisation, the tracker), kept apart
+// from the algorithms so that a new option and its bound are read together. Names follow the
+// YAML keys (configs/default.yaml) where an option has one.
+#include <limits>
+
+#include "slslam/core/check.h"
+#include "slslam/tracking/stereo_frame.h"
+#include "slslam/tracking/tracker.h"
+
+namespace slslam {
+namespace {
+constexpr int kMaxCount = 1'000'000'000;  ///< frames, inliers: any sensible int [-]
+}  // namespace
+
+void StereoMatchOptions::Check() const {
+  CheckInRange("stereo.max_row_offset_px", max_row_offset_px, 0.0f, limits::kMaxImageDistancePx);
+  CheckAboveInRange("stereo.min_disparity_px", min_disparity_px, 0.0f, limits::kMaxImageDistancePx);
+  SLSLAM_CHECK(
+      max_disparity_px > min_disparity_px && max_disparity_px <= limits::kMaxImageDistancePx,
+      "stereo.max_disparity_px must be in (min_disparity_px, ", limits::kMaxImageDistancePx,
+      "], got ", max_disparity_px);
+  CheckAboveInRange("stereo.max_distance_binary", max_distance_binary, 0.0f, 256.0f);
+  CheckAboveInRange("stereo.max_distance_float", max_distance_float, 0.0f,
+                    limits::kMaxDescriptorDistance);
+  CheckAboveInRange("stereo.ratio", ratio, 0.0f, 1.0f);
+  CheckAboveInRange("tracking.max_depth_baselines", max_depth_baselines, 0.0f, 1e6f);
+  CheckInRange("stereo.subpixel_window", subpixel_window, 0, 100);
+  CheckInRange("stereo.subpixel_search", subpixel_search, 1, 1000);
+  lines.Check();
+}
+
+void RelocalisationOptions::Check() const {
+  CheckInRange("tracking.relocalisation.candidates", candidates, 1, 1000);
+  CheckInRange("tracking.relocalisation.min_matches", min_matches, 6, limits::kMaxKeypoints);
+  CheckAboveInRange("tracking.relocalisation.match_ratio", match_ratio, 0.0f, 1.0f);
+  CheckAboveInRange("tracking.relocalisation.ransac_error_px", ransac_error_px, 0.0,
+                    limits::kMaxImageDistancePx);
+  CheckInRange("tracking.relocalisation.ransac_iterations", ransac_iterations, 1, 1'000'000);
+  CheckInRange("tracking.relocalisation.min_pnp_inliers", min_pnp_inliers, 4,
+               limits::kMaxKeypoints);
+  CheckAboveInRange("tracking.relocalisation.min_inliers", min_inliers, 0.0, 1e9);
+  CheckInRange("tracking.relocalisation.vocabulary_levels_up", vocabulary_levels_up, 0, 32);
+}
+
+void TrackerOptions::Check() const {
+  rig.Check();
+  stereo.Check();
+  pose.Check();
+  mapping.Check();
+  relocalisation.Check();
+  CheckInRange("tracking.min_init_points", min_init_points, 3, limits::kMaxKeypoints);
+  CheckInRange("tracking.min_inliers", min_inliers, 3, limits::kMaxKeypoints);
+  // doubled on a retry and scaled by lost_search_scale: still far inside int
+  CheckAboveInRange("tracking.search_radius_px", search_radius_px, 0.0f,
+                    limits::kMaxImageDistancePx);
+  CheckAboveInRange("tracking.max_distance_binary", max_distance_binary, 0.0f, 256.0f);
+  CheckAboveInRange("tracking.max_distance_float", max_distance_float, 0.0f,
+                    limits::kMaxDescriptorDistance);
+  CheckAboveInRange("tracking.match_ratio", match_ratio, 0.0f, 1.0f);
+  CheckAboveInRange("tracking.line_search_px", line_search_px, 0.0f, limits::kMaxImageDistancePx);
+  CheckAboveInRange("tracking.line_max_angle_rad", line_max_angle_rad, 0.0f, limits::kPi);
+  CheckAboveInRange("tracking.line_max_lbd", line_max_lbd, 0.0f, limits::kLbdBits);
+  CheckInRange("tracking.keyframe_max_frames", keyframe_max_frames, 1, kMaxCount);
+  CheckInRange("tracking.keyframe_min_frames", keyframe_min_frames, 0, kMaxCount);
+  CheckAboveInRange("tracking.keyframe_track_ratio", keyframe_track_ratio, 0.0, 1.0);
+  CheckInRange("tracking.keyframe_min_inliers", keyframe_min_inliers, 0, kMaxCount);
+  CheckAboveInRange("tracking.close_depth_baselines", close_depth_baselines, 0.0, 1e6);
+  CheckAboveInRange("tracking.point_sigma_px", point_sigma_px, 0.0, 1e4);
+  CheckAboveInRange("tracking.line_sigma_px", line_sigma_px, 0.0, 1e4);
+  CheckInRange("tracking.line_inlier_weight", line_inlier_weight, 0.0, 1e6);
+  CheckInRange("tracking.recently_lost_frames", recently_lost_frames, 0, kMaxCount);
+  CheckInRange("tracking.lost_velocity_decay", lost_velocity_decay, 0.0, 1.0);
+  CheckInRange("tracking.lost_search_scale", lost_search_scale, 1.0f, 1000.0f);
+  CheckInRange("tracking.weak_keyframe_inliers", weak_keyframe_inliers, 0, kMaxCount);
+  CheckInRange("tracking.weak_keyframe_frames", weak_keyframe_frames, 1, kMaxCount);
+}
+
+}  // namespace slslam
