@@ -111,14 +111,18 @@ class TrackerSession {
     LocalMappingStats s;
     int maps = 0;
     TrackingStats t;
+    LoopClosingStats loops;
+    std::vector<LoopEvent> events;
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);
       tracker_.Flush();
       m = tracker_.ExportMap();
       s = tracker_.mapping_stats();
-      maps = tracker_.num_maps();
+      maps = tracker_.live_maps();
       t = tracker_.stats();
+      loops = tracker_.loop_stats();
+      events = tracker_.loop_events();
     }
     py::dict out;
     out["points"] = m.points;
@@ -137,6 +141,75 @@ class TrackerSession {
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;
     out["maps_started"] = t.maps_started;
+    out["loop_keyframes_checked"] = loops.keyframes_checked;
+    out["loop_candidates_verified"] = loops.candidates_verified;
+    out["loops_detected"] = loops.loops_detected;
+    out["loops_rejected"] = loops.loops_rejected;
+    out["loops_accepted"] = loops.loops_accepted;
+    out["merges"] = loops.merges;
+    out["global_ba_runs"] = loops.global_ba_runs;
+    out["loop_closing_ms"] = loops.loop_ms;
+    out["global_ba_ms"] = loops.global_ba_ms;
+    py::list loop_events;
+    for (const LoopEvent& e : events) {
+      py::dict d;
+      d["frame_index"] = e.frame_index;
+      d["candidate_frame_index"] = e.candidate_frame_index;
+      d["merge"] = e.merge;
+      d["correction_m"] = e.correction_m;
+      loop_events.append(d);
+    }
+    out["loop_events"] = loop_events;
+    return out;
+  }
+
+  void SaveMap(const std::string& path, const std::string& version) {
+    py::gil_scoped_release release;
+    std::lock_guard<std::mutex> lock(mutex_);
+    tracker_.SaveMap(path, version);
+  }
+
+  void LoadMap(const std::string& path) {
+    py::gil_scoped_release release;
+    std::lock_guard<std::mutex> lock(mutex_);
+    tracker_.LoadMap(path);
+  }
+
+  // Every estimated frame pose in the final (loop-corrected, merged) map.
+  py::dict Trajectory() {
+    std::vector<FramePose> poses;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard<std::mutex> lock(mutex_);
+      tracker_.Flush();
+      poses = tracker_.Trajectory();
+    }
+    const auto n = static_cast<py::ssize_t>(poses.size());
+    py::array_t<int> index(n), map_index(n);
+    py::array_t<double> timestamp(n);
+    py::array_t<double> R_cw({n, py::ssize_t{3}, py::ssize_t{3}});
+    py::array_t<double> t_cw({n, py::ssize_t{3}});
+    auto idx = index.mutable_unchecked<1>();
+    auto mi = map_index.mutable_unchecked<1>();
+    auto ts = timestamp.mutable_unchecked<1>();
+    auto R = R_cw.mutable_unchecked<3>();
+    auto t = t_cw.mutable_unchecked<2>();
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const FramePose& f = poses[i];
+      idx(i) = f.index;
+      mi(i) = f.map_index;
+      ts(i) = f.timestamp;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R(i, r, c) = f.R_cw(r, c);
+        t(i, r) = f.t_cw(r);
+      }
+    }
+    py::dict out;
+    out["index"] = index;
+    out["timestamp"] = timestamp;
+    out["map_index"] = map_index;
+    out["R_cw"] = R_cw;
+    out["t_cw"] = t_cw;
     return out;
   }
 
@@ -216,6 +289,37 @@ void BindTracking(py::module_& m) {
       .def_readwrite("vocabulary_levels_up", &RelocalisationOptions::vocabulary_levels_up)
       .def("check", &RelocalisationOptions::Check);
 
+  py::class_<PoseGraphOptions>(m, "PoseGraphOptions", "Essential-graph optimisation.")
+      .def(py::init<>())
+      .def_readwrite("max_iterations", &PoseGraphOptions::max_iterations)
+      .def_readwrite("rotation_sigma_rad", &PoseGraphOptions::rotation_sigma_rad)
+      .def_readwrite("translation_sigma_m", &PoseGraphOptions::translation_sigma_m)
+      .def("check", &PoseGraphOptions::Check);
+
+  py::class_<LoopClosingOptions>(m, "LoopClosingOptions",
+                                 "Loop closing and map merging (bag of words, points and lines).")
+      .def(py::init<>())
+      .def_readwrite("enabled", &LoopClosingOptions::enabled)
+      .def_readwrite("merge_maps", &LoopClosingOptions::merge_maps)
+      .def_readwrite("min_keyframes", &LoopClosingOptions::min_keyframes)
+      .def_readwrite("candidates", &LoopClosingOptions::candidates)
+      .def_readwrite("min_matches", &LoopClosingOptions::min_matches)
+      .def_readwrite("match_ratio", &LoopClosingOptions::match_ratio)
+      .def_readwrite("ransac_error_px", &LoopClosingOptions::ransac_error_px)
+      .def_readwrite("ransac_iterations", &LoopClosingOptions::ransac_iterations)
+      .def_readwrite("min_pnp_inliers", &LoopClosingOptions::min_pnp_inliers)
+      .def_readwrite("min_inliers", &LoopClosingOptions::min_inliers)
+      .def_readwrite("consistency", &LoopClosingOptions::consistency)
+      .def_readwrite("agree_m", &LoopClosingOptions::agree_m)
+      .def_readwrite("agree_rad", &LoopClosingOptions::agree_rad)
+      .def_readwrite("max_correction_ratio", &LoopClosingOptions::max_correction_ratio)
+      .def_readwrite("max_correction_floor_m", &LoopClosingOptions::max_correction_floor_m)
+      .def_readwrite("max_correction_rad", &LoopClosingOptions::max_correction_rad)
+      .def_readwrite("strong_covisibility", &LoopClosingOptions::strong_covisibility)
+      .def_readwrite("global_ba", &LoopClosingOptions::global_ba)
+      .def_readwrite("pose_graph", &LoopClosingOptions::pose_graph)
+      .def("check", &LoopClosingOptions::Check);
+
   py::class_<TrackerOptions>(m, "TrackerOptions", "Tracking, mapping and front-end thresholds.")
       .def(py::init<>())
       .def_readwrite("rig", &TrackerOptions::rig)
@@ -248,6 +352,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("weak_keyframe_frames", &TrackerOptions::weak_keyframe_frames)
       .def_readwrite("vocabulary_path", &TrackerOptions::vocabulary_path)
       .def_readwrite("relocalisation", &TrackerOptions::relocalisation)
+      .def_readwrite("loop_closing", &TrackerOptions::loop_closing)
+      .def_readwrite("localise_only", &TrackerOptions::localise_only)
       .def("check", &TrackerOptions::Check);
 
   py::class_<TrackerSession>(m, "TrackerCore",
@@ -265,6 +371,13 @@ void BindTracking(py::module_& m) {
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
            "Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).")
       .def("map", &TrackerSession::Map, "Waits for local mapping, returns points and lines.")
+      .def("save_map", &TrackerSession::SaveMap, py::arg("path"), py::arg("version"),
+           "Writes every live map (versioned binary, checksummed); waits for mapping.")
+      .def("load_map", &TrackerSession::LoadMap, py::arg("path"),
+           "Loads a saved atlas before the first frame; tracking starts by relocalising in it.")
+      .def("trajectory", &TrackerSession::Trajectory,
+           "Every estimated frame pose (index, timestamp, map_index, R_cw, t_cw arrays) in the "
+           "final map: after loop correction, merges and bundle adjustment.")
       .def("flush", &TrackerSession::Flush);
 }
 

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -632,6 +632,8 @@ class LineMatchOptions:
     """
     def __init__(self) -> None:
         ...
+    def check(self) -> None:
+        ...
     @property
     def max_angle_rad(self) -> float:
         ...
@@ -655,6 +657,8 @@ class StereoLineOptions:
     Stereo line matching.
     """
     def __init__(self) -> None:
+        ...
+    def check(self) -> None:
         ...
     @property
     def max_angle_rad(self) -> float:
@@ -711,6 +715,8 @@ class PoseOptimizerOptions:
     """
     def __init__(self) -> None:
         ...
+    def check(self) -> None:
+        ...
     @property
     def iterations_per_round(self) -> int:
         ...
@@ -740,6 +746,8 @@ class BundleAdjustmentOptions:
     Local bundle adjustment.
     """
     def __init__(self) -> None:
+        ...
+    def check(self) -> None:
         ...
     @property
     def line_angle_weight(self) -> float:
@@ -774,6 +782,8 @@ class LocalMapperOptions:
     triangulate: bool
     def __init__(self) -> None:
         ...
+    def check(self) -> None:
+        ...
     @property
     def local_keyframes(self) -> int:
         ...
@@ -797,6 +807,8 @@ class StereoMatchOptions:
     Stereo keypoint matching.
     """
     def __init__(self) -> None:
+        ...
+    def check(self) -> None:
         ...
     @property
     def max_depth_baselines(self) -> float:
@@ -902,10 +914,140 @@ class RelocalisationOptions:
     @vocabulary_levels_up.setter
     def vocabulary_levels_up(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class PoseGraphOptions:
+    """
+    Essential-graph optimisation.
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def max_iterations(self) -> int:
+        ...
+    @max_iterations.setter
+    def max_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def rotation_sigma_rad(self) -> float:
+        ...
+    @rotation_sigma_rad.setter
+    def rotation_sigma_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def translation_sigma_m(self) -> float:
+        ...
+    @translation_sigma_m.setter
+    def translation_sigma_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class LoopClosingOptions:
+    """
+    Loop closing and map merging (bag of words, points and lines).
+    """
+    enabled: bool
+    global_ba: bool
+    merge_maps: bool
+    pose_graph: PoseGraphOptions
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def agree_m(self) -> float:
+        ...
+    @agree_m.setter
+    def agree_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def agree_rad(self) -> float:
+        ...
+    @agree_rad.setter
+    def agree_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def candidates(self) -> int:
+        ...
+    @candidates.setter
+    def candidates(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def consistency(self) -> int:
+        ...
+    @consistency.setter
+    def consistency(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def match_ratio(self) -> float:
+        ...
+    @match_ratio.setter
+    def match_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_correction_floor_m(self) -> float:
+        ...
+    @max_correction_floor_m.setter
+    def max_correction_floor_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_correction_rad(self) -> float:
+        ...
+    @max_correction_rad.setter
+    def max_correction_rad(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_correction_ratio(self) -> float:
+        ...
+    @max_correction_ratio.setter
+    def max_correction_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_inliers(self) -> float:
+        ...
+    @min_inliers.setter
+    def min_inliers(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_keyframes(self) -> int:
+        ...
+    @min_keyframes.setter
+    def min_keyframes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_matches(self) -> int:
+        ...
+    @min_matches.setter
+    def min_matches(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_pnp_inliers(self) -> int:
+        ...
+    @min_pnp_inliers.setter
+    def min_pnp_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ransac_error_px(self) -> float:
+        ...
+    @ransac_error_px.setter
+    def ransac_error_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ransac_iterations(self) -> int:
+        ...
+    @ransac_iterations.setter
+    def ransac_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def strong_covisibility(self) -> int:
+        ...
+    @strong_covisibility.setter
+    def strong_covisibility(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class TrackerOptions:
     """
     Tracking, mapping and front-end thresholds.
     """
+    localise_only: bool
+    loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions
     pose: PoseOptimizerOptions
     relocalisation: RelocalisationOptions
@@ -1058,13 +1200,25 @@ class TrackerCore:
         ...
     def flush(self) -> None:
         ...
+    def load_map(self, path: str) -> None:
+        """
+        Loads a saved atlas before the first frame; tracking starts by relocalising in it.
+        """
     def map(self) -> dict:
         """
         Waits for local mapping, returns points and lines.
         """
+    def save_map(self, path: str, version: str) -> None:
+        """
+        Writes every live map (versioned binary, checksummed); waits for mapping.
+        """
     def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray) -> dict:
         """
         Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).
+        """
+    def trajectory(self) -> dict:
+        """
+        Every estimated frame pose (index, timestamp, map_index, R_cw, t_cw arrays) in the final map: after loop correction, merges and bundle adjustment.
         """
 class VocabularyOptions:
     """
@@ -1959,6 +2113,10 @@ def preprocess_lines(segments: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
 def read_gray_image(path: str) -> numpy.ndarray:
     """
     Read an image file as a uint8 gray array; ValueError names the file.
+    """
+def read_map_file_header(path: str) -> dict:
+    """
+    Header of a map file (.slmap) as a dict: format_version, slslam_version, descriptor_type ('binary', 'float' or None), descriptor_cols, vocabulary, camera {fx, fy, cx, cy, width, height} [px], baseline_m, next_ids {keyframe, point, line}, and per map {keyframes, culled_keyframes, points, lines}. Checks magic, version, size and checksum (the whole file is read) but builds no map; a foreign, damaged or newer file raises ValueError naming it.
     """
 def read_point_cloud(path: str) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]"]:
     """

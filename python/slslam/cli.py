@@ -244,6 +244,20 @@ def sim_command(
         bool, typer.Option("--roof-lamps", help="A roof lamp every 20 m.")
     ] = False,
     speed: Annotated[float, typer.Option(help="Robot cruise speed in m/s.")] = 0.8,
+    laps: Annotated[
+        int,
+        typer.Option(
+            help="Loop preset: laps the path goes round (--frames decides how far the robot "
+            "gets; one lap of the default loop is 143 m). Two laps revisit every place: loop "
+            "closing."
+        ),
+    ] = 1,
+    loop_length: Annotated[
+        float, typer.Option(help="Loop preset: length of the two straights in metres.")
+    ] = 40.0,
+    loop_radius: Annotated[
+        float, typer.Option(help="Loop preset: radius of the two half circles in metres.")
+    ] = 10.0,
     spin_at: Annotated[
         float | None,
         typer.Option(
@@ -287,6 +301,9 @@ def sim_command(
         movers=movers,
         roof_lamps=roof_lamps,
         speed_mps=speed,
+        laps=laps,
+        loop_length_m=loop_length,
+        loop_radius_m=loop_radius,
         spin_at_s=spin_at,
         spin_deg=spin_deg,
         spin_duration_s=spin_duration,
@@ -363,6 +380,32 @@ def run_command(
             help="Record the same view into FILE.rrd for later (`rerun FILE.rrd` opens it).",
         ),
     ] = None,
+    save_map: Annotated[
+        Path | None,
+        typer.Option(
+            "--save-map",
+            metavar="FILE",
+            help="Save the final atlas (keyframes, points, lines; slslam's versioned binary "
+            "map file) for a later --load-map.",
+        ),
+    ] = None,
+    load_map: Annotated[
+        Path | None,
+        typer.Option(
+            "--load-map",
+            metavar="FILE",
+            help="Start from a saved map: the first frames relocalise in it. Same camera and "
+            "point front end as the run that saved it.",
+        ),
+    ] = None,
+    localise_only: Annotated[
+        bool,
+        typer.Option(
+            "--localise-only",
+            help="With --load-map: track in the loaded map without changing it (no keyframes, "
+            "no mapping, no new maps; lost frames keep relocalising).",
+        ),
+    ] = False,
 ) -> None:
     """Stereo point-line SLAM over a sequence.
 
@@ -405,6 +448,9 @@ def run_command(
             progress=progress,
             groundtruth=groundtruth,
             viewer=shown,
+            save_map=save_map,
+            load_map=load_map,
+            localise_only=localise_only,
         )
     except RunInterrupted as stop:
         Console(stderr=True).print(

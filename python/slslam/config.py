@@ -145,6 +145,23 @@ class FeaturesConfig:
 
 
 @dataclass(frozen=True)
+class LoopClosingConfig:
+    """Loop closing and map merging; mirrors C++ ``LoopClosingOptions`` (needs the vocabulary)."""
+
+    enabled: bool = True  # close loops within a map (essential graph, then global BA)
+    merge_maps: bool = True  # merge a map into an older one when place recognition links them
+    global_ba: bool = True  # global bundle adjustment over points and lines after a loop / merge
+    # weighted inliers (points + lines) of the candidate's local map a loop needs
+    min_inliers: float = _option(80.0, "[1, 100000]")
+    # consecutive keyframes whose verified loop transforms must agree
+    consistency: int = _option(3, "[1, 100]")
+    # same map: largest correction as a share of the path driven since the loop keyframe (a
+    # repeated arch seen as the old one gives a confident, implausibly large jump)
+    max_correction_ratio: float = _option(0.05, "[0, 1]")
+    max_correction_floor_m: float = _option(0.5, "[0, 1000]")  # correction always allowed [m]
+
+
+@dataclass(frozen=True)
 class TrackingConfig:
     """Tracking and local mapping (SPEC A5-A6); mirrors C++ ``TrackerOptions``."""
 
@@ -200,6 +217,7 @@ class TrackingConfig:
     # BoW vocabulary file; null: the one shipped for ORB (learned descriptors need their own,
     # made with `slslam vocab train`)
     vocabulary_path: str | None = None
+    loop_closing: LoopClosingConfig = field(default_factory=LoopClosingConfig)
 
 
 @dataclass(frozen=True)

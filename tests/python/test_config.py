@@ -41,6 +41,20 @@ def test_python_and_cpp_defaults_agree():
     assert features.orb.scale_factor == pytest.approx(orb.scale_factor)
 
 
+def test_loop_closing_defaults_agree_with_cpp():
+    loop, core = Config().tracking.loop_closing, _core.LoopClosingOptions()
+    for name in (
+        "enabled",
+        "merge_maps",
+        "global_ba",
+        "consistency",
+        "max_correction_ratio",
+        "max_correction_floor_m",
+    ):
+        assert getattr(loop, name) == pytest.approx(getattr(core, name)), name
+    assert loop.min_inliers == pytest.approx(core.min_inliers)
+
+
 def test_partial_file_and_round_trip(tmp_path):
     path = tmp_path / "c.yaml"
     path.write_text("features:\n  point_frontend: orb\n  orb:\n    max_keypoints: 500\n")

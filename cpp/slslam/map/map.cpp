@@ -10,7 +10,7 @@ std::shared_ptr<KeyFrame> Map::AddKeyFrame(const Eigen::Matrix3d& R_cw, const Ei
                                            std::shared_ptr<const StereoFrame> frame) {
   Require(frame != nullptr, "a keyframe needs its frame");
   auto kf = std::make_shared<KeyFrame>();
-  kf->id = next_keyframe_++;
+  kf->id = ids_->next_keyframe++;
   kf->R_cw = R_cw;
   kf->t_cw = t_cw;
   kf->point_ids.assign(frame->NumKeypoints(), -1);
@@ -23,7 +23,7 @@ std::shared_ptr<KeyFrame> Map::AddKeyFrame(const Eigen::Matrix3d& R_cw, const Ei
 std::shared_ptr<MapPoint> Map::AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
                                         int keyframe_id) {
   auto p = std::make_shared<MapPoint>();
-  p->id = next_point_++;
+  p->id = ids_->next_point++;
   p->position = position;
   p->descriptor = descriptor.clone();
   p->first_keyframe = keyframe_id;
@@ -35,7 +35,7 @@ std::shared_ptr<MapLine> Map::AddLine(const PluckerLine& line, const Eigen::Vect
                                       const Eigen::Vector3d& end, const cv::Mat& descriptor,
                                       int keyframe_id) {
   auto l = std::make_shared<MapLine>();
-  l->id = next_line_++;
+  l->id = ids_->next_line++;
   l->line = line;
   l->start = start;
   l->end = end;
@@ -119,6 +119,14 @@ void Map::EraseKeyFrame(int keyframe_id) {
   auto kf = keyframe(keyframe_id);
   if (!kf) return;
   kf->bad = true;
+  // Frames tracked against kf keep a pose: kf relative to its parent at this moment.
+  RetiredKeyFrame retired;
+  retired.parent = kf->parent;
+  if (auto parent = keyframe(kf->parent)) {
+    retired.R_kf_parent = kf->R_cw * parent->R_cw.transpose();
+    retired.t_kf_parent = kf->t_cw - retired.R_kf_parent * parent->t_cw;
+  }
+  retired_[keyframe_id] = retired;
   for (int pid : kf->point_ids) {
     if (auto p = point(pid)) p->observations.erase(keyframe_id);
   }
@@ -164,6 +172,65 @@ std::vector<int> Map::BestCovisible(int id, int n) const {
     out.push_back(other);
   }
   return out;
+}
+
+bool Map::KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const {
+  // T_id_w = T_id_p1 * T_p1_p2 * ... * T_pn_w along retired parents until a live keyframe.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (size_t hops = 0; hops <= retired_.size(); ++hops) {
+    if (auto kf = keyframe(id)) {
+      *R_cw = R * kf->R_cw;
+      *t_cw = R * kf->t_cw + t;
+      return true;
+    }
+    auto it = retired_.find(id);
+    if (it == retired_.end()) return false;
+    t = R * it->second.t_kf_parent + t;
+    R = R * it->second.R_kf_parent;
+    id = it->second.parent;
+  }
+  return false;  // a cycle: cannot happen with parents older than children
+}
+
+void Map::RestoreKeyFrame(std::shared_ptr<KeyFrame> keyframe) {
+  Require(keyframe != nullptr && keyframe->id >= 0, "a restored keyframe needs an id");
+  SLSLAM_CHECK(!keyframes_.count(keyframe->id), "keyframe id ", keyframe->id, " is in use");
+  ids_->next_keyframe = std::max(ids_->next_keyframe, keyframe->id + 1);
+  keyframes_[keyframe->id] = std::move(keyframe);
+}
+
+void Map::RestorePoint(std::shared_ptr<MapPoint> point) {
+  Require(point != nullptr && point->id >= 0, "a restored map point needs an id");
+  SLSLAM_CHECK(!points_.count(point->id), "map point id ", point->id, " is in use");
+  ids_->next_point = std::max(ids_->next_point, point->id + 1);
+  points_[point->id] = std::move(point);
+}
+
+void Map::RestoreLine(std::shared_ptr<MapLine> line) {
+  Require(line != nullptr && line->id >= 0, "a restored map line needs an id");
+  SLSLAM_CHECK(!lines_.count(line->id), "map line id ", line->id, " is in use");
+  ids_->next_line = std::max(ids_->next_line, line->id + 1);
+  lines_[line->id] = std::move(line);
+}
+
+void Map::RestoreRetired(int id, const RetiredKeyFrame& retired) {
+  ids_->next_keyframe = std::max(ids_->next_keyframe, id + 1);
+  retired_[id] = retired;
+}
+
+void Map::Absorb(Map* other) {
+  Require(other != nullptr && other != this, "a map cannot absorb itself");
+  for (auto& [id, kf] : other->keyframes_) RestoreKeyFrame(kf);
+  for (auto& [id, p] : other->points_) RestorePoint(p);
+  for (auto& [id, l] : other->lines_) RestoreLine(l);
+  for (auto& [id, r] : other->retired_) RestoreRetired(id, r);
+  other->keyframes_.clear();
+  other->points_.clear();
+  other->lines_.clear();
+  other->retired_.clear();
+  ++correction_epoch_;
+  ++other->correction_epoch_;
 }
 
 }  // namespace slslam

@@ -59,8 +59,28 @@ struct KeyFrame {
   Eigen::Vector3d Center() const { return -R_cw.transpose() * t_cw; }
 };
 
+// Id counters shared by the maps of one atlas, so that keyframe, point and line ids are unique
+// across maps and a merge moves entries from one map into another without renumbering them.
+struct MapIds {
+  int next_keyframe = 0;
+  int next_point = 0;
+  int next_line = 0;
+};
+
+// A keyframe removed by culling, kept as its pose relative to its spanning-tree parent at the time
+// (ORB-SLAM's Tcp), so that frames tracked against it still get a pose from the final map.
+struct RetiredKeyFrame {
+  int parent = -1;
+  Eigen::Matrix3d R_kf_parent = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_kf_parent = Eigen::Vector3d::Zero();
+};
+
 class Map {
  public:
+  // `ids` may be shared with other maps of an atlas; null: the map counts on its own.
+  explicit Map(std::shared_ptr<MapIds> ids = nullptr)
+      : ids_(ids ? std::move(ids) : std::make_shared<MapIds>()) {}
+
   std::mutex& mutex() const { return mutex_; }
 
   // All below expect the caller to hold mutex().
@@ -90,14 +110,36 @@ class Map {
   // Keyframes sharing the most map points with `id`, strongest first (at most n).
   std::vector<int> BestCovisible(int id, int n) const;
 
+  // Pose of a keyframe, live or culled (through the chain of retired parents); false when the
+  // id is unknown to this map.
+  bool KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const;
+  const std::map<int, RetiredKeyFrame>& retired() const { return retired_; }
+
+  // Restoring a saved map, or moving entries in from another map of the atlas: entries keep their
+  // ids (which must be unused here); the shared counters move past them.
+  void RestoreKeyFrame(std::shared_ptr<KeyFrame> keyframe);
+  void RestorePoint(std::shared_ptr<MapPoint> point);
+  void RestoreLine(std::shared_ptr<MapLine> line);
+  void RestoreRetired(int id, const RetiredKeyFrame& retired);
+  const MapIds& ids() const { return *ids_; }
+  const std::shared_ptr<MapIds>& shared_ids() const { return ids_; }
+  // Moves every keyframe, point, line and retired record of `other` into this map (ids are unique
+  // across an atlas); `other` is left empty. Poses are not changed: transform `other` first.
+  void Absorb(Map* other);
+
+  // Bumped whenever keyframe poses change outside local mapping's window (loop correction,
+  // merge): a tracker holding a pose relative to the old map re-reads its reference keyframe.
+  int correction_epoch() const { return correction_epoch_; }
+  void BumpCorrectionEpoch() { ++correction_epoch_; }
+
  private:
   mutable std::mutex mutex_;
+  std::shared_ptr<MapIds> ids_;
   std::map<int, std::shared_ptr<KeyFrame>> keyframes_;
   std::map<int, std::shared_ptr<MapPoint>> points_;
   std::map<int, std::shared_ptr<MapLine>> lines_;
-  int next_keyframe_ = 0;
-  int next_point_ = 0;
-  int next_line_ = 0;
+  std::map<int, RetiredKeyFrame> retired_;
+  int correction_epoch_ = 0;
 };
 
 }  // namespace slslam

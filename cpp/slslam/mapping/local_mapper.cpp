@@ -37,6 +37,7 @@ LocalMapper::~LocalMapper() {
 void LocalMapper::Insert(Map* map, int keyframe_id) {
   if (sequential_) {
     Process(map, keyframe_id);
+    if (after_keyframe_) after_keyframe_(map, keyframe_id);
     return;
   }
   {
@@ -76,6 +77,7 @@ void LocalMapper::Run() {
     std::exception_ptr error;
     try {
       Process(job.first, job.second);
+      if (after_keyframe_) after_keyframe_(job.first, job.second);
     } catch (...) {  // a throw on this thread would terminate the process
       error = std::current_exception();
     }

@@ -10,6 +10,7 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -59,6 +60,9 @@ class LocalMapper {
   // thread caught since the last Flush.
   void Flush();
   LocalMappingStats stats() const;
+  // Called (on the mapping thread, or inline in sequential mode) after each keyframe has been
+  // processed, without any lock held: loop closing runs there, serialised with local mapping.
+  void SetAfterKeyFrame(std::function<void(Map*, int)> hook) { after_keyframe_ = std::move(hook); }
 
  private:
   void Process(Map* map, int keyframe_id);
@@ -74,6 +78,7 @@ class LocalMapper {
   bool busy_ = false;
   bool stop_ = false;
   std::exception_ptr error_;
+  std::function<void(Map*, int)> after_keyframe_;
   LocalMappingStats stats_;
   std::thread worker_;
 };

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <tuple>
 
 #include <Eigen/Geometry>
@@ -13,6 +14,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/features/line_segment.h"
+#include "slslam/map/map_io.h"
 
 namespace slslam {
 
@@ -64,6 +66,190 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
   mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential);
+  options_.loop_closing.Check();
+  if (vocabulary_ && !options_.localise_only &&
+      (options_.loop_closing.enabled || options_.loop_closing.merge_maps)) {
+    LoopClosingOptions loop = options_.loop_closing;
+    loop.point_sigma_px = options_.point_sigma_px;
+    loop.line_sigma_px = options_.line_sigma_px;
+    loop.vocabulary_levels_up = options_.relocalisation.vocabulary_levels_up;
+    if (!options_.use_lines) loop.global_ba_options.line_weight = 0.0;
+    // Verification tracks the candidate's local map (points and lines) as tracking does.
+    auto verifier = [this](const StereoFrame& frame, Map& map, int reference_kf,
+                           const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw) {
+      LocalTracking t = TrackLocalMap(frame, map, reference_kf, R_cw, t_cw, 1.0f);
+      LocalMapMatch match;
+      match.success = t.pose.success;
+      match.R_cw = t.pose.R_cw;
+      match.t_cw = t.pose.t_cw;
+      match.weighted_inliers = t.weighted_inliers;
+      for (size_t i = 0; i < t.point_ids.size(); ++i) {
+        if (!t.pose.point_inlier[i]) continue;
+        match.point_ids.push_back(t.point_ids[i]);
+        match.keypoints.push_back(t.keypoints[i]);
+      }
+      for (size_t i = 0; i < t.line_ids.size(); ++i) {
+        if (!t.pose.line_inlier[i]) continue;
+        match.line_ids.push_back(t.line_ids[i]);
+        match.segments.push_back(t.segments[i]);
+      }
+      return match;
+    };
+    loop_closer_ = std::make_unique<LoopCloser>(options_.rig, loop, vocabulary_.get(),
+                                                options_.max_distance_binary,
+                                                options_.max_distance_float, verifier);
+    mapper_->SetAfterKeyFrame([this](Map* map, int keyframe_id) {
+      for (int m = 0; m < atlas_.size(); ++m) {
+        if (&atlas_.map(m) == map) {
+          loop_closer_->Process(&atlas_, m, keyframe_id);
+          return;
+        }
+      }
+    });
+  }
+}
+
+LoopClosingStats Tracker::loop_stats() const {
+  return loop_closer_ ? loop_closer_->stats() : LoopClosingStats{};
+}
+
+void Tracker::SaveMap(const std::string& path, const std::string& version) {
+  mapper_->Flush();
+  MapFileHeader header;
+  header.slslam_version = version;
+  header.rig = options_.rig;
+  header.vocabulary = options_.vocabulary_path;
+  std::vector<const Map*> maps;
+  std::vector<std::unique_lock<std::mutex>> locks;
+  for (int m = 0; m < atlas_.size(); ++m) {
+    if (atlas_.merged(m)) continue;
+    const Map& map = atlas_.map(m);
+    locks.emplace_back(map.mutex());
+    if (map.keyframes().empty()) {
+      locks.pop_back();
+      continue;
+    }
+    maps.push_back(&map);
+    if (header.descriptor_type < 0) {
+      const cv::Mat& d = map.keyframes().begin()->second->frame->keypoints.descriptors;
+      header.descriptor_type = d.type();
+      header.descriptor_cols = d.cols;
+    }
+  }
+  SLSLAM_CHECK(!maps.empty(), path, ": nothing to save, the atlas has no map with keyframes");
+  SaveMaps(path, maps, header);
+}
+
+void Tracker::LoadMap(const std::string& path) {
+  SLSLAM_CHECK(atlas_.size() == 0, path, ": a map file loads only before the first frame");
+  SLSLAM_CHECK(vocabulary_ != nullptr, path,
+               ": tracking in a loaded map relocalises in it and needs the bag-of-words "
+               "vocabulary (tracking.vocabulary_path / relocalisation)");
+  LoadedMaps loaded = LoadMaps(path, atlas_.ids());
+  const PinholeCamera& a = loaded.header.rig.camera;
+  const PinholeCamera& b = options_.rig.camera;
+  auto close = [](double x, double y) {
+    return std::abs(x - y) <= 1e-6 * std::max(1.0, std::abs(y));
+  };
+  SLSLAM_CHECK(a.width == b.width && a.height == b.height && close(a.fx, b.fx) &&
+                   close(a.fy, b.fy) && close(a.cx, b.cx) && close(a.cy, b.cy) &&
+                   close(loaded.header.rig.baseline_m, options_.rig.baseline_m),
+               path, ": the map was made with another camera (", a.width, "x", a.height, ", fx ",
+               a.fx, ", baseline ", loaded.header.rig.baseline_m, " m; this run: ", b.width, "x",
+               b.height, ", fx ", b.fx, ", baseline ", options_.rig.baseline_m, " m)");
+  SLSLAM_CHECK(!loaded.maps.empty(), path, ": the file holds no map");
+  for (auto& map : loaded.maps) {
+    const int index = atlas_.AdoptMap(std::move(map));
+    Map& m = atlas_.map(index);
+    std::lock_guard<std::mutex> lock(m.mutex());
+    for (auto& [id, kf] : m.keyframes()) {
+      if (kf->bow.empty() && kf->frame && kf->frame->NumKeypoints() > 0) {
+        vocabulary_->Transform(kf->frame->keypoints.descriptors, &kf->bow, &kf->bow_features,
+                               options_.relocalisation.vocabulary_levels_up);
+      }
+      if (!kf->bow.empty()) atlas_.database(index).Add(id, kf->bow);
+    }
+  }
+  loaded_descriptor_type_ = loaded.header.descriptor_type;
+  loaded_descriptor_cols_ = loaded.header.descriptor_cols;
+  loaded_path_ = path;
+  active_ = 0;
+  mode_ = Mode::kLost;
+  lost_count_ = options_.recently_lost_frames + 1;
+  have_pose_ = false;
+}
+
+std::vector<LoopEvent> Tracker::loop_events() const {
+  return loop_closer_ ? loop_closer_->events() : std::vector<LoopEvent>{};
+}
+
+int Tracker::live_maps() const {
+  int live = 0;
+  for (int m = 0; m < atlas_.size(); ++m) live += !atlas_.merged(m);
+  return live;
+}
+
+void Tracker::FollowCorrections() {
+  if (active_ < 0) return;
+  const int resolved = atlas_.Resolve(active_);
+  Map& map = atlas_.map(resolved);
+  std::lock_guard<std::mutex> lock(map.mutex());
+  if (resolved == active_ && map.correction_epoch() == seen_epoch_) return;
+  active_ = resolved;
+  seen_epoch_ = map.correction_epoch();
+  // The last pose relative to the reference keyframe, as recorded, on the keyframe's new pose.
+  if (records_.empty() || !have_pose_) return;
+  const FrameRecord& r = records_.back();
+  Eigen::Matrix3d R_rw;
+  Eigen::Vector3d t_rw;
+  if (r.reference_kf < 0 || !map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) return;
+  last_R_ = r.R_fr * R_rw;
+  last_t_ = r.R_fr * t_rw + r.t_fr;
+}
+
+void Tracker::RecordFrame(const StereoFrame& frame) {
+  FrameRecord r;
+  r.index = frame.index;
+  r.timestamp = frame.timestamp;
+  r.map_index = active_;
+  r.reference_kf = last_keyframe_;
+  r.R_cw = last_R_;
+  r.t_cw = last_t_;
+  Map& map = atlas_.map(active_);
+  std::lock_guard<std::mutex> lock(map.mutex());
+  Eigen::Matrix3d R_rw;
+  Eigen::Vector3d t_rw;
+  if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
+    r.R_fr = last_R_ * R_rw.transpose();
+    r.t_fr = last_t_ - r.R_fr * t_rw;
+  } else {
+    r.reference_kf = -1;
+  }
+  seen_epoch_ = map.correction_epoch();
+  records_.push_back(r);
+}
+
+std::vector<FramePose> Tracker::Trajectory() const {
+  std::vector<FramePose> out;
+  out.reserve(records_.size());
+  for (const FrameRecord& r : records_) {
+    FramePose f;
+    f.index = r.index;
+    f.timestamp = r.timestamp;
+    f.map_index = atlas_.Resolve(r.map_index);
+    f.R_cw = r.R_cw;
+    f.t_cw = r.t_cw;
+    Map& map = atlas_.map(f.map_index);
+    std::lock_guard<std::mutex> lock(map.mutex());
+    Eigen::Matrix3d R_rw;
+    Eigen::Vector3d t_rw;
+    if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
+      f.R_cw = r.R_fr * R_rw;
+      f.t_cw = r.R_fr * t_rw + r.t_fr;
+    }
+    out.push_back(f);
+  }
+  return out;
 }
 
 Tracker::~Tracker() {
@@ -107,9 +293,7 @@ bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Ei
       Weighted(stereo_points, stereo_lines) < options_.min_init_points) {
     return false;
   }
-  maps_.push_back(std::make_unique<Map>());
-  databases_.push_back(std::make_unique<KeyframeDatabase>());
-  active_ = static_cast<int>(maps_.size()) - 1;
+  active_ = atlas_.AddMap();
   ++stats_.maps_started;
   InsertKeyFrame(frame, R_cw, t_cw, std::vector<int>(frame->NumKeypoints(), -1),
                  std::vector<int>(frame->NumLines(), -1));
@@ -120,7 +304,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
                              const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
                              const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches) {
-  Map& map = *maps_[active_];
+  Map& map = atlas_.map(active_);
   BowVector bow;
   FeatureVector bow_features;
   if (vocabulary_ && frame->NumKeypoints() > 0) {
@@ -161,7 +345,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     }
     map.UpdateConnections(kf_id);
   }
-  if (!bow.empty()) databases_[active_]->Add(kf_id, bow);
+  if (!bow.empty()) atlas_.database(active_).Add(kf_id, bow);
   last_keyframe_ = kf_id;
   last_keyframe_frame_ = frame->index;
   first_tracked_ = 0;
@@ -366,12 +550,13 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
                               int* keyframe_id) {
   const RelocalisationOptions& ro = options_.relocalisation;
   const cv::Mat& desc = frame.keypoints.descriptors;
-  Map& map = *maps_[map_index];
+  Map& map = atlas_.map(map_index);
   std::lock_guard<std::mutex> lock(map.mutex());
-  const auto candidates = databases_[map_index]->Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
-    auto kf = map.keyframe(id);
-    return kf && !kf->bad;
-  });
+  const auto candidates =
+      atlas_.database(map_index).Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
+        auto kf = map.keyframe(id);
+        return kf && !kf->bad;
+      });
   const PinholeCamera& camera = options_.rig.camera;
   const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
                      0.0, 0.0, 1.0);
@@ -380,38 +565,14 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
   for (const auto& candidate : candidates) {
     auto kf = map.keyframe(candidate.keyframe_id);
     if (!kf) continue;
-    // Frame keypoint -> map point, within the vocabulary nodes both share (one-to-one: a map
-    // point keeps the keypoint with the smaller distance).
-    std::map<int, std::pair<float, int>> owner;  // map point -> (distance, keypoint)
-    for (const auto& [node, frame_ids] : features) {
-      auto it = kf->bow_features.find(node);
-      if (it == kf->bow_features.end()) continue;
-      for (int i : frame_ids) {
-        BestTwo best;  // index: the map point id
-        for (int j : it->second) {
-          const int pid = j < static_cast<int>(kf->point_ids.size()) ? kf->point_ids[j] : -1;
-          if (pid < 0) continue;
-          auto p = map.point(pid);
-          if (!p || p->bad) continue;
-          best.Add(DescriptorDistance(desc, i, p->descriptor, 0), pid);
-        }
-        if (best.index < 0 || best.best > max_distance) continue;
-        if (best.second < std::numeric_limits<float>::max() &&
-            best.best >= ro.match_ratio * best.second) {
-          continue;
-        }
-        // Map point ids are sparse, so the one-to-one table is a map here (OneToOne is dense).
-        auto [pos, inserted] = owner.emplace(best.index, std::make_pair(best.best, i));
-        if (!inserted && best.best < pos->second.first) pos->second = {best.best, i};
-      }
-    }
-    if (static_cast<int>(owner.size()) < ro.min_matches) continue;
+    const auto matches = MatchByWords(desc, features, *kf, map, max_distance, ro.match_ratio);
+    if (static_cast<int>(matches.size()) < ro.min_matches) continue;
     std::vector<cv::Point3d> object;
     std::vector<cv::Point2d> image;
-    for (const auto& [pid, match] : owner) {
+    for (const auto& [keypoint, pid] : matches) {
       const Eigen::Vector3d& x = map.point(pid)->position;
       object.emplace_back(x.x(), x.y(), x.z());
-      image.emplace_back(frame.keypoints.uv(match.second, 0), frame.keypoints.uv(match.second, 1));
+      image.emplace_back(frame.keypoints.uv(keypoint, 0), frame.keypoints.uv(keypoint, 1));
     }
     cv::Mat rvec, tvec;
     std::vector<int> inliers;
@@ -497,7 +658,7 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     hypotheses.emplace_back(R, t);
   }
   LocalTracking best;
-  Map& map = *maps_[active_];
+  Map& map = atlas_.map(active_);
   for (const auto& [R, t] : hypotheses) {
     std::lock_guard<std::mutex> lock(map.mutex());
     LocalTracking attempt =
@@ -516,13 +677,27 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   Eigen::Vector3d t_pred;
   Predict(&R_pred, &t_pred);
 
-  if (maps_.empty()) {  // not initialised yet
+  if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
+    const cv::Mat& d = frame->keypoints.descriptors;
+    SLSLAM_CHECK(d.type() == loaded_descriptor_type_ && d.cols == loaded_descriptor_cols_,
+                 loaded_path_, ": the map was made with another point front end (descriptors of ",
+                 loaded_descriptor_cols_, " ",
+                 loaded_descriptor_type_ == CV_8U ? "bytes" : "floats", "; this run's have ",
+                 d.cols, ")");
+    loaded_descriptor_type_ = -1;  // checked once
+  }
+  FollowCorrections();
+  if (atlas_.size() == 0) {  // not initialised yet
     const auto start = Clock::now();
+    if (options_.localise_only) {
+      throw std::runtime_error("localise-only mode needs a loaded map (the atlas is empty)");
+    }
     if (StartMap(frame, R_pred, t_pred)) {
       result.state = TrackingState::kOk;
       result.keyframe = true;
       mode_ = Mode::kTracking;
       SetPose(R_pred, t_pred, /*update_velocity=*/false);
+      RecordFrame(*frame);
     } else {
       result.state = TrackingState::kNotInitialized;
     }
@@ -536,7 +711,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   LocalTracking tracking;
   bool tracked = false, relocalised = false;
   auto track_local_map = [&](float scale) {
-    Map& map = *maps_[active_];
+    Map& map = atlas_.map(active_);
     std::lock_guard<std::mutex> lock(map.mutex());
     tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale);
   };
@@ -548,13 +723,13 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     // Recently lost: the active map only; lost: every map, the active one first, then the newest.
     std::vector<int> order = {active_};
     if (mode_ == Mode::kLost) {
-      for (int m = static_cast<int>(maps_.size()) - 1; m >= 0; --m) {
-        if (m != active_) order.push_back(m);
+      for (int m = atlas_.size() - 1; m >= 0; --m) {
+        if (m != active_ && !atlas_.merged(m)) order.push_back(m);
       }
     }
     relocalised = Relocalise(*frame, order, &result, &tracking);
   }
-  if (!tracked && !relocalised && mode_ == Mode::kLost) {
+  if (!tracked && !relocalised && mode_ == Mode::kLost && have_pose_) {
     tracking = TrackAlongLossMotion(*frame, R_pred, t_pred);  // lost: `tracking` was empty
     tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
   }
@@ -567,7 +742,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   result.optimisation_ms = tracking.optimisation_ms;
 
   if (tracked || relocalised) {
-    Map& map = *maps_[active_];
+    Map& map = atlas_.map(active_);
     std::vector<int> point_match(frame->NumKeypoints(), -1);
     std::vector<int> line_match(frame->NumLines(), -1);
     bool make_keyframe = false;
@@ -583,12 +758,34 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     SetPose(tracking.pose.R_cw, tracking.pose.t_cw, /*update_velocity=*/mode_ == Mode::kTracking);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
-    if (make_keyframe) {
+    if (options_.localise_only) {
+      // No keyframes are made: the reference keyframe (centre of the local map) moves to the
+      // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
+      std::lock_guard<std::mutex> lock(map.mutex());
+      std::map<int, int> seen;
+      for (int pid : point_match) {
+        auto p = pid >= 0 ? map.point(pid) : nullptr;
+        if (!p) continue;
+        for (const auto& [kf_id, idx] : p->observations) {
+          (void)idx;
+          ++seen[kf_id];
+        }
+      }
+      int best = 0;
+      for (const auto& [kf_id, count] : seen) {
+        if (count > best) {
+          best = count;
+          last_keyframe_ = kf_id;
+        }
+      }
+    }
+    if (make_keyframe && !options_.localise_only) {
       const auto start = Clock::now();
       InsertKeyFrame(frame, tracking.pose.R_cw, tracking.pose.t_cw, point_match, line_match);
       result.keyframe = true;
       result.mapping_ms = Ms(start);
     }
+    RecordFrame(*frame);
     return result;
   }
 
@@ -622,11 +819,12 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   result.R_cw = last_R_;
   result.t_cw = last_t_;
   const auto start = Clock::now();
-  if (StartMap(frame, last_R_, last_t_)) {
+  if (!options_.localise_only && StartMap(frame, last_R_, last_t_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;
     mode_ = Mode::kTracking;
     lost_count_ = 0;
+    RecordFrame(*frame);
   } else {
     result.state = TrackingState::kLost;
   }
@@ -640,15 +838,16 @@ MapExport Tracker::ExportMap() const {
   std::vector<Eigen::Matrix<double, 6, 1>> lines;
   std::vector<int> point_map, line_map;
   MapExport out;
-  for (size_t m = 0; m < maps_.size(); ++m) {
-    std::lock_guard<std::mutex> lock(maps_[m]->mutex());
-    for (const auto& [id, p] : maps_[m]->points()) {
+  for (int m = 0; m < atlas_.size(); ++m) {
+    const Map& map = atlas_.map(m);
+    std::lock_guard<std::mutex> lock(map.mutex());
+    for (const auto& [id, p] : map.points()) {
       (void)id;
       if (p->bad || p->observations.empty()) continue;
       points.push_back(p->position);
       point_map.push_back(static_cast<int>(m));
     }
-    for (const auto& [id, l] : maps_[m]->lines()) {
+    for (const auto& [id, l] : map.lines()) {
       (void)id;
       if (l->bad || l->observations.empty()) continue;
       Eigen::Matrix<double, 6, 1> row;
@@ -656,7 +855,7 @@ MapExport Tracker::ExportMap() const {
       lines.push_back(row);
       line_map.push_back(static_cast<int>(m));
     }
-    out.keyframes += static_cast<int>(maps_[m]->keyframes().size());
+    out.keyframes += static_cast<int>(map.keyframes().size());
   }
   out.points.resize(static_cast<Eigen::Index>(points.size()), 3);
   for (size_t i = 0; i < points.size(); ++i) out.points.row(i) = points[i].transpose();

@@ -20,7 +20,9 @@
 
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/map/map.h"
+#include "slslam/mapping/atlas.h"
 #include "slslam/mapping/local_mapper.h"
+#include "slslam/mapping/loop_closer.h"
 #include "slslam/optimization/pose_optimizer.h"
 #include "slslam/place/keyframe_database.h"
 #include "slslam/place/vocabulary.h"
@@ -104,8 +106,21 @@ struct TrackerOptions {
   std::string vocabulary_path;          ///< bag-of-words vocabulary for relocalisation; empty:
                                         ///< no relocalisation
   RelocalisationOptions relocalisation;
+  LoopClosingOptions loop_closing;      ///< loop closing and map merging (need the vocabulary)
+  bool localise_only = false;           ///< track in the loaded maps without changing them: no
+                                        ///< keyframes, no mapping, no new maps
 
   void Check() const;
+};
+
+// A frame's pose expressed in the final map: relative to its reference keyframe, so loop
+// correction, merging and bundle adjustment that move the keyframe move the frame too.
+struct FramePose {
+  int index = 0;             ///< input frame number
+  double timestamp = 0.0;    ///< [s]
+  int map_index = -1;        ///< map of the atlas the pose is in (after merges)
+  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
+  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
 };
 
 struct TrackResult {
@@ -145,10 +160,21 @@ class Tracker {
   void Flush();
   MapExport ExportMap() const;
   LocalMappingStats mapping_stats() const { return mapper_->stats(); }
+  LoopClosingStats loop_stats() const;
+  std::vector<LoopEvent> loop_events() const;
   TrackingStats stats() const { return stats_; }
-  int num_maps() const { return static_cast<int>(maps_.size()); }
+  int num_maps() const { return atlas_.size(); }  ///< maps started (merged ones included)
+  int live_maps() const;                          ///< maps not merged into another
   int active_map() const { return active_; }
   bool has_vocabulary() const { return vocabulary_ != nullptr; }
+  // Every estimated frame pose (OK, RELOCALISED, NEW_MAP), expressed in the final map.
+  std::vector<FramePose> Trajectory() const;
+  // Writes every live map of the atlas (map_io.h's versioned binary file). Waits for mapping.
+  void SaveMap(const std::string& path, const std::string& version);
+  // Loads the maps of a file into an atlas that has none yet (before the first frame): tracking
+  // starts by relocalising in them. Refuses a file made with another rig, or when the tracker
+  // has no vocabulary. The descriptor type is checked against the first frame's.
+  void LoadMap(const std::string& path);
 
  private:
   // Matches of the local map around `reference_kf` in a frame, and the motion-only BA on them.
@@ -193,8 +219,7 @@ class Tracker {
   void SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, bool update_velocity);
 
   TrackerOptions options_;
-  std::vector<std::unique_ptr<Map>> maps_;
-  std::vector<std::unique_ptr<KeyframeDatabase>> databases_;  ///< one per map
+  Atlas atlas_;
   std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
   int active_ = -1;  ///< index of the map being tracked in
@@ -212,6 +237,27 @@ class Tracker {
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   int first_tracked_ = 0;  ///< inliers of the first frame after the last keyframe
+  // After a loop correction or merge moved the active map: the active map index and the last
+  // pose follow (the pose through its reference keyframe).
+  void FollowCorrections();
+  void RecordFrame(const StereoFrame& frame);
+
+  struct FrameRecord {
+    int index = 0;
+    double timestamp = 0.0;
+    int map_index = -1;
+    int reference_kf = -1;
+    Eigen::Matrix3d R_fr = Eigen::Matrix3d::Identity();  ///< frame <- reference keyframe
+    Eigen::Vector3d t_fr = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< the online estimate (fallback)
+    Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  };
+  std::vector<FrameRecord> records_;
+  int loaded_descriptor_type_ = -1;  ///< of a loaded map file (-1: none loaded)
+  int loaded_descriptor_cols_ = 0;
+  std::string loaded_path_;
+  std::unique_ptr<LoopCloser> loop_closer_;
+  int seen_epoch_ = -1;  ///< the active map's correction epoch the last pose is expressed in
   TrackingStats stats_;
 };
 

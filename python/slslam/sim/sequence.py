@@ -63,6 +63,9 @@ class SimOptions:
     imu_rate_hz: float = 200.0
     noise: bool = True  # image, IMU and LiDAR noise (off: exact measurements)
     speed_mps: float = 0.8  # robot cruise speed [m/s]
+    laps: int = 1  # loop preset: times the robot may drive round (frames decide how far it gets)
+    loop_length_m: float = 40.0  # loop preset: length of the two straights [m]
+    loop_radius_m: float = 10.0  # loop preset: radius of the two half circles [m]
     spin_at_s: float | None = None  # the robot stops and turns on the spot at this time [s]
     spin_deg: float = 360.0  # yaw turned on the spot [deg], > 0 = left; kept afterwards
     spin_duration_s: float = 6.0  # duration of the turn [s]
@@ -88,6 +91,13 @@ class SimOptions:
             raise ValueError("exposure must be > 0 and headlamp_power >= 0")
         if not 0.1 <= self.speed_mps <= 3.0:
             raise ValueError(f"speed_mps must be in [0.1, 3], got {self.speed_mps}")
+        if not 1 <= self.laps <= 20:
+            raise ValueError(f"laps must be in [1, 20], got {self.laps}")
+        if not (2.0 <= self.loop_length_m <= 1000.0 and 3.0 <= self.loop_radius_m <= 500.0):
+            raise ValueError(
+                "loop_length_m must be in [2, 1000] and loop_radius_m in [3, 500], got "
+                f"{self.loop_length_m} and {self.loop_radius_m}"
+            )
         self.section.check()
         self.camera.check()
         self.trajectory_options()  # checks the spin options
@@ -107,13 +117,17 @@ class SimOptions:
         return dataclasses.asdict(self)
 
 
-def preset_geometry(preset: str) -> tuple[list[np.ndarray], np.ndarray]:
-    """Roadway centrelines and the robot's path for a preset."""
+def preset_geometry(
+    preset: str, laps: int = 1, loop_length_m: float = 40.0, loop_radius_m: float = 10.0
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Roadway centrelines and the robot's path for a preset (the loop's path goes round
+    ``laps`` times)."""
     if preset == "straight":
         return [centrelines.straight(80.0)], centrelines.straight(80.0)[4:-4]
     if preset == "loop":
-        line = centrelines.loop()
-        return [line], line
+        line = centrelines.loop(loop_length_m, loop_radius_m)
+        path = np.vstack([line] + [line[1:]] * (laps - 1))
+        return [line], path
     if preset == "junction":
         return centrelines.junction_roadways(), centrelines.junction_path()
     raise ValueError(f"unknown preset '{preset}' (choose from {', '.join(PRESETS)})")
@@ -125,7 +139,9 @@ class Simulator:
     def __init__(self, options: SimOptions = SimOptions()):
         options.check()
         self.options = options
-        roadways, path = preset_geometry(options.preset)
+        roadways, path = preset_geometry(
+            options.preset, options.laps, options.loop_length_m, options.loop_radius_m
+        )
         self.mesh = network_mesh(roadways, options.section)
         self.scene = RaycastScene(self.mesh)
         duration = (options.frames - 1) / options.rate_hz + 1.0 / options.rate_hz

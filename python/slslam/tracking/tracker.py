@@ -112,6 +112,17 @@ class MapData:
     stats: dict[str, float] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class FinalTrajectory:
+    """Estimated frame poses in the final map (see :meth:`Tracker.final_trajectory`): per frame its
+    ``index``, ``timestamp`` [s], ``map_index`` (after merges) and ``T_world_cam`` (N, 4, 4)."""
+
+    index: np.ndarray
+    timestamp: np.ndarray
+    map_index: np.ndarray
+    T_world_cam: np.ndarray
+
+
 def _core_options(
     camera: RectifiedStereoCamera, config: Config, vocabulary: Path | None = None
 ) -> _core.TrackerOptions:
@@ -151,6 +162,17 @@ def _core_options(
     options.pose.line_angle_weight = t.line_angle_weight
     options.mapping.ba.line_weight = t.line_weight
     options.mapping.ba.line_angle_weight = t.line_angle_weight
+    loop = t.loop_closing
+    for name in (
+        "enabled",
+        "merge_maps",
+        "global_ba",
+        "min_inliers",
+        "consistency",
+        "max_correction_ratio",
+        "max_correction_floor_m",
+    ):
+        setattr(options.loop_closing, name, getattr(loop, name))
     try:
         options.check()
     except ValueError as exc:
@@ -206,6 +228,8 @@ class Tracker:
         camera: RectifiedStereoCamera,
         config: Config | None = None,
         frontend=None,
+        load_map: str | Path | None = None,
+        localise_only: bool = False,
     ) -> None:
         self.config = config or Config()
         self.camera = camera
@@ -227,12 +251,24 @@ class Tracker:
             self._weak_threshold = threshold * features.low_texture_ratio
             self._grid.strong_score = threshold
         self.vocabulary = _vocabulary_for(self.config, self.frontend)
+        options = _core_options(camera, self.config, self.vocabulary)
+        if localise_only and load_map is None:
+            raise InputError("--localise-only", "localisation-only mode needs a map (--load-map)")
+        options.localise_only = localise_only
         self._core = _core.TrackerCore(
-            _core_options(camera, self.config, self.vocabulary),
+            options,
             _core.LinePreprocessOptions(),
             self.config.tracking.line_detection_scale,
             self.config.tracking.line_detector,
         )
+        if load_map is not None:
+            path = Path(load_map).expanduser()
+            if not path.is_file():
+                raise InputError(path, "map file not found")
+            try:
+                self._core.load_map(str(path))
+            except (ValueError, RuntimeError) as exc:
+                raise InputError(path, str(exc)) from None
         self._results: list[TrackResult] = []
         self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
         self._closed = False
@@ -465,9 +501,48 @@ class Tracker:
                     "relocalisations",
                     "relocalisation_attempts",
                     "maps_started",
+                    "loop_keyframes_checked",
+                    "loop_candidates_verified",
+                    "loops_detected",
+                    "loops_rejected",
+                    "loops_accepted",
+                    "merges",
+                    "global_ba_runs",
+                    "loop_closing_ms",
+                    "global_ba_ms",
+                    "loop_events",
                 )
             },
         )
+
+    def final_trajectory(self) -> FinalTrajectory:
+        """Every estimated frame pose in the final map: after loop correction, map merges and
+        global bundle adjustment (each frame follows its reference keyframe). Waits for local
+        mapping first."""
+        t = self._core.trajectory()
+        R_cw = np.asarray(t["R_cw"]).reshape(-1, 3, 3)
+        t_cw = np.asarray(t["t_cw"]).reshape(-1, 3)
+        T_world_cam = np.tile(np.eye(4), (len(R_cw), 1, 1))
+        T_world_cam[:, :3, :3] = np.transpose(R_cw, (0, 2, 1))
+        T_world_cam[:, :3, 3] = -np.einsum("nji,nj->ni", R_cw, t_cw)
+        return FinalTrajectory(
+            np.asarray(t["index"], dtype=int),
+            np.asarray(t["timestamp"], dtype=float),
+            np.asarray(t["map_index"], dtype=int),
+            T_world_cam,
+        )
+
+    def save_map(self, path: str | Path) -> Path:
+        """Writes every live map of the atlas to ``path`` (slslam's versioned, checksummed binary
+        map file; written to a temporary name and renamed). Waits for local mapping first."""
+        from slslam import __version__
+
+        path = Path(path).expanduser()
+        try:
+            self._core.save_map(str(path), __version__)
+        except (ValueError, RuntimeError) as exc:
+            raise InputError(path, str(exc)) from None
+        return path
 
     def close(self) -> None:
         """Finishes local mapping. The results and the map stay readable."""

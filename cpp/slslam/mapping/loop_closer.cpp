@@ -1,0 +1,643 @@
+#include "slslam/mapping/loop_closer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <tuple>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+
+#include "slslam/core/check.h"
+#include "slslam/features/descriptor_matcher.h"
+
+namespace slslam {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
+}
+
+double RotationAngle(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle(); }
+
+// Moves display endpoints onto a re-estimated line.
+Eigen::Vector3d ProjectOntoLine(const PluckerLine& line, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d p0 = line.ClosestPointToOrigin();
+  const Eigen::Vector3d d = line.v.normalized();
+  return p0 + (p - p0).dot(d) * d;
+}
+
+struct Pose {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+void LoopClosingOptions::Check() const {
+  SLSLAM_CHECK(min_keyframes >= 2, "loop_closing.min_keyframes must be >= 2, got ", min_keyframes);
+  SLSLAM_CHECK(candidates >= 1, "loop_closing.candidates must be >= 1, got ", candidates);
+  SLSLAM_CHECK(min_matches >= 6, "loop_closing.min_matches must be >= 6, got ", min_matches);
+  SLSLAM_CHECK(match_ratio > 0.0f && match_ratio <= 1.0f,
+               "loop_closing.match_ratio must be in (0, 1], got ", match_ratio);
+  SLSLAM_CHECK(std::isfinite(ransac_error_px) && ransac_error_px > 0.0,
+               "loop_closing.ransac_error_px must be > 0, got ", ransac_error_px);
+  SLSLAM_CHECK(ransac_iterations >= 1, "loop_closing.ransac_iterations must be >= 1");
+  SLSLAM_CHECK(min_pnp_inliers >= 4, "loop_closing.min_pnp_inliers must be >= 4");
+  SLSLAM_CHECK(std::isfinite(min_inliers) && min_inliers > 0.0,
+               "loop_closing.min_inliers must be > 0, got ", min_inliers);
+  SLSLAM_CHECK(consistency >= 1, "loop_closing.consistency must be >= 1, got ", consistency);
+  SLSLAM_CHECK(std::isfinite(agree_m) && agree_m > 0.0, "loop_closing.agree_m must be > 0");
+  SLSLAM_CHECK(std::isfinite(agree_rad) && agree_rad > 0.0, "loop_closing.agree_rad must be > 0");
+  SLSLAM_CHECK(std::isfinite(max_correction_ratio) && max_correction_ratio >= 0.0,
+               "loop_closing.max_correction_ratio must be >= 0");
+  SLSLAM_CHECK(std::isfinite(max_correction_floor_m) && max_correction_floor_m >= 0.0,
+               "loop_closing.max_correction_floor_m must be >= 0");
+  SLSLAM_CHECK(std::isfinite(max_correction_rad) && max_correction_rad > 0.0,
+               "loop_closing.max_correction_rad must be > 0");
+  SLSLAM_CHECK(strong_covisibility >= 1, "loop_closing.strong_covisibility must be >= 1");
+  SLSLAM_CHECK(vocabulary_levels_up >= 0, "loop_closing.vocabulary_levels_up must be >= 0");
+  SLSLAM_CHECK(std::isfinite(point_sigma_px) && point_sigma_px > 0.0 &&
+                   std::isfinite(line_sigma_px) && line_sigma_px > 0.0,
+               "loop_closing sigmas must be > 0");
+  pose_graph.Check();
+}
+
+std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
+                                              const FeatureVector& features, const KeyFrame& kf,
+                                              const Map& map, float max_distance, float ratio) {
+  // Map point ids are sparse, so the one-to-one table is a map (a point keeps the keypoint with
+  // the smaller distance).
+  std::map<int, std::pair<float, int>> owner;  // map point -> (distance, keypoint)
+  for (const auto& [node, frame_ids] : features) {
+    auto it = kf.bow_features.find(node);
+    if (it == kf.bow_features.end()) continue;
+    for (int i : frame_ids) {
+      BestTwo best;  // index: the map point id
+      for (int j : it->second) {
+        const int pid = j < static_cast<int>(kf.point_ids.size()) ? kf.point_ids[j] : -1;
+        if (pid < 0) continue;
+        auto p = map.point(pid);
+        if (!p || p->bad) continue;
+        best.Add(DescriptorDistance(descriptors, i, p->descriptor, 0), pid);
+      }
+      if (best.index < 0 || best.best > max_distance) continue;
+      if (best.second < std::numeric_limits<float>::max() && best.best >= ratio * best.second) {
+        continue;
+      }
+      auto [pos, inserted] = owner.emplace(best.index, std::make_pair(best.best, i));
+      if (!inserted && best.best < pos->second.first) pos->second = {best.best, i};
+    }
+  }
+  std::vector<std::pair<int, int>> out;
+  out.reserve(owner.size());
+  for (const auto& [pid, match] : owner) out.emplace_back(match.second, pid);
+  return out;
+}
+
+LoopCloser::LoopCloser(const StereoRig& rig, const LoopClosingOptions& options,
+                       const Vocabulary* vocabulary, float max_descriptor_distance_binary,
+                       float max_descriptor_distance_float, LocalMapVerifier verifier)
+    : rig_(rig),
+      options_(options),
+      vocabulary_(vocabulary),
+      max_distance_binary_(max_descriptor_distance_binary),
+      max_distance_float_(max_descriptor_distance_float),
+      verifier_(std::move(verifier)) {
+  options_.Check();
+  Require(static_cast<bool>(verifier_), "the loop closer needs a local-map verifier");
+}
+
+LoopClosingStats LoopCloser::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+std::vector<LoopEvent> LoopCloser::events() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return events_;
+}
+
+double LoopCloser::PathLength(const Map& map, int from_id, int to_id) {
+  if (from_id > to_id) std::swap(from_id, to_id);
+  double length = 0.0;
+  bool have = false;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  for (auto it = map.keyframes().lower_bound(from_id);
+       it != map.keyframes().end() && it->first <= to_id; ++it) {
+    const Eigen::Vector3d c = it->second->Center();
+    if (have) length += (c - last).norm();
+    last = c;
+    have = true;
+  }
+  return length;
+}
+
+bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map,
+                        int candidate, Verified* out) {
+  Map& target = atlas->map(target_map);
+  std::lock_guard<std::mutex> lock(target.mutex());
+  auto c = target.keyframe(candidate);
+  if (!c || c->bad) return false;
+  const StereoFrame& frame = *kf.frame;
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  const float max_distance = desc.type() == CV_8U ? max_distance_binary_ : max_distance_float_;
+  const auto matches =
+      MatchByWords(desc, kf.bow_features, *c, target, max_distance, options_.match_ratio);
+  if (static_cast<int>(matches.size()) < options_.min_matches) return false;
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (const auto& [keypoint, pid] : matches) {
+    const Eigen::Vector3d& x = target.point(pid)->position;
+    object.emplace_back(x.x(), x.y(), x.z());
+    image.emplace_back(frame.keypoints.uv(keypoint, 0), frame.keypoints.uv(keypoint, 1));
+  }
+  const PinholeCamera& camera = rig_.camera;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
+                     0.0, 0.0, 1.0);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const bool solved = cv::solvePnPRansac(
+      object, image, K, cv::noArray(), rvec, tvec, false, options_.ransac_iterations,
+      static_cast<float>(options_.ransac_error_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
+  if (!solved || static_cast<int>(inliers.size()) < options_.min_pnp_inliers) return false;
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R_cw;
+  Eigen::Vector3d t_cw;
+  for (int r = 0; r < 3; ++r) {
+    for (int col = 0; col < 3; ++col) R_cw(r, col) = R_cv.at<double>(r, col);
+    t_cw(r) = tvec.at<double>(r);
+  }
+  if (!R_cw.allFinite() || !t_cw.allFinite()) return false;
+  LocalMapMatch match = verifier_(frame, target, candidate, R_cw, t_cw);
+  if (!match.success || match.weighted_inliers < options_.min_inliers) return false;
+  {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.candidates_verified;
+  }
+  out->target_map = target_map;
+  out->candidate = candidate;
+  // T_target_source = T_target_K * T_K_source (the keyframe's pose in its own map: kf).
+  out->R_ts = match.R_cw.transpose() * kf.R_cw;
+  out->t_ts = match.R_cw.transpose() * (kf.t_cw - match.t_cw);
+  out->match = std::move(match);
+  if (target_map != source_map) return true;
+  // Same map: the correction must be explainable by drift since the candidate.
+  const Eigen::Vector3d center_old = kf.Center();
+  const Eigen::Vector3d center_new = -out->match.R_cw.transpose() * out->match.t_cw;
+  const double moved = (center_new - center_old).norm();
+  const double turned = RotationAngle(out->match.R_cw * kf.R_cw.transpose());
+  const double allowed = options_.max_correction_floor_m +
+                         options_.max_correction_ratio * PathLength(target, candidate, kf.id);
+  return moved <= allowed && turned <= options_.max_correction_rad;
+}
+
+bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
+  if (!vocabulary_ || (!options_.enabled && !options_.merge_maps)) return false;
+  const auto start = Clock::now();
+  const int source = atlas->Resolve(map_index);
+  Map& source_map = atlas->map(source);
+  std::shared_ptr<KeyFrame> kf;
+  std::set<int> exclude = {keyframe_id};
+  std::vector<BowVector> neighbour_bows;
+  int map_keyframes = 0;
+  {
+    std::lock_guard<std::mutex> lock(source_map.mutex());
+    kf = source_map.keyframe(keyframe_id);
+    if (!kf || kf->bad || kf->bow.empty() || !kf->frame) return false;
+    for (const auto& [id, weight] : kf->covisibility) {
+      (void)weight;
+      exclude.insert(id);
+      if (auto n = source_map.keyframe(id); n && !n->bow.empty()) neighbour_bows.push_back(n->bow);
+    }
+    map_keyframes = static_cast<int>(source_map.keyframes().size());
+  }
+  // A candidate must look at least as similar as the keyframe's weakest covisible neighbour.
+  double min_score = 1.0;
+  for (const BowVector& bow : neighbour_bows) {
+    min_score = std::min(min_score, vocabulary_->Score(kf->bow, bow));
+  }
+  if (neighbour_bows.empty()) min_score = 0.0;
+
+  std::vector<std::tuple<double, int, int>> candidates;  // (-score, map, keyframe)
+  for (int m = 0; m < atlas->size(); ++m) {
+    if (atlas->merged(m)) continue;
+    const bool same = m == source;
+    if (same && (!options_.enabled || map_keyframes < options_.min_keyframes)) continue;
+    if (!same && !options_.merge_maps) continue;
+    Map& target = atlas->map(m);
+    const auto found =
+        atlas->database(m).Query(kf->bow, options_.candidates, min_score, 0.8, [&](int id) {
+          if (same && (exclude.count(id) || id >= keyframe_id)) return false;
+          std::lock_guard<std::mutex> lock(target.mutex());
+          auto c = target.keyframe(id);
+          if (!c || c->bad) return false;
+          if (!same) return true;
+          // Not a neighbour of a neighbour either: the keyframes just behind on this pass.
+          for (const auto& [n, w] : c->covisibility) {
+            (void)w;
+            if (exclude.count(n)) return false;
+          }
+          return true;
+        });
+    for (const auto& c : found) candidates.emplace_back(-c.score, m, c.keyframe_id);
+  }
+  std::sort(candidates.begin(), candidates.end());
+  if (static_cast<int>(candidates.size()) > options_.candidates) {
+    candidates.resize(options_.candidates);
+  }
+
+  Verified verified;
+  bool found = false;
+  for (const auto& [score, m, id] : candidates) {
+    (void)score;
+    Verified attempt;
+    if (Verify(atlas, source, *kf, m, id, &attempt)) {
+      verified = std::move(attempt);
+      found = true;
+      break;
+    }
+    if (attempt.target_map >= 0) {  // verified geometrically but implausible
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.loops_rejected;
+    }
+  }
+
+  Pending& pending = pending_[source];
+  bool accept = false;
+  if (found) {
+    {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.loops_detected;
+    }
+    const bool agrees =
+        pending.count > 0 && pending.target_map == verified.target_map &&
+        (pending.t_ts - verified.t_ts).norm() <= options_.agree_m &&
+        RotationAngle(pending.R_ts.transpose() * verified.R_ts) <= options_.agree_rad;
+    if (agrees) {
+      ++pending.count;
+    } else {
+      if (pending.count > 0) {
+        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+        ++stats_.loops_rejected;
+      }
+      pending = Pending{verified.target_map, 1, 0, verified.R_ts, verified.t_ts};
+    }
+    pending.misses = 0;
+    pending.R_ts = verified.R_ts;
+    pending.t_ts = verified.t_ts;
+    accept = pending.count >= options_.consistency;
+  } else if (pending.count > 0 && ++pending.misses > 1) {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.loops_rejected;
+    pending = Pending{};
+  }
+
+  bool changed = false;
+  if (accept) {
+    pending_.erase(source);
+    const int target = verified.target_map;
+    Map& target_map = atlas->map(target);
+    LoopEvent event;
+    event.keyframe_id = keyframe_id;
+    event.candidate_id = verified.candidate;
+    event.merge = target != source;
+    event.frame_index = kf->frame->index;
+    {
+      std::lock_guard<std::mutex> lock(target_map.mutex());
+      if (auto c = target_map.keyframe(verified.candidate); c && c->frame) {
+        event.candidate_frame_index = c->frame->index;
+      }
+    }
+    event.correction_m =
+        (kf->Center() - (-verified.match.R_cw.transpose() * verified.match.t_cw)).norm();
+    if (event.merge) event.correction_m = 0.0;  // different worlds: no distance to compare
+    {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      events_.push_back(event);
+    }
+    if (target == source) {
+      std::lock_guard<std::mutex> lock(source_map.mutex());
+      if (source_map.keyframe(keyframe_id)) {
+        Correct(&source_map, keyframe_id, verified);
+        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+        ++stats_.loops_accepted;
+        changed = true;
+      }
+    } else {
+      std::scoped_lock lock(source_map.mutex(), target_map.mutex());
+      if (source_map.keyframe(keyframe_id)) {
+        TransformMap(&source_map, verified.R_ts, verified.t_ts);
+        std::vector<std::pair<int, BowVector>> moved;
+        for (const auto& [id, k] : source_map.keyframes()) moved.emplace_back(id, k->bow);
+        target_map.Absorb(&source_map);
+        atlas->database(source).Clear();
+        for (const auto& [id, bow] : moved) {
+          if (!bow.empty()) atlas->database(target).Add(id, bow);
+        }
+        atlas->MarkMerged(source, target);
+        auto& edges = loop_edges_[target];
+        for (const LoopEdge& e : loop_edges_[source]) edges.push_back(e);
+        loop_edges_.erase(source);
+        Correct(&target_map, keyframe_id, verified);
+        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+        ++stats_.merges;
+        changed = true;
+      }
+    }
+  }
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  ++stats_.keyframes_checked;
+  stats_.loop_ms += Ms(start);
+  return changed;
+}
+
+void LoopCloser::TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts) {
+  // x_t = R_ts x_s + t_ts; a pose T_cs becomes T_ct = T_cs T_st.
+  const Eigen::Matrix3d R_st = R_ts.transpose();
+  const Eigen::Vector3d t_st = -R_st * t_ts;
+  for (auto& [id, kf] : map->keyframes()) {
+    (void)id;
+    kf->t_cw = kf->R_cw * t_st + kf->t_cw;
+    kf->R_cw = kf->R_cw * R_st;
+  }
+  for (auto& [id, p] : map->points()) {
+    (void)id;
+    p->position = R_ts * p->position + t_ts;
+  }
+  for (auto& [id, l] : map->lines()) {
+    (void)id;
+    l->line = l->line.Transformed(R_ts, t_ts);
+    l->start = R_ts * l->start + t_ts;
+    l->end = R_ts * l->end + t_ts;
+  }
+  map->BumpCorrectionEpoch();
+}
+
+void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
+  auto current = map->keyframe(keyframe_id);
+  // Poses before the correction, and the initial values of the essential graph: the keyframe and
+  // its covisible neighbours move rigidly to the verified pose.
+  std::unordered_map<int, Pose> original;
+  for (const auto& [id, kf] : map->keyframes()) original[id] = {kf->R_cw, kf->t_cw};
+  const Pose K_old = original[keyframe_id];
+  const Pose K_new{verified.match.R_cw, verified.match.t_cw};
+  std::set<int> group = {keyframe_id};
+  for (const auto& [id, w] : current->covisibility) {
+    (void)w;
+    if (map->keyframe(id) && id != verified.candidate) group.insert(id);
+  }
+  std::vector<int> ids;
+  std::unordered_map<int, int> index;
+  std::vector<BaPose> poses;
+  const int root = map->keyframes().begin()->first;
+  for (const auto& [id, kf] : map->keyframes()) {
+    BaPose pose;
+    const Pose& o = original[id];
+    if (group.count(id)) {
+      const Eigen::Matrix3d R_iK = o.R * K_old.R.transpose();
+      pose.R_cw = R_iK * K_new.R;
+      pose.t_cw = R_iK * (K_new.t - K_old.t) + o.t;
+    } else {
+      pose.R_cw = o.R;
+      pose.t_cw = o.t;
+    }
+    pose.fixed = id == root || id == verified.candidate;
+    index[id] = static_cast<int>(poses.size());
+    ids.push_back(id);
+    poses.push_back(pose);
+  }
+  // Essential graph: spanning tree and strong covisibility from the poses before the correction,
+  // loop edges (earlier ones and the keyframe's group to the candidate) from the corrected ones.
+  std::vector<PoseGraphEdge> edges;
+  auto add_edge = [&](int a, int b, const Pose& pa, const Pose& pb) {
+    PoseGraphEdge e;
+    e.a = index[a];
+    e.b = index[b];
+    RelativePose(pa.R, pa.t, pb.R, pb.t, &e.R_ab, &e.t_ab);
+    edges.push_back(e);
+  };
+  for (const auto& [id, kf] : map->keyframes()) {
+    if (kf->parent >= 0 && index.count(kf->parent)) {
+      add_edge(kf->parent, id, original[kf->parent], original[id]);
+    }
+    for (const auto& [other, weight] : kf->covisibility) {
+      if (other > id && weight >= options_.strong_covisibility && index.count(other) &&
+          other != kf->parent) {
+        add_edge(id, other, original[id], original[other]);
+      }
+    }
+  }
+  for (const LoopEdge& e : loop_edges_[verified.target_map]) {
+    if (!index.count(e.a) || !index.count(e.b)) continue;
+    PoseGraphEdge edge;
+    edge.a = index[e.a];
+    edge.b = index[e.b];
+    edge.R_ab = e.R_ab;
+    edge.t_ab = e.t_ab;
+    edges.push_back(edge);
+  }
+  const Pose C{poses[index[verified.candidate]].R_cw, poses[index[verified.candidate]].t_cw};
+  for (int g : group) {
+    const BaPose& p = poses[index[g]];
+    add_edge(verified.candidate, g, C, Pose{p.R_cw, p.t_cw});
+    LoopEdge loop;
+    loop.a = verified.candidate;
+    loop.b = g;
+    RelativePose(C.R, C.t, p.R_cw, p.t_cw, &loop.R_ab, &loop.t_ab);
+    loop_edges_[verified.target_map].push_back(loop);
+  }
+  const PoseGraphReport report = OptimizePoseGraph(&poses, edges, options_.pose_graph);
+  if (!report.solved) {  // keep the rigid correction of the group at least
+    for (size_t i = 0; i < ids.size(); ++i) {
+      if (!group.count(ids[i])) poses[i] = {original[ids[i]].R, original[ids[i]].t, false};
+    }
+  }
+  // Poses, then every landmark follows its reference keyframe (its oldest live observer).
+  for (size_t i = 0; i < ids.size(); ++i) {
+    auto kf = map->keyframe(ids[i]);
+    kf->R_cw = poses[i].R_cw;
+    kf->t_cw = poses[i].t_cw;
+  }
+  auto reference = [&](const std::map<int, int>& observations) -> int {
+    for (const auto& [kf_id, idx] : observations) {
+      (void)idx;
+      if (index.count(kf_id)) return kf_id;
+    }
+    return -1;
+  };
+  for (auto& [id, p] : map->points()) {
+    (void)id;
+    const int ref = reference(p->observations);
+    if (ref < 0) continue;
+    const Pose& o = original[ref];
+    const BaPose& n = poses[index[ref]];
+    p->position = n.R_cw.transpose() * (o.R * p->position + o.t - n.t_cw);
+  }
+  for (auto& [id, l] : map->lines()) {
+    (void)id;
+    const int ref = reference(l->observations);
+    if (ref < 0) continue;
+    const Pose& o = original[ref];
+    const BaPose& n = poses[index[ref]];
+    const Eigen::Matrix3d R_wn = n.R_cw.transpose();
+    const Eigen::Vector3d t_wn = -R_wn * n.t_cw;
+    l->line = l->line.Transformed(o.R, o.t).Transformed(R_wn, t_wn);
+    l->start = R_wn * (o.R * l->start + o.t) + t_wn;
+    l->end = R_wn * (o.R * l->end + o.t) + t_wn;
+  }
+  Fuse(map, keyframe_id, verified.match);
+  for (int g : group) map->UpdateConnections(g);
+  map->BumpCorrectionEpoch();
+  if (options_.global_ba) GlobalBundleAdjustment(map);
+}
+
+void LoopCloser::Fuse(Map* map, int keyframe_id, const LocalMapMatch& match) {
+  auto kf = map->keyframe(keyframe_id);
+  if (!kf) return;
+  // Points: the keyframe's keypoint takes the older map point; a duplicate gives its
+  // observations to it and goes.
+  for (size_t i = 0; i < match.point_ids.size(); ++i) {
+    auto keep = map->point(match.point_ids[i]);
+    const int k = match.keypoints[i];
+    if (!keep || keep->bad || k < 0 || k >= static_cast<int>(kf->point_ids.size())) continue;
+    const int old_id = kf->point_ids[k];
+    if (old_id == keep->id) continue;
+    if (keep->observations.count(keyframe_id)) continue;  // already seen at another keypoint
+    auto duplicate = old_id >= 0 ? map->point(old_id) : nullptr;
+    if (duplicate) {
+      for (const auto& [other_kf, idx] : duplicate->observations) {
+        auto o = map->keyframe(other_kf);
+        if (!o || keep->observations.count(other_kf)) continue;
+        keep->observations[other_kf] = idx;
+        o->point_ids[idx] = keep->id;
+      }
+      keep->visible += duplicate->visible;
+      keep->found += duplicate->found;
+      map->ErasePoint(old_id);
+    }
+    map->AddPointObservation(keep->id, keyframe_id, k);
+  }
+  for (size_t i = 0; i < match.line_ids.size(); ++i) {
+    auto keep = map->line(match.line_ids[i]);
+    const int s = match.segments[i];
+    if (!keep || keep->bad || s < 0 || s >= static_cast<int>(kf->line_ids.size())) continue;
+    const int old_id = kf->line_ids[s];
+    if (old_id == keep->id) continue;
+    if (keep->observations.count(keyframe_id)) continue;
+    auto duplicate = old_id >= 0 ? map->line(old_id) : nullptr;
+    if (duplicate) {
+      for (const auto& [other_kf, idx] : duplicate->observations) {
+        auto o = map->keyframe(other_kf);
+        if (!o || keep->observations.count(other_kf)) continue;
+        keep->observations[other_kf] = idx;
+        o->line_ids[idx] = keep->id;
+      }
+      keep->visible += duplicate->visible;
+      keep->found += duplicate->found;
+      map->EraseLine(old_id);
+    }
+    map->AddLineObservation(keep->id, keyframe_id, s);
+  }
+}
+
+void LoopCloser::GlobalBundleAdjustment(Map* map) {
+  const auto start = Clock::now();
+  BaProblem problem;
+  std::unordered_map<int, int> pose_index;
+  std::vector<int> pose_kf, point_id, line_id;
+  std::vector<std::pair<int, int>> point_obs_ref, line_obs_ref;
+  const int root = map->keyframes().begin()->first;
+  for (const auto& [id, kf] : map->keyframes()) {
+    pose_index[id] = static_cast<int>(problem.poses.size());
+    problem.poses.push_back({kf->R_cw, kf->t_cw, id == root});
+    pose_kf.push_back(id);
+  }
+  for (const auto& [pid, p] : map->points()) {
+    if (p->bad || p->observations.empty()) continue;
+    const int index = static_cast<int>(problem.points.size());
+    problem.points.push_back(p->position);
+    point_id.push_back(pid);
+    for (const auto& [kf_id, kp] : p->observations) {
+      auto it = pose_index.find(kf_id);
+      if (it == pose_index.end()) continue;
+      const StereoFrame& f = *map->keyframe(kf_id)->frame;
+      BaPointObservation o;
+      o.pose = it->second;
+      o.point = index;
+      o.stereo = f.u_right[kp] >= 0.0;
+      o.observed << f.keypoints.uv(kp, 0), f.keypoints.uv(kp, 1), f.u_right[kp];
+      o.sigma_px = options_.point_sigma_px;
+      problem.point_observations.push_back(o);
+      point_obs_ref.emplace_back(pid, kf_id);
+    }
+  }
+  for (const auto& [lid, l] : map->lines()) {
+    if (l->bad || l->observations.empty()) continue;
+    const int index = static_cast<int>(problem.lines.size());
+    problem.lines.push_back(l->line);
+    line_id.push_back(lid);
+    for (const auto& [kf_id, seg] : l->observations) {
+      auto it = pose_index.find(kf_id);
+      if (it == pose_index.end()) continue;
+      const StereoFrame& f = *map->keyframe(kf_id)->frame;
+      BaLineObservation o;
+      o.pose = it->second;
+      o.line = index;
+      o.start_px = f.lines[seg].start.cast<double>();
+      o.end_px = f.lines[seg].end.cast<double>();
+      o.sigma_px = options_.line_sigma_px;
+      problem.line_observations.push_back(o);
+      line_obs_ref.emplace_back(lid, kf_id);
+    }
+  }
+  const BundleAdjustmentReport report =
+      SolveBundleAdjustment(rig_, &problem, options_.global_ba_options);
+  if (report.solved) {
+    for (size_t i = 0; i < problem.poses.size(); ++i) {
+      if (problem.poses[i].fixed) continue;
+      auto kf = map->keyframe(pose_kf[i]);
+      kf->R_cw = problem.poses[i].R_cw;
+      kf->t_cw = problem.poses[i].t_cw;
+    }
+    for (size_t i = 0; i < point_id.size(); ++i)
+      map->point(point_id[i])->position = problem.points[i];
+    for (size_t i = 0; i < line_id.size(); ++i) {
+      auto l = map->line(line_id[i]);
+      l->line = problem.lines[i];
+      l->start = ProjectOntoLine(l->line, l->start);
+      l->end = ProjectOntoLine(l->line, l->end);
+    }
+    for (size_t i = 0; i < point_obs_ref.size(); ++i) {
+      if (!report.point_outlier[i]) continue;
+      auto p = map->point(point_obs_ref[i].first);
+      auto kf = map->keyframe(point_obs_ref[i].second);
+      auto it = p->observations.find(point_obs_ref[i].second);
+      if (it == p->observations.end()) continue;
+      kf->point_ids[it->second] = -1;
+      p->observations.erase(it);
+    }
+    for (size_t i = 0; i < line_obs_ref.size(); ++i) {
+      if (!report.line_outlier[i]) continue;
+      auto l = map->line(line_obs_ref[i].first);
+      auto kf = map->keyframe(line_obs_ref[i].second);
+      auto it = l->observations.find(line_obs_ref[i].second);
+      if (it == l->observations.end()) continue;
+      kf->line_ids[it->second] = -1;
+      l->observations.erase(it);
+    }
+    map->BumpCorrectionEpoch();
+  }
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  ++stats_.global_ba_runs;
+  stats_.global_ba_ms += Ms(start);
+}
+
+}  // namespace slslam

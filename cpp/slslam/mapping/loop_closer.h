@@ -1,0 +1,165 @@
+// Loop closing and map merging (ORB-SLAM3's LoopClosing thread, SPEC A1/A6), for a stereo
+// point-line map.
+//
+// For every keyframe local mapping has finished:
+//  1. Candidates: keyframes of every map of the atlas whose bag of words scores at least as high
+//     as the new keyframe's weakest covisible neighbour, excluding its covisible keyframes.
+//  2. Geometric verification: the keyframe's keypoints matched to the candidate's map points
+//     within shared vocabulary nodes, EPnP RANSAC, then the candidate's local map (points AND
+//     lines) projected and optimised by the caller's local-map tracker (`LocalMapVerifier`).
+//  3. Plausibility (same map): the correction must be explainable by drift, at most
+//     `max_correction_ratio` of the path driven since the candidate (plus a floor). Mine roadways
+//     repeat (arches, mesh, bolts): an aliased match gives a confident but wrong transform, and a
+//     false loop is worse than a missed one.
+//  4. Consistency: `consistency` consecutive keyframes must verify against the same map with
+//     transforms that agree.
+//  5. Same map, a loop: the keyframe and its neighbours take the verified pose, duplicated points
+//     and lines are fused, the essential graph (spanning tree, strong covisibility, loop edges)
+//     is optimised in Ceres, every landmark follows its reference keyframe, then global bundle
+//     adjustment over points and lines.
+//     Another map, a merge: the active map is transformed into the older one and absorbed, then
+//     the same fusion, graph and bundle adjustment weld the two.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <mutex>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slslam/mapping/atlas.h"
+#include "slslam/optimization/bundle_adjustment.h"
+#include "slslam/optimization/pose_graph.h"
+#include "slslam/place/vocabulary.h"
+
+namespace slslam {
+
+struct LoopClosingOptions {
+  bool enabled = true;                  ///< detect and close loops within a map
+  bool merge_maps = true;               ///< detect links to other maps of the atlas and merge
+  int min_keyframes = 12;               ///< a map needs this many keyframes before loops [-]
+  int candidates = 3;                   ///< best BoW candidates verified per keyframe [-]
+  int min_matches = 20;                 ///< word matches a candidate needs for PnP [-]
+  float match_ratio = 0.75f;            ///< best / second best within a vocabulary node [-]
+  double ransac_error_px = 3.0;         ///< PnP RANSAC inlier bound [px]
+  int ransac_iterations = 300;          ///< [-]
+  int min_pnp_inliers = 20;             ///< [-]
+  double min_inliers = 80.0;            ///< weighted inliers of the candidate's local map [-]
+  int consistency = 3;                  ///< consecutive verified keyframes that must agree [-]
+  double agree_m = 0.3;                 ///< consecutive transforms agree within this [m]
+  double agree_rad = 0.05;              ///< ... and this [rad]
+  double max_correction_ratio = 0.05;   ///< same map: correction / path since the candidate [-]
+  double max_correction_floor_m = 0.5;  ///< same map: correction always allowed [m]
+  double max_correction_rad = 0.3;      ///< same map: largest rotation correction [rad]
+  int strong_covisibility = 100;  ///< shared points for an essential-graph covisibility edge [-]
+  bool global_ba = true;          ///< global bundle adjustment after a loop or merge
+  int vocabulary_levels_up = 2;   ///< direct-index level of the keyframes' words
+  double point_sigma_px = 1.0;    ///< global BA point sigma [px] (the tracker sets its own)
+  double line_sigma_px = 3.0;     ///< global BA line sigma [px]
+  PoseGraphOptions pose_graph;
+  BundleAdjustmentOptions global_ba_options;
+
+  void Check() const;
+};
+
+struct LoopClosingStats {
+  int keyframes_checked = 0;
+  int candidates_verified = 0;  ///< candidates that passed geometric verification
+  int loops_detected = 0;       ///< verified and plausible hypotheses (before consistency)
+  int loops_rejected = 0;       ///< verified but implausible (drift gate) or inconsistent
+  int loops_accepted = 0;       ///< loops closed within a map
+  int merges = 0;               ///< maps merged into an older one
+  int global_ba_runs = 0;
+  double loop_ms = 0.0;       ///< detection + verification + correction [ms]
+  double global_ba_ms = 0.0;  ///< [ms]
+};
+
+// What the tracker found when tracking the candidate's local map in the keyframe's frame from a
+// pose: the optimised pose and the inlier matches. The caller holds the map's mutex.
+struct LocalMapMatch {
+  bool success = false;
+  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  double weighted_inliers = 0.0;
+  std::vector<int> point_ids, keypoints;  ///< inlier pairs (map point, keypoint of the frame)
+  std::vector<int> line_ids, segments;    ///< inlier pairs (map line, segment of the frame)
+};
+using LocalMapVerifier =
+    std::function<LocalMapMatch(const StereoFrame& frame, Map& map, int reference_keyframe,
+                                const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw)>;
+
+// One keyframe's keypoints matched to a keyframe's map points within shared vocabulary nodes
+// (one-to-one, ratio test): (keypoint, map point id) pairs. Caller holds the map's mutex.
+std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
+                                              const FeatureVector& features, const KeyFrame& kf,
+                                              const Map& map, float max_distance, float ratio);
+
+// One accepted loop or merge: the keyframe that closed it and the older keyframe it matched, by
+// the frames they were made from (so a benchmark can check both against ground truth).
+struct LoopEvent {
+  int keyframe_id = -1;
+  int candidate_id = -1;
+  int frame_index = -1;            ///< input frame of the keyframe
+  int candidate_frame_index = -1;  ///< input frame of the matched older keyframe
+  bool merge = false;              ///< maps merged (else a loop within a map)
+  double correction_m = 0.0;       ///< how far the keyframe moved [m]
+};
+
+class LoopCloser {
+ public:
+  LoopCloser(const StereoRig& rig, const LoopClosingOptions& options, const Vocabulary* vocabulary,
+             float max_descriptor_distance_binary, float max_descriptor_distance_float,
+             LocalMapVerifier verifier);
+
+  // Looks for a loop or a merge for a keyframe local mapping has processed, and closes it.
+  // Returns true when the atlas changed (a loop was corrected or maps were merged).
+  bool Process(Atlas* atlas, int map_index, int keyframe_id);
+  LoopClosingStats stats() const;
+  std::vector<LoopEvent> events() const;
+
+ private:
+  struct Verified {
+    int target_map = -1;
+    int candidate = -1;
+    LocalMapMatch match;                                 ///< K in the target map's world
+    Eigen::Matrix3d R_ts = Eigen::Matrix3d::Identity();  ///< T_target_source (worlds)
+    Eigen::Vector3d t_ts = Eigen::Vector3d::Zero();
+  };
+  struct Pending {
+    int target_map = -1;
+    int count = 0;
+    int misses = 0;
+    Eigen::Matrix3d R_ts = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_ts = Eigen::Vector3d::Zero();
+  };
+  struct LoopEdge {
+    int a = -1, b = -1;
+    Eigen::Matrix3d R_ab = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_ab = Eigen::Vector3d::Zero();
+  };
+
+  bool Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map, int candidate,
+              Verified* out);
+  // Path length along the keyframes (by id) between two keyframes of a map [m]. Caller locks.
+  static double PathLength(const Map& map, int from_id, int to_id);
+  // Transforms every keyframe, point and line of `map` by T_target_source (caller locks).
+  static void TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts);
+  // Fusion, essential graph and global BA in `map` after K got its verified pose. Caller locks.
+  void Correct(Map* map, int keyframe_id, const Verified& verified);
+  void Fuse(Map* map, int keyframe_id, const LocalMapMatch& match);
+  void GlobalBundleAdjustment(Map* map);
+
+  StereoRig rig_;
+  LoopClosingOptions options_;
+  const Vocabulary* vocabulary_;
+  float max_distance_binary_, max_distance_float_;
+  LocalMapVerifier verifier_;
+  std::map<int, Pending> pending_;                   ///< per source map
+  std::map<int, std::vector<LoopEdge>> loop_edges_;  ///< per map, kept for later graphs
+  mutable std::mutex stats_mutex_;
+  LoopClosingStats stats_;
+  std::vector<LoopEvent> events_;
+};
+
+}  // namespace slslam

@@ -1,0 +1,62 @@
+#include "slslam/map/map.h"
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+
+namespace slslam {
+namespace {
+
+std::shared_ptr<StereoFrame> EmptyFrame() { return std::make_shared<StereoFrame>(); }
+
+Eigen::Matrix3d Yaw(double deg) {
+  return Eigen::AngleAxisd(deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+TEST(Map, CulledKeyFrameKeepsItsPoseThroughItsParent) {
+  Map map;
+  auto a = map.AddKeyFrame(Yaw(10), Eigen::Vector3d(1, 2, 3), EmptyFrame());
+  auto b = map.AddKeyFrame(Yaw(20), Eigen::Vector3d(2, 2, 3), EmptyFrame());
+  auto c = map.AddKeyFrame(Yaw(35), Eigen::Vector3d(4, 1, 3), EmptyFrame());
+  b->parent = a->id;
+  c->parent = b->id;
+  const Eigen::Matrix3d R_b = b->R_cw;
+  const Eigen::Vector3d t_b = b->t_cw;
+  map.EraseKeyFrame(b->id);
+  EXPECT_EQ(c->parent, a->id);  // reparented
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  ASSERT_TRUE(map.KeyFramePose(b->id, &R, &t));
+  EXPECT_TRUE(R.isApprox(R_b, 1e-12));
+  EXPECT_TRUE(t.isApprox(t_b, 1e-12));
+  // The parent moves (a loop correction): the culled keyframe moves with it, rigidly.
+  const Eigen::Matrix3d dR = Yaw(5);
+  a->R_cw = a->R_cw * dR;
+  ASSERT_TRUE(map.KeyFramePose(b->id, &R, &t));
+  EXPECT_TRUE(R.isApprox(R_b * dR, 1e-12));
+  EXPECT_FALSE(map.KeyFramePose(99, &R, &t));
+}
+
+TEST(Map, AbsorbKeepsIdsUniqueAcrossMapsSharingIds) {
+  auto ids = std::make_shared<MapIds>();
+  Map first(ids), second(ids);
+  auto a = first.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
+  auto b = second.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
+  auto p = second.AddPoint(Eigen::Vector3d(1, 0, 5), cv::Mat::zeros(1, 32, CV_8U), b->id);
+  EXPECT_NE(a->id, b->id);
+  const int epoch = first.correction_epoch();
+  first.Absorb(&second);
+  EXPECT_EQ(first.keyframes().size(), 2u);
+  EXPECT_EQ(first.point(p->id), p);
+  EXPECT_TRUE(second.keyframes().empty());
+  EXPECT_GT(first.correction_epoch(), epoch);
+  // New entries in either map continue after every id in use.
+  auto c = first.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
+  EXPECT_GT(c->id, b->id);
+  EXPECT_THROW(first.Absorb(&first), std::invalid_argument);
+  auto duplicate = std::make_shared<KeyFrame>();
+  duplicate->id = a->id;
+  EXPECT_THROW(first.RestoreKeyFrame(duplicate), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam

@@ -1,0 +1,95 @@
+#include "slslam/optimization/pose_graph.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+
+namespace slslam {
+namespace {
+
+// Ground truth: N camera poses round a circle of radius 10 m (T_cw, camera looking along the
+// tangent). Odometry: the true relative poses with a small constant yaw bias (the drift).
+struct Circle {
+  std::vector<Eigen::Matrix3d> R;
+  std::vector<Eigen::Vector3d> t;
+};
+
+Circle MakeCircle(int n) {
+  Circle c;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * M_PI * i / n;
+    const Eigen::Matrix3d R_wc = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d p(10.0 * std::cos(a), 10.0 * std::sin(a), 0.0);
+    c.R.push_back(R_wc.transpose());
+    c.t.push_back(-R_wc.transpose() * p);
+  }
+  return c;
+}
+
+double CenterError(const BaPose& pose, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  return ((-pose.R_cw.transpose() * pose.t_cw) - (-R.transpose() * t)).norm();
+}
+
+TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
+  const int n = 60;
+  const Circle truth = MakeCircle(n);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  // Dead reckoning with a yaw bias of 0.3 deg per step and noisy translations.
+  std::vector<PoseGraphEdge> edges;
+  std::vector<BaPose> poses(n);
+  poses[0] = {truth.R[0], truth.t[0], true};
+  const Eigen::Matrix3d bias =
+      Eigen::AngleAxisd(0.3 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (int i = 1; i < n; ++i) {
+    PoseGraphEdge e;
+    e.a = i - 1;
+    e.b = i;
+    RelativePose(truth.R[i - 1], truth.t[i - 1], truth.R[i], truth.t[i], &e.R_ab, &e.t_ab);
+    e.R_ab = e.R_ab * bias;
+    e.t_ab += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    edges.push_back(e);
+    // T_i = T_{i-1,i}^-1 * T_{i-1}
+    poses[i].R_cw = e.R_ab.transpose() * poses[i - 1].R_cw;
+    poses[i].t_cw = e.R_ab.transpose() * (poses[i - 1].t_cw - e.t_ab);
+  }
+  const double drift_before = CenterError(poses[n - 1], truth.R[n - 1], truth.t[n - 1]);
+  ASSERT_GT(drift_before, 0.5);  // the bias really drifts
+  // The loop: the last pose seen from the first, exactly.
+  PoseGraphEdge loop;
+  loop.a = 0;
+  loop.b = n - 1;
+  RelativePose(truth.R[0], truth.t[0], truth.R[n - 1], truth.t[n - 1], &loop.R_ab, &loop.t_ab);
+  edges.push_back(loop);
+  const PoseGraphReport report = OptimizePoseGraph(&poses, edges);
+  ASSERT_TRUE(report.solved);
+  EXPECT_LT(report.final_cost, 0.1 * report.initial_cost);
+  double worst = 0.0;
+  for (int i = 0; i < n; ++i)
+    worst = std::max(worst, CenterError(poses[i], truth.R[i], truth.t[i]));
+  // The bias is spread over the loop: every pose within a fraction of the end drift.
+  EXPECT_LT(CenterError(poses[n - 1], truth.R[n - 1], truth.t[n - 1]), 0.05 * drift_before);
+  EXPECT_LT(worst, 0.35 * drift_before);
+  // The fixed pose did not move.
+  EXPECT_TRUE(poses[0].R_cw.isApprox(truth.R[0]));
+  EXPECT_TRUE(poses[0].t_cw.isApprox(truth.t[0]));
+}
+
+TEST(PoseGraph, RejectsBadEdgesAndOptions) {
+  std::vector<BaPose> poses(2);
+  PoseGraphEdge e;
+  e.a = 0;
+  e.b = 2;
+  EXPECT_THROW(OptimizePoseGraph(&poses, {e}), std::invalid_argument);
+  e.b = 1;
+  e.weight = std::nan("");
+  EXPECT_THROW(OptimizePoseGraph(&poses, {e}), std::invalid_argument);
+  PoseGraphOptions options;
+  options.translation_sigma_m = 0.0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam
