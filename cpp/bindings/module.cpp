@@ -14,6 +14,7 @@ void BindRayCaster(py::module_& m);
 void BindLines(py::module_& m);
 void BindTracking(py::module_& m);
 void BindPlace(py::module_& m);
+void BindMapIo(py::module_& m);
 #ifdef SLSLAM_WITH_PCL
 void BindLidar(py::module_& m);
 #endif
@@ -41,6 +42,7 @@ PYBIND11_MODULE(_core, m) {
   slslam::bindings::BindLines(m);
   slslam::bindings::BindTracking(m);
   slslam::bindings::BindPlace(m);
+  slslam::bindings::BindMapIo(m);
 #ifdef SLSLAM_WITH_PCL
   slslam::bindings::BindLidar(m);
 #endif
