@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <set>
@@ -118,7 +119,8 @@ void Tracker::SaveMap(const std::string& path, const std::string& version) {
   MapFileHeader header;
   header.slslam_version = version;
   header.rig = options_.rig;
-  header.vocabulary = options_.vocabulary_path;
+  // The file name, not the path: the same vocabulary sits elsewhere on another machine.
+  header.vocabulary = std::filesystem::path(options_.vocabulary_path).filename().string();
   std::vector<const Map*> maps;
   std::vector<std::unique_lock<std::mutex>> locks;
   for (int m = 0; m < atlas_.size(); ++m) {
@@ -130,8 +132,11 @@ void Tracker::SaveMap(const std::string& path, const std::string& version) {
       continue;
     }
     maps.push_back(&map);
-    if (header.descriptor_type < 0) {
-      const cv::Mat& d = map.keyframes().begin()->second->frame->keypoints.descriptors;
+    for (const auto& [id, kf] : map.keyframes()) {
+      (void)id;
+      if (header.descriptor_type >= 0) break;
+      const cv::Mat& d = kf->frame->keypoints.descriptors;
+      if (d.rows == 0) continue;  // a keyframe without keypoints says nothing of the front end
       header.descriptor_type = d.type();
       header.descriptor_cols = d.cols;
     }
