@@ -12,6 +12,7 @@ The length of a straight roadway is the extent of the map along its axis.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -27,6 +28,7 @@ def cross_section_widths(
     band_m: tuple[float, float] = (0.3, 1.8),
     min_points: int = 20,
     outer_m: float = 0.1,
+    section_radius_m: float = 6.0,
 ) -> np.ndarray:
     """Roadway width [m] at stations every ``spacing_m`` along the path (NaN where a section
     has fewer than ``min_points`` wall points). ``band_m``: heights above the floor (the lowest
@@ -35,6 +37,9 @@ def cross_section_widths(
     s = np.r_[0.0, np.cumsum(steps)]
     stations = np.arange(spacing_m, s[-1] - spacing_m, spacing_m)
     widths = np.full(len(stations), np.nan)
+    # Each section needs the points near its centre only: a kd-tree on x, y keeps the cost per
+    # section independent of the map's size.
+    tree = cKDTree(map_points[:, :2])
     for k, st in enumerate(stations):
         i = int(np.clip(np.searchsorted(s, st), 1, len(path_xyz) - 1))
         centre = path_xyz[i]
@@ -42,10 +47,8 @@ def cross_section_widths(
         tangent[2] = 0.0
         tangent = _unit(tangent)
         left = np.array([-tangent[1], tangent[0], 0.0])
-        rel = map_points - centre
-        near = np.abs(rel @ tangent) < slab_m
-        near &= np.abs(rel[:, :2]).max(axis=1) < 10.0
-        section = rel[near]
+        rel = map_points[tree.query_ball_point(centre[:2], r=section_radius_m)] - centre
+        section = rel[np.abs(rel @ tangent) < slab_m]
         if len(section) < min_points:
             continue
         floor = np.percentile(section[:, 2], 2)
