@@ -132,7 +132,8 @@ def summarise(rows: list[dict], out: Path, extra: dict) -> dict:
         ),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    plot(rows, out / "memory.png", f"{last['frame']} frames, {extra.get('frontend', '')}")
+    frontend = extra.get("frontend", "default configuration")
+    plot(rows, out / "memory.png", f"{last['frame']} frames, {frontend}, resident memory and map")
     return summary
 
 
