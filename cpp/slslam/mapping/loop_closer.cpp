@@ -41,31 +41,37 @@ struct Pose {
 }  // namespace
 
 void LoopClosingOptions::Check() const {
-  SLSLAM_CHECK(min_keyframes >= 2, "loop_closing.min_keyframes must be >= 2, got ", min_keyframes);
-  SLSLAM_CHECK(candidates >= 1, "loop_closing.candidates must be >= 1, got ", candidates);
-  SLSLAM_CHECK(min_matches >= 6, "loop_closing.min_matches must be >= 6, got ", min_matches);
+  SLSLAM_CHECK(min_keyframes >= 2, "tracking.loop_closing.min_keyframes must be >= 2, got ",
+               min_keyframes);
+  SLSLAM_CHECK(candidates >= 1, "tracking.loop_closing.candidates must be >= 1, got ", candidates);
+  SLSLAM_CHECK(min_matches >= 6, "tracking.loop_closing.min_matches must be >= 6, got ",
+               min_matches);
   SLSLAM_CHECK(match_ratio > 0.0f && match_ratio <= 1.0f,
-               "loop_closing.match_ratio must be in (0, 1], got ", match_ratio);
+               "tracking.loop_closing.match_ratio must be in (0, 1], got ", match_ratio);
   SLSLAM_CHECK(std::isfinite(ransac_error_px) && ransac_error_px > 0.0,
-               "loop_closing.ransac_error_px must be > 0, got ", ransac_error_px);
-  SLSLAM_CHECK(ransac_iterations >= 1, "loop_closing.ransac_iterations must be >= 1");
-  SLSLAM_CHECK(min_pnp_inliers >= 4, "loop_closing.min_pnp_inliers must be >= 4");
+               "tracking.loop_closing.ransac_error_px must be > 0, got ", ransac_error_px);
+  SLSLAM_CHECK(ransac_iterations >= 1, "tracking.loop_closing.ransac_iterations must be >= 1");
+  SLSLAM_CHECK(min_pnp_inliers >= 4, "tracking.loop_closing.min_pnp_inliers must be >= 4");
   SLSLAM_CHECK(std::isfinite(min_inliers) && min_inliers > 0.0,
-               "loop_closing.min_inliers must be > 0, got ", min_inliers);
-  SLSLAM_CHECK(consistency >= 1, "loop_closing.consistency must be >= 1, got ", consistency);
-  SLSLAM_CHECK(std::isfinite(agree_m) && agree_m > 0.0, "loop_closing.agree_m must be > 0");
-  SLSLAM_CHECK(std::isfinite(agree_rad) && agree_rad > 0.0, "loop_closing.agree_rad must be > 0");
+               "tracking.loop_closing.min_inliers must be > 0, got ", min_inliers);
+  SLSLAM_CHECK(consistency >= 1, "tracking.loop_closing.consistency must be >= 1, got ",
+               consistency);
+  SLSLAM_CHECK(std::isfinite(agree_m) && agree_m > 0.0,
+               "tracking.loop_closing.agree_m must be > 0");
+  SLSLAM_CHECK(std::isfinite(agree_rad) && agree_rad > 0.0,
+               "tracking.loop_closing.agree_rad must be > 0");
   SLSLAM_CHECK(std::isfinite(max_correction_ratio) && max_correction_ratio >= 0.0,
-               "loop_closing.max_correction_ratio must be >= 0");
+               "tracking.loop_closing.max_correction_ratio must be >= 0");
   SLSLAM_CHECK(std::isfinite(max_correction_floor_m) && max_correction_floor_m >= 0.0,
-               "loop_closing.max_correction_floor_m must be >= 0");
+               "tracking.loop_closing.max_correction_floor_m must be >= 0");
   SLSLAM_CHECK(std::isfinite(max_correction_rad) && max_correction_rad > 0.0,
-               "loop_closing.max_correction_rad must be > 0");
-  SLSLAM_CHECK(strong_covisibility >= 1, "loop_closing.strong_covisibility must be >= 1");
-  SLSLAM_CHECK(vocabulary_levels_up >= 0, "loop_closing.vocabulary_levels_up must be >= 0");
+               "tracking.loop_closing.max_correction_rad must be > 0");
+  SLSLAM_CHECK(strong_covisibility >= 1, "tracking.loop_closing.strong_covisibility must be >= 1");
+  SLSLAM_CHECK(vocabulary_levels_up >= 0,
+               "tracking.loop_closing.vocabulary_levels_up must be >= 0");
   SLSLAM_CHECK(std::isfinite(point_sigma_px) && point_sigma_px > 0.0 &&
                    std::isfinite(line_sigma_px) && line_sigma_px > 0.0,
-               "loop_closing sigmas must be > 0");
+               "tracking.loop_closing sigmas must be > 0");
   pose_graph.Check();
 }
 

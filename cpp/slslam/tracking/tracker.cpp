@@ -67,7 +67,6 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
   mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential);
-  options_.loop_closing.Check();
   if (vocabulary_ && !options_.localise_only &&
       (options_.loop_closing.enabled || options_.loop_closing.merge_maps)) {
     LoopClosingOptions loop = options_.loop_closing;
