@@ -29,7 +29,8 @@ PluckerLine PluckerLine::FromPlanes(const Eigen::Vector4d& plane1, const Eigen::
   return line;
 }
 
-PluckerLine PluckerLine::Transformed(const Eigen::Matrix3d& R_ba, const Eigen::Vector3d& t_ba) const {
+PluckerLine PluckerLine::Transformed(const Eigen::Matrix3d& R_ba,
+                                     const Eigen::Vector3d& t_ba) const {
   PluckerLine out;
   out.v = R_ba * v;
   out.n = R_ba * n + t_ba.cross(out.v);
@@ -43,6 +44,12 @@ PluckerLine PluckerLine::Normalized() const {
 }
 
 Eigen::Vector3d PluckerLine::ClosestPointToOrigin() const { return v.cross(n) / v.squaredNorm(); }
+
+Eigen::Vector3d PluckerLine::ClosestPointTo(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d p0 = ClosestPointToOrigin();
+  const Eigen::Vector3d d = v.normalized();
+  return p0 + (p - p0).dot(d) * d;
+}
 
 Eigen::Vector3d PluckerLine::ClosestPointToRay(const Eigen::Vector3d& ray_direction) const {
   // Line p0 + s d, ray t r: the normal equations of min |p0 + s d - t r|^2 give

@@ -14,7 +14,7 @@
 namespace slslam {
 
 struct PluckerLine {
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();  ///< moment: p x v for a point p on the line
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();   ///< moment: p x v for a point p on the line
   Eigen::Vector3d v = Eigen::Vector3d::UnitX();  ///< direction
 
   // The line through two distinct points.
@@ -29,6 +29,8 @@ struct PluckerLine {
   PluckerLine Normalized() const;
   // Point of the line nearest to the origin.
   Eigen::Vector3d ClosestPointToOrigin() const;
+  // Point of the line nearest to p (moves display endpoints onto a re-estimated line).
+  Eigen::Vector3d ClosestPointTo(const Eigen::Vector3d& p) const;
   // Point of the line nearest to the ray {s * ray_direction, s > 0} from the origin (used to cut a
   // map line to the extent of an observed segment). Falls back to ClosestPointToOrigin for a ray
   // parallel to the line.

@@ -8,17 +8,6 @@
 
 namespace slslam {
 
-namespace {
-
-// Moves display endpoints onto a re-estimated line.
-Eigen::Vector3d ProjectOntoLine(const PluckerLine& line, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d p0 = line.ClosestPointToOrigin();
-  const Eigen::Vector3d d = line.v.normalized();
-  return p0 + (p - p0).dot(d) * d;
-}
-
-}  // namespace
-
 LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential)
     : rig_(rig), options_(options), sequential_(sequential) {
   options_.Check();
@@ -204,8 +193,8 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
     for (size_t i = 0; i < line_id.size(); ++i) {
       if (auto l = map->line(line_id[i])) {
         l->line = problem.lines[i];
-        l->start = ProjectOntoLine(l->line, l->start);
-        l->end = ProjectOntoLine(l->line, l->end);
+        l->start = l->line.ClosestPointTo(l->start);
+        l->end = l->line.ClosestPointTo(l->end);
       }
     }
     // Outlier observations leave the map.

@@ -26,13 +26,6 @@ double Ms(Clock::time_point since) {
 
 double RotationAngle(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle(); }
 
-// Moves display endpoints onto a re-estimated line.
-Eigen::Vector3d ProjectOntoLine(const PluckerLine& line, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d p0 = line.ClosestPointToOrigin();
-  const Eigen::Vector3d d = line.v.normalized();
-  return p0 + (p - p0).dot(d) * d;
-}
-
 struct Pose {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t = Eigen::Vector3d::Zero();
@@ -107,6 +100,34 @@ std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
   return out;
 }
 
+bool PoseFromMatches(const StereoFrame& frame, const Map& map,
+                     const std::vector<std::pair<int, int>>& matches, const PinholeCamera& camera,
+                     int iterations, double error_px, int min_inliers, Eigen::Matrix3d* R_cw,
+                     Eigen::Vector3d* t_cw) {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (const auto& [keypoint, pid] : matches) {
+    const Eigen::Vector3d& x = map.point(pid)->position;
+    object.emplace_back(x.x(), x.y(), x.z());
+    image.emplace_back(frame.keypoints.uv(keypoint, 0), frame.keypoints.uv(keypoint, 1));
+  }
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
+                     0.0, 0.0, 1.0);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const bool solved =
+      cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, iterations,
+                         static_cast<float>(error_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
+  if (!solved || static_cast<int>(inliers.size()) < min_inliers) return false;
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) (*R_cw)(r, c) = R_cv.at<double>(r, c);
+    (*t_cw)(r) = tvec.at<double>(r);
+  }
+  return R_cw->allFinite() && t_cw->allFinite();
+}
+
 LoopCloser::LoopCloser(const StereoRig& rig, const LoopClosingOptions& options,
                        const Vocabulary* vocabulary, float max_descriptor_distance_binary,
                        float max_descriptor_distance_float, LocalMapVerifier verifier)
@@ -157,31 +178,12 @@ bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int ta
   const auto matches =
       MatchByWords(desc, kf.bow_features, *c, target, max_distance, options_.match_ratio);
   if (static_cast<int>(matches.size()) < options_.min_matches) return false;
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
-  for (const auto& [keypoint, pid] : matches) {
-    const Eigen::Vector3d& x = target.point(pid)->position;
-    object.emplace_back(x.x(), x.y(), x.z());
-    image.emplace_back(frame.keypoints.uv(keypoint, 0), frame.keypoints.uv(keypoint, 1));
-  }
-  const PinholeCamera& camera = rig_.camera;
-  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
-                     0.0, 0.0, 1.0);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  const bool solved = cv::solvePnPRansac(
-      object, image, K, cv::noArray(), rvec, tvec, false, options_.ransac_iterations,
-      static_cast<float>(options_.ransac_error_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
-  if (!solved || static_cast<int>(inliers.size()) < options_.min_pnp_inliers) return false;
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
   Eigen::Matrix3d R_cw;
   Eigen::Vector3d t_cw;
-  for (int r = 0; r < 3; ++r) {
-    for (int col = 0; col < 3; ++col) R_cw(r, col) = R_cv.at<double>(r, col);
-    t_cw(r) = tvec.at<double>(r);
+  if (!PoseFromMatches(frame, target, matches, rig_.camera, options_.ransac_iterations,
+                       options_.ransac_error_px, options_.min_pnp_inliers, &R_cw, &t_cw)) {
+    return false;
   }
-  if (!R_cw.allFinite() || !t_cw.allFinite()) return false;
   LocalMapMatch match = verifier_(frame, target, candidate, R_cw, t_cw);
   if (!match.success || match.weighted_inliers < options_.min_inliers) return false;
   {
@@ -618,8 +620,8 @@ void LoopCloser::GlobalBundleAdjustment(Map* map) {
     for (size_t i = 0; i < line_id.size(); ++i) {
       auto l = map->line(line_id[i]);
       l->line = problem.lines[i];
-      l->start = ProjectOntoLine(l->line, l->start);
-      l->end = ProjectOntoLine(l->line, l->end);
+      l->start = l->line.ClosestPointTo(l->start);
+      l->end = l->line.ClosestPointTo(l->end);
     }
     for (size_t i = 0; i < point_obs_ref.size(); ++i) {
       if (!report.point_outlier[i]) continue;

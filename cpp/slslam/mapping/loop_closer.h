@@ -95,6 +95,14 @@ std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
                                               const FeatureVector& features, const KeyFrame& kf,
                                               const Map& map, float max_distance, float ratio);
 
+// The camera pose T_cw from (keypoint, map point id) matches: EPnP RANSAC on the keypoints' left
+// pixels. False when RANSAC fails, keeps fewer than `min_inliers`, or the pose is not finite.
+// Caller holds the map's mutex.
+bool PoseFromMatches(const StereoFrame& frame, const Map& map,
+                     const std::vector<std::pair<int, int>>& matches, const PinholeCamera& camera,
+                     int iterations, double error_px, int min_inliers, Eigen::Matrix3d* R_cw,
+                     Eigen::Vector3d* t_cw);
+
 // One accepted loop or merge: the keyframe that closed it and the older keyframe it matched, by
 // the frames they were made from (so a benchmark can check both against ground truth).
 struct LoopEvent {

@@ -561,9 +561,6 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
         auto kf = map.keyframe(id);
         return kf && !kf->bad;
       });
-  const PinholeCamera& camera = options_.rig.camera;
-  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy,
-                     0.0, 0.0, 1.0);
   const float max_distance =
       desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
   for (const auto& candidate : candidates) {
@@ -571,28 +568,12 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
     if (!kf) continue;
     const auto matches = MatchByWords(desc, features, *kf, map, max_distance, ro.match_ratio);
     if (static_cast<int>(matches.size()) < ro.min_matches) continue;
-    std::vector<cv::Point3d> object;
-    std::vector<cv::Point2d> image;
-    for (const auto& [keypoint, pid] : matches) {
-      const Eigen::Vector3d& x = map.point(pid)->position;
-      object.emplace_back(x.x(), x.y(), x.z());
-      image.emplace_back(frame.keypoints.uv(keypoint, 0), frame.keypoints.uv(keypoint, 1));
-    }
-    cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    const bool solved = cv::solvePnPRansac(
-        object, image, K, cv::noArray(), rvec, tvec, false, ro.ransac_iterations,
-        static_cast<float>(ro.ransac_error_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
-    if (!solved || static_cast<int>(inliers.size()) < ro.min_pnp_inliers) continue;
-    cv::Mat R_cv;
-    cv::Rodrigues(rvec, R_cv);
     Eigen::Matrix3d R_cw;
     Eigen::Vector3d t_cw;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) R_cw(r, c) = R_cv.at<double>(r, c);
-      t_cw(r) = tvec.at<double>(r);
+    if (!PoseFromMatches(frame, map, matches, options_.rig.camera, ro.ransac_iterations,
+                         ro.ransac_error_px, ro.min_pnp_inliers, &R_cw, &t_cw)) {
+      continue;
     }
-    if (!R_cw.allFinite() || !t_cw.allFinite()) continue;
     LocalTracking local = TrackLocalMap(frame, map, kf->id, R_cw, t_cw, 1.0f);
 
     if (!local.pose.success || local.weighted_inliers < ro.min_inliers) continue;
