@@ -211,7 +211,7 @@ void Tracker::FollowCorrections() {
   last_t_ = r.R_fr * t_rw + r.t_fr;
 }
 
-void Tracker::RecordFrame(const StereoFrame& frame) {
+void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   FrameRecord r;
   r.index = frame.index;
   r.timestamp = frame.timestamp;
@@ -219,6 +219,14 @@ void Tracker::RecordFrame(const StereoFrame& frame) {
   r.reference_kf = last_keyframe_;
   r.R_cw = last_R_;
   r.t_cw = last_t_;
+  if (keyframe) {
+    // The frame is its own reference keyframe. Its pose is not read back: in sequential mode
+    // loop closing has already run on the keyframe and may have moved it, or merged its map
+    // into another map's world; FollowCorrections then moves the last pose with it (the epoch
+    // seen stays the one from before the keyframe).
+    records_.push_back(r);
+    return;
+  }
   Map& map = atlas_.map(active_);
   std::lock_guard<std::mutex> lock(map.mutex());
   Eigen::Matrix3d R_rw;
@@ -658,10 +666,6 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   Require(frame != nullptr, "Track needs a frame");
   TrackResult result;
-  Eigen::Matrix3d R_pred;
-  Eigen::Vector3d t_pred;
-  Predict(&R_pred, &t_pred);
-
   if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
     const cv::Mat& d = frame->keypoints.descriptors;
     SLSLAM_CHECK(d.type() == loaded_descriptor_type_ && d.cols == loaded_descriptor_cols_,
@@ -671,7 +675,12 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
                  d.cols, ")");
     loaded_descriptor_type_ = -1;  // checked once
   }
+  // A loop correction or a merge may have moved the last pose (a merge into another map's
+  // world): the prediction starts from where it is now.
   FollowCorrections();
+  Eigen::Matrix3d R_pred;
+  Eigen::Vector3d t_pred;
+  Predict(&R_pred, &t_pred);
   if (atlas_.size() == 0) {  // not initialised yet
     const auto start = Clock::now();
     if (options_.localise_only) {
@@ -682,7 +691,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       result.keyframe = true;
       mode_ = Mode::kTracking;
       SetPose(R_pred, t_pred, /*update_velocity=*/false);
-      RecordFrame(*frame);
+      RecordFrame(*frame, /*keyframe=*/true);
     } else {
       result.state = TrackingState::kNotInitialized;
     }
@@ -770,7 +779,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       result.keyframe = true;
       result.mapping_ms = Ms(start);
     }
-    RecordFrame(*frame);
+    RecordFrame(*frame, result.keyframe);
     return result;
   }
 
@@ -809,7 +818,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     result.keyframe = true;
     mode_ = Mode::kTracking;
     lost_count_ = 0;
-    RecordFrame(*frame);
+    RecordFrame(*frame, /*keyframe=*/true);
   } else {
     result.state = TrackingState::kLost;
   }

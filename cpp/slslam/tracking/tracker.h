@@ -106,9 +106,9 @@ struct TrackerOptions {
   std::string vocabulary_path;          ///< bag-of-words vocabulary for relocalisation; empty:
                                         ///< no relocalisation
   RelocalisationOptions relocalisation;
-  LoopClosingOptions loop_closing;      ///< loop closing and map merging (need the vocabulary)
-  bool localise_only = false;           ///< track in the loaded maps without changing them: no
-                                        ///< keyframes, no mapping, no new maps
+  LoopClosingOptions loop_closing;  ///< loop closing and map merging (need the vocabulary)
+  bool localise_only = false;       ///< track in the loaded maps without changing them: no
+                                    ///< keyframes, no mapping, no new maps
 
   void Check() const;
 };
@@ -116,9 +116,9 @@ struct TrackerOptions {
 // A frame's pose expressed in the final map: relative to its reference keyframe, so loop
 // correction, merging and bundle adjustment that move the keyframe move the frame too.
 struct FramePose {
-  int index = 0;             ///< input frame number
-  double timestamp = 0.0;    ///< [s]
-  int map_index = -1;        ///< map of the atlas the pose is in (after merges)
+  int index = 0;           ///< input frame number
+  double timestamp = 0.0;  ///< [s]
+  int map_index = -1;      ///< map of the atlas the pose is in (after merges)
   Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
   Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
 };
@@ -240,7 +240,7 @@ class Tracker {
   // After a loop correction or merge moved the active map: the active map index and the last
   // pose follow (the pose through its reference keyframe).
   void FollowCorrections();
-  void RecordFrame(const StereoFrame& frame);
+  void RecordFrame(const StereoFrame& frame, bool keyframe);
 
   struct FrameRecord {
     int index = 0;
