@@ -57,7 +57,7 @@ void BindLidarSlam(py::module_& m) {
           SLSLAM_FIELD(ScanMatchOptions, max_iterations)
               SLSLAM_FIELD(ScanMatchOptions, max_correspondence_m)
                   SLSLAM_FIELD(ScanMatchOptions, plane_neighbours)
-                      SLSLAM_FIELD(ScanMatchOptions, plane_max_planarity)
+                      SLSLAM_FIELD(ScanMatchOptions, plane_max_thickness_m)
                           SLSLAM_FIELD(ScanMatchOptions, robust_scale_m)
                               SLSLAM_FIELD(ScanMatchOptions, convergence_translation_m)
                                   SLSLAM_FIELD(ScanMatchOptions, convergence_rotation_rad)

@@ -22,7 +22,9 @@ namespace slslam::lidar {
 
 struct LidarOdometryOptions {
   double min_range_m = 1.0;             ///< points nearer than this to the sensor are dropped [m]
-  double max_range_m = 80.0;            ///< points farther are dropped [m]
+  double max_range_m = 100.0;           ///< points farther are dropped [m]: a 16-beam sensor's
+                                        ///< range; in a long roadway the far end walls are what
+                                        ///< fixes the position along it where the walls are bare
   double source_voxel_m = 0.5;          ///< voxel of the points registered against the map [m]
   double map_voxel_m = 0.25;            ///< voxel of the points added to the map [m]
   double scan_period_s = 0.1;           ///< duration of one sweep [s]

@@ -23,8 +23,8 @@ void ScanMatchOptions::Check() const {
   SLSLAM_CHECK(max_correspondence_m > 0, "ScanMatchOptions.max_correspondence_m must be > 0 m");
   SLSLAM_CHECK(plane_neighbours >= 3 && plane_neighbours <= 16,
                "ScanMatchOptions.plane_neighbours must be in [3, 16], got ", plane_neighbours);
-  SLSLAM_CHECK(plane_max_planarity > 0 && plane_max_planarity <= 1,
-               "ScanMatchOptions.plane_max_planarity must be in (0, 1], got ", plane_max_planarity);
+  SLSLAM_CHECK(plane_max_thickness_m > 0,
+               "ScanMatchOptions.plane_max_thickness_m must be > 0 m, got ", plane_max_thickness_m);
   SLSLAM_CHECK(robust_scale_m > 0, "ScanMatchOptions.robust_scale_m must be > 0 m");
   SLSLAM_CHECK(prior_translation_sigma_m >= 0 && prior_rotation_sigma_rad >= 0,
                "ScanMatchOptions prior sigmas must be >= 0");
@@ -85,7 +85,7 @@ Normal Linearise(const std::vector<Eigen::Vector3d>& source, const VoxelMap& map
         continue;
       }
       LocalPlane plane;
-      if (!map.FitPlane(q, o.plane_neighbours, o.max_correspondence_m, o.plane_max_planarity,
+      if (!map.FitPlane(q, o.plane_neighbours, o.max_correspondence_m, o.plane_max_thickness_m,
                         &plane)) {
         continue;
       }

@@ -18,10 +18,11 @@ struct ScanMatchOptions {
                                ///< which measured biased on sparse 16-beam rings (up to 2.5 cm,
                                ///< 0.3 deg against a ground-truth map, vs 1 cm, 0.09 deg)
   int max_iterations = 15;     ///< Gauss-Newton iterations [-]
-  double max_correspondence_m = 1.0;  ///< a source point pairs with a plane nearer than this [m]
-  int plane_neighbours = 8;           ///< map points a plane is fitted to [-]
-  double plane_max_planarity = 0.1;   ///< smallest / middle eigenvalue of a valid plane [-]
-  double robust_scale_m = 0.1;        ///< Geman-McClure scale of the point-to-plane residual [m]
+  double max_correspondence_m = 1.0;   ///< a source point pairs with a plane nearer than this [m]
+  int plane_neighbours = 5;            ///< map points a plane is fitted to [-]
+  double plane_max_thickness_m = 0.1;  ///< every neighbour of a valid plane lies within this
+                                       ///< distance of it [m]
+  double robust_scale_m = 0.1;         ///< Geman-McClure scale of the point-to-plane residual [m]
   double convergence_translation_m = 1e-4;  ///< stop when a step is below this [m] ...
   double convergence_rotation_rad = 1e-5;   ///< ... and this [rad]
   double prior_translation_sigma_m = 0.0;   ///< std. dev. of the predicted position [m]; 0: no

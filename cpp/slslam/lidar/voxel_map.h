@@ -18,12 +18,14 @@ struct VoxelMapOptions {
   double min_point_spacing_m = 0.1;  ///< a point nearer than this to one already in its voxel
                                      ///< is not added: repeated sweeps from one place would
                                      ///< stack copies that make plane fits degenerate [m]
-  double max_distance_m = 60.0;      ///< voxels farther than this from the sensor are dropped [m]
+  double max_distance_m = 100.0;     ///< voxels farther than this from the sensor are dropped
+                                     ///< [m]; at least the odometry's max_range_m, or what the
+                                     ///< sensor sees far away has nothing to match
   void Check() const;
 };
 
 // A plane through a point's neighbourhood: unit normal (of the neighbours' covariance) and a
-// point on it (the nearest neighbour).
+// point on it (the neighbours' mean).
 struct LocalPlane {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -41,10 +43,10 @@ class VoxelMap {
   void Clear() { voxels_.clear(); }
 
   // Plane fitted to the `k` map points nearest `query` within `max_distance_m` of it, searched in
-  // the 27 voxels around it (so at most about one voxel edge away). False when fewer than `k`
-  // points are near or the neighbours are not planar (smallest eigenvalue above `max_planarity`
-  // times the middle one).
-  bool FitPlane(const Eigen::Vector3d& query, int k, double max_distance_m, double max_planarity,
+  // the 27 voxels around it (so at most about one voxel edge away), through their mean. False
+  // when fewer than `k` points are near, the neighbours lie on a line, or one of them is farther
+  // than `max_thickness_m` from the plane.
+  bool FitPlane(const Eigen::Vector3d& query, int k, double max_distance_m, double max_thickness_m,
                 LocalPlane* plane) const;
 
   // Nearest map point to `query` within `max_distance_m`, searched in the 27 voxels around it.
