@@ -1473,10 +1473,10 @@ class ScanMatchOptions:
     def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
-    def plane_max_planarity(self) -> float:
+    def plane_max_thickness_m(self) -> float:
         ...
-    @plane_max_planarity.setter
-    def plane_max_planarity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+    @plane_max_thickness_m.setter
+    def plane_max_thickness_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def plane_neighbours(self) -> int:
