@@ -1,8 +1,6 @@
 // slslam._core tracking: the stereo point-line tracker with local mapping. Python hands over the
 // images and the point features (SuperPoint runs in Python through onnxruntime, ORB in C++);
 // line extraction, stereo matching, tracking and mapping run here with the GIL released.
-#include <chrono>
-#include <future>
 #include <memory>
 #include <mutex>
 
@@ -14,6 +12,7 @@
 #include "bindings/image_conversion.h"
 #include "slslam/core/check.h"
 #include "slslam/features/line_extractor.h"
+#include "slslam/tracking/stereo_frontend.h"
 #include "slslam/tracking/tracker.h"
 
 namespace py = pybind11;
@@ -35,18 +34,11 @@ Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, cons
   return k;
 }
 
-double Ms(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
-      .count();
-}
-
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
 class TrackerSession {
  public:
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
-      : options_(options), lines_(lines), tracker_(options) {
-    lines_.Check();
-  }
+      : tracker_(options), frontend_({options.rig, options.stereo, lines, options.use_lines}) {}
 
   py::dict Track(int index, double timestamp, const py::array& left_image,
                  const py::array& right_image, const PixelArray& left_uv,
@@ -54,35 +46,16 @@ class TrackerSession {
                  const py::array& right_descriptors) {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
-    const PinholeCamera& cam = options_.rig.camera;
-    SLSLAM_CHECK(left.cols == cam.width && left.rows == cam.height, "left image is ", left.cols,
-                 "x", left.rows, ", calibration says ", cam.width, "x", cam.height);
-    Require(right.size() == left.size(), "left and right images differ in size");
     Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
     Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
     TrackResult r;
-    double line_ms = 0.0, stereo_ms = 0.0;
+    StereoFrontendTiming timing;
     int num_lines = 0;
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      auto start = std::chrono::steady_clock::now();
-      LineFeatures ll, lr;
-      if (options_.use_lines) {
-        // LSD is single-threaded: the two images on two threads.
-        auto right_lines =
-            std::async(std::launch::async, [&] { return ExtractLines(right, lines_); });
-        ll = ExtractLines(left, lines_);
-        lr = right_lines.get();
-      }
-      line_ms = Ms(start);
-      start = std::chrono::steady_clock::now();
-      auto frame = std::make_shared<StereoFrame>(
-          MakeStereoFrame(index, timestamp, kl, kr, options_.use_lines ? &ll : nullptr,
-                          options_.use_lines ? &lr : nullptr, options_.rig, options_.stereo));
-      RefineStereoSubpixel(left, right, options_.rig, options_.stereo, frame.get());
+      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &timing);
       num_lines = frame->NumLines();
-      stereo_ms = Ms(start);
       r = tracker_.Track(frame);
     }
     py::dict out;
@@ -98,8 +71,8 @@ class TrackerSession {
     out["keyframe"] = r.keyframe;
     out["weighted_inliers"] = r.weighted_inliers;
     out["relocalisation_ms"] = r.relocalisation_ms;
-    out["line_extraction_ms"] = line_ms;
-    out["stereo_matching_ms"] = stereo_ms;
+    out["line_extraction_ms"] = timing.line_extraction_ms;
+    out["stereo_matching_ms"] = timing.stereo_matching_ms;
     out["matching_ms"] = r.matching_ms;
     out["optimisation_ms"] = r.optimisation_ms;
     out["mapping_ms"] = r.mapping_ms;
@@ -220,9 +193,8 @@ class TrackerSession {
   }
 
  private:
-  TrackerOptions options_;
-  LineExtractorOptions lines_;
-  Tracker tracker_;
+  Tracker tracker_;  // first: its option checks (named by YAML key) run before the front end's
+  StereoFrontend frontend_;
   std::mutex mutex_;
 };
 

@@ -8,18 +8,10 @@
 #include <Eigen/Core>
 
 #include "slslam/core/pinhole_camera.h"
+#include "slslam/core/stereo_rig.h"
 #include "slslam/geometry/plucker_line.h"
 
 namespace slslam {
-
-// Stereo rig of two rectified pinhole cameras with the same intrinsics; the right camera sits at
-// +baseline along the left camera's x axis (u_right = u_left - fx * baseline / z).
-struct StereoRig {
-  PinholeCamera camera;
-  double baseline_m = 0.0;  ///< [m]
-
-  void Check() const;
-};
 
 // Residual (u, v) - observed of a point seen by one camera. Returns false (residual and Jacobians
 // untouched) when the point is not in front of the camera (z < min_depth).

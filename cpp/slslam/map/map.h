@@ -15,7 +15,7 @@
 
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/place/vocabulary.h"
-#include "slslam/tracking/stereo_frame.h"
+#include "slslam/features/stereo_frame.h"
 
 namespace slslam {
 

@@ -26,7 +26,7 @@
 #include "slslam/optimization/pose_optimizer.h"
 #include "slslam/place/keyframe_database.h"
 #include "slslam/place/vocabulary.h"
-#include "slslam/tracking/stereo_frame.h"
+#include "slslam/tracking/stereo_matching.h"
 
 namespace slslam {
 

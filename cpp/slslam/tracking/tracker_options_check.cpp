@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "slslam/core/check.h"
-#include "slslam/tracking/stereo_frame.h"
+#include "slslam/tracking/stereo_matching.h"
 #include "slslam/tracking/tracker.h"
 
 namespace slslam {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "slslam/tracking/stereo_frame.h"
+#include "slslam/tracking/stereo_matching.h"
 
 namespace slslam {
 namespace {

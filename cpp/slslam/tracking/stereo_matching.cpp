@@ -1,4 +1,4 @@
-#include "slslam/tracking/stereo_frame.h"
+#include "slslam/tracking/stereo_matching.h"
 
 #include <cmath>
 #include <limits>
@@ -7,10 +7,6 @@
 #include "slslam/features/descriptor_matcher.h"
 
 namespace slslam {
-
-Eigen::Vector3d StereoFrame::Backproject(const PinholeCamera& camera, int i) const {
-  return depth[i] * camera.Unproject(keypoints.uv.row(i).cast<double>().transpose());
-}
 
 namespace {
 

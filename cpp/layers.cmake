@@ -1,0 +1,41 @@
+# The layers of the C++ core, lowest first, and the layers each one builds on directly. One
+# table for two readers: cpp/CMakeLists.txt makes one static library per layer
+# (slslam_<layer>, every .cpp under cpp/slslam/<layer>/) linking only these, and
+# cpp/check_layers.cmake fails the build when a file of a layer includes a header of a layer that
+# is not below it (the transitive closure of this table).
+#
+#   core          cameras, the stereo rig, images, checks
+#   features      keypoints, lines, descriptors, the stereo frame's data
+#   geometry      rotations, Pluecker lines, reprojection residuals
+#   place         bag-of-words vocabulary and keyframe database
+#   map           keyframes, points, lines, covisibility, map files
+#   optimization  Ceres problems: pose, bundle adjustment, pose graph
+#   mapping       local mapping, triangulation, loop closing, the atlas
+#   tracking      stereo matching, the stereo front end, the tracker
+#   sim           the roadway simulator's renderer (beside the SLAM layers)
+#   lidar         LiDAR registration and LiDAR-inertial SLAM (beside; needs PCL)
+set(SLSLAM_LAYERS core features geometry place map optimization mapping tracking sim lidar)
+set(SLSLAM_LAYER_DEPS_core "")
+set(SLSLAM_LAYER_DEPS_features core)
+set(SLSLAM_LAYER_DEPS_geometry core)
+set(SLSLAM_LAYER_DEPS_place core)
+set(SLSLAM_LAYER_DEPS_map core features geometry place)
+set(SLSLAM_LAYER_DEPS_optimization core geometry)
+set(SLSLAM_LAYER_DEPS_mapping map optimization)
+set(SLSLAM_LAYER_DEPS_tracking mapping)
+set(SLSLAM_LAYER_DEPS_sim core)
+set(SLSLAM_LAYER_DEPS_lidar core geometry)
+
+# SLSLAM_LAYER_BELOW_<layer>: every layer it may include (transitive closure of the table).
+foreach(layer IN LISTS SLSLAM_LAYERS)
+  set(below "")
+  set(todo ${SLSLAM_LAYER_DEPS_${layer}})
+  while(todo)
+    list(POP_FRONT todo next)
+    if(NOT next IN_LIST below)
+      list(APPEND below ${next})
+      list(APPEND todo ${SLSLAM_LAYER_DEPS_${next}})
+    endif()
+  endwhile()
+  set(SLSLAM_LAYER_BELOW_${layer} ${below})
+endforeach()

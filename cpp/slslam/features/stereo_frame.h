@@ -1,0 +1,36 @@
+// One rectified stereo frame as tracking and the map see it: left keypoints with their
+// right-image match (disparity, depth), and left line segments with their stereo-triangulated
+// endpoints. Plain data; stereo matching that fills it lives in tracking/stereo_matching.h.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "slslam/core/pinhole_camera.h"
+#include "slslam/features/keypoints.h"
+#include "slslam/features/line_segment.h"
+
+namespace slslam {
+
+struct StereoFrame {
+  int index = 0;                ///< input frame number (0-based)
+  double timestamp = 0.0;       ///< [s]
+  Keypoints keypoints;          ///< left image
+  std::vector<double> u_right;  ///< per keypoint: matched right column [px], or -1
+  std::vector<double> depth;    ///< per keypoint: depth from the stereo match [m], or -1
+  Segments lines;               ///< left image segments
+  cv::Mat line_descriptors;     ///< LBD rows of `lines`
+  /// per line: 3-D endpoints in the left camera frame [m] when the stereo pair triangulated it
+  std::vector<std::array<Eigen::Vector3d, 2>> line_endpoints;
+  std::vector<bool> line_has_depth;
+
+  int NumKeypoints() const { return keypoints.size(); }
+  int NumLines() const { return static_cast<int>(lines.size()); }
+  // Camera-frame point of keypoint i (requires depth[i] > 0).
+  Eigen::Vector3d Backproject(const PinholeCamera& camera, int i) const;
+};
+
+}  // namespace slslam
