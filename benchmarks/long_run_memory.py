@@ -1,10 +1,12 @@
 """Long run: resident memory and map size over 10,000 simulated frames (issue 17 item 5).
 
     python benchmarks/long_run_memory.py [--frames 10000] [--every 100] [--light 1.0]
+        [--loop-length-m 40] [--loop-radius-m 10] [--rate-hz 20] [--speed-mps 0.8]
         [--out benchmarks/results/long_run_memory]
     python benchmarks/long_run_memory.py --from-csv OUT/memory.csv   # plot and summarise
 
-The simulated loop roadway (142.75 m, 3,589 frames at 0.8 m/s and 20 Hz, 752 x 480) is driven
+The simulated loop roadway (by default 142.75 m, 3,589 frames at 0.8 m/s and 20 Hz, 752 x 480;
+``--loop-length-m/--loop-radius-m/--rate-hz/--speed-mps`` pick a smaller or faster one) is driven
 lap after lap: frame k shows lap frame k mod 3,589 (rendered on the fly, one frame ahead on a
 second thread; the robot stops at the end of a lap and starts again where it began), with
 timestamps that keep increasing. The tracker runs with the default configuration (the point
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import json
 import logging
 import sys
@@ -52,6 +55,8 @@ COLUMNS = (
     "points_culled",
     "lines_culled",
     "tracked_share_window",
+    "loops_accepted",
+    "merges",
 )
 
 
@@ -65,7 +70,9 @@ def resident_mib() -> float:
 
 def lap_frames(options: SimOptions) -> int:
     """Frames of one full lap of the preset's path at the options' speed and rate."""
-    path = preset_geometry(options.preset)[1]
+    path = preset_geometry(
+        options.preset, options.laps, options.loop_length_m, options.loop_radius_m
+    )[1]
     full = RobotTrajectory(path, options=options.trajectory_options()).duration_s
     return int(full * options.rate_hz)
 
@@ -142,6 +149,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=10_000)
     parser.add_argument("--every", type=int, default=100, help="sample every N frames")
     parser.add_argument("--light", type=float, default=1.0)
+    parser.add_argument("--loop-length-m", type=float, default=SimOptions.loop_length_m)
+    parser.add_argument("--loop-radius-m", type=float, default=SimOptions.loop_radius_m)
+    parser.add_argument("--rate-hz", type=float, default=SimOptions.rate_hz)
+    parser.add_argument("--speed-mps", type=float, default=SimOptions.speed_mps)
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "long_run_memory")
     parser.add_argument("--from-csv", type=Path, help="only plot and summarise this memory.csv")
     args = parser.parse_args(argv)
@@ -154,9 +165,17 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args.out.mkdir(parents=True, exist_ok=True)
 
-    base = SimOptions(preset="loop", light=args.light, lidar=False)
+    base = SimOptions(
+        preset="loop",
+        light=args.light,
+        lidar=False,
+        loop_length_m=args.loop_length_m,
+        loop_radius_m=args.loop_radius_m,
+        rate_hz=args.rate_hz,
+        speed_mps=args.speed_mps,
+    )
     lap = lap_frames(base)
-    sim = Simulator(SimOptions(preset="loop", light=args.light, lidar=False, frames=lap))
+    sim = Simulator(dataclasses.replace(base, frames=lap))
     config = Config()
     frontend = make_point_frontend(config.features)
     print(
@@ -196,6 +215,8 @@ def main(argv: list[str] | None = None) -> int:
                     "points_culled": m.stats["points_culled"],
                     "lines_culled": m.stats["lines_culled"],
                     "tracked_share_window": round(tracked_window / args.every, 3),
+                    "loops_accepted": m.stats.get("loops_accepted", 0),
+                    "merges": m.stats.get("merges", 0),
                 }
                 tracked_window = 0
                 rows.append(row)
@@ -207,6 +228,10 @@ def main(argv: list[str] | None = None) -> int:
         "frames": args.frames,
         "lap_frames": lap,
         "light": args.light,
+        "loop_length_m": args.loop_length_m,
+        "loop_radius_m": args.loop_radius_m,
+        "rate_hz": args.rate_hz,
+        "speed_mps": args.speed_mps,
         "frontend": type(frontend).__name__,
         "resolution": [sim.camera.width, sim.camera.height],
         "seconds": round(time.perf_counter() - start, 1),

@@ -1,14 +1,18 @@
 """Loop closing and map merging on simulated mine roadways, with and without loop closing.
 
     python benchmarks/loop_closing.py [--out benchmarks/results/loop_closing]
-        [--sequences loop_bright,loop_dark,corridor] [--frames 620]
+        [--sequences loop_bright,loop_dark,corridor] [--frames N]
 
-Sequences (rendered once into --data, default /tmp/slslam_loop_closing):
-  loop_bright  a small yard loop (10 m straights, 4 m half circles: 45 m a lap) driven 1.4 laps
-               at 1 m/s, 10 Hz, light 1.0: the second lap revisits the first
+Sequences (rendered once into --data, default /tmp/slslam_loop_closing), each with its own
+default frame count (--frames overrides it for all):
+  loop_bright  a small yard loop (10 m straights, 4 m half circles: 45 m a lap) driven 2 laps
+               at 1 m/s, 10 Hz (900 frames), light 1.0: the second lap revisits the first
   loop_dark    the same at light 0.15 with dust
-  corridor     the straight 80 m roadway at light 1.0: arches and mesh repeat, no place is
-               visited twice, so every accepted loop there is false
+  corridor     the straight 80 m roadway at light 1.0 (700 frames): arches and mesh repeat, no
+               place is visited twice, so every accepted loop there is false
+  full_bright  the simulator's default yard loop (40 m straights, 10 m half circles: 143 m a
+               lap) driven 2 laps at 1 m/s, 10 Hz (2,840 frames), light 1.0
+  full_dark    the same at light 0.15 with dust
 
 Per sequence, loop closing on and off (tracking.loop_closing.enabled / merge_maps): frames
 posed, maps at the end, ATE RMSE of the final trajectory (frames through their corrected
@@ -48,7 +52,11 @@ SEQUENCES = {
         dust=True,
     ),
     "corridor": dict(preset="straight", rate_hz=10.0, speed_mps=1.0),
+    "full_bright": dict(preset="loop", rate_hz=10.0, speed_mps=1.0, laps=2),
+    "full_dark": dict(preset="loop", rate_hz=10.0, speed_mps=1.0, laps=2, light=0.15, dust=True),
 }
+FRAMES = {"loop_bright": 900, "loop_dark": 900, "corridor": 700}
+FRAMES.update(full_bright=2840, full_dark=2840)
 FALSE_LOOP_M = 2.0
 
 
@@ -99,16 +107,18 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/loop_closing"))
     parser.add_argument("--data", type=Path, default=Path("/tmp/slslam_loop_closing"))
     parser.add_argument("--sequences", default="loop_bright,loop_dark,corridor")
-    parser.add_argument("--frames", type=int, default=620)
+    parser.add_argument(
+        "--frames", type=int, default=None, help="frames per sequence (default: per sequence)"
+    )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     results: dict = {"load_average": os.getloadavg(), "runs": {}}
     for name in args.sequences.split(","):
-        sequence = simulate(name, args.frames, args.data)
+        sequence = simulate(name, args.frames or FRAMES[name], args.data)
         for enabled in (True, False):
             label = f"{name}/{'loops' if enabled else 'no_loops'}"
             out = args.out / name / ("loops" if enabled else "no_loops")
-            save = out / "atlas.slmap" if enabled and name == "loop_bright" else None
+            save = out / "atlas.slmap" if enabled and name.endswith("_bright") else None
             start = time.perf_counter()
             summary = run_sequence(
                 sequence, out, with_loops(enabled), progress=False, save_map=save
