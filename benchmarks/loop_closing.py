@@ -62,7 +62,9 @@ FALSE_LOOP_M = 2.0
 
 def simulate(name: str, frames: int, data: Path) -> Path:
     out = data / f"{name}_{frames}"
-    if not (out / "manifest.json").exists():
+    manifest = out / "manifest.json"
+    complete = manifest.exists() and json.loads(manifest.read_text()).get("status") == "complete"
+    if not complete:  # absent, or a render that was interrupted
         print(f"simulating {name} ({frames} frames) into {out}", flush=True)
         Simulator(SimOptions(frames=frames, lidar=False, **SEQUENCES[name])).write(
             out, progress=False

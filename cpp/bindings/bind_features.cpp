@@ -84,6 +84,8 @@ void BindFeatures(py::module_& m) {
       .def_readwrite("sigma_px", &DynamicCellOptions::sigma_px, "Gaussian width of G(d) [px]")
       .def_readwrite("alpha", &DynamicCellOptions::alpha, "weight of the current frame")
       .def_readwrite("threshold", &DynamicCellOptions::threshold, "l: invalid below this")
+      .def_readwrite("min_matches", &DynamicCellOptions::min_matches,
+                     "matches a cell needs in a frame to count as evidence")
       .def("check", &DynamicCellOptions::Check);
   py::class_<DynamicCellFilter>(m, "DynamicCellFilter",
                                 "Per-cell motion-consistency weights; drops moving objects.")

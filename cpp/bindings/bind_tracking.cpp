@@ -69,6 +69,7 @@ class TrackerSession {
     out["inlier_lines"] = r.inlier_lines;
     out["lines"] = num_lines;
     out["keyframe"] = r.keyframe;
+    out["masked_keypoints"] = r.masked_keypoints;
     out["weighted_inliers"] = r.weighted_inliers;
     out["relocalisation_ms"] = r.relocalisation_ms;
     out["line_extraction_ms"] = timing.line_extraction_ms;
@@ -326,6 +327,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("relocalisation", &TrackerOptions::relocalisation)
       .def_readwrite("loop_closing", &TrackerOptions::loop_closing)
       .def_readwrite("localise_only", &TrackerOptions::localise_only)
+      .def_readwrite("dynamic_cells", &TrackerOptions::dynamic_cells)
+      .def_readwrite("dynamic", &TrackerOptions::dynamic)
       .def("check", &TrackerOptions::Check);
 
   py::class_<TrackerSession>(m, "TrackerCore",

@@ -230,6 +230,14 @@ class DynamicCellOptions:
     def cell_size_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
+    def min_matches(self) -> int:
+        """
+        matches a cell needs in a frame to count as evidence
+        """
+    @min_matches.setter
+    def min_matches(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
     def sigma_px(self) -> float:
         """
         Gaussian width of G(d) [px]
@@ -1046,6 +1054,8 @@ class TrackerOptions:
     """
     Tracking, mapping and front-end thresholds.
     """
+    dynamic: DynamicCellOptions
+    dynamic_cells: bool
     localise_only: bool
     loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions

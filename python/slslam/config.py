@@ -117,7 +117,8 @@ class GridConfig:
 
 @dataclass(frozen=True)
 class DynamicCellConfig:
-    """Invalid-cell filter (SPEC A2); mirrors C++ ``DynamicCellOptions``."""
+    """Invalid-cell filter for moving objects (SPEC A2), applied in tracking; mirrors C++
+    ``DynamicCellOptions`` (``TrackerOptions.dynamic``; ``enabled`` is ``dynamic_cells``)."""
 
     enabled: bool = True
     cell_size_px: int = _option(32, "[4, 4096]")  # cell side [px]
@@ -126,6 +127,8 @@ class DynamicCellConfig:
     alpha: float = _option(0.7, "[0.01, 1]")
     # l: a cell below this weight is invalid (with its 8 neighbours)
     threshold: float = _option(0.5, "[0, 1]")
+    # matches a cell needs in a frame to count as evidence (fewer: the cell counts as static)
+    min_matches: int = _option(2, "[1, 1000000]")
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from slslam import _core
@@ -104,3 +105,20 @@ def test_frontend_choice_and_model_path_precedence(tmp_path, monkeypatch, caplog
     assert isinstance(frontend, SuperPoint) and frontend.model_path == config_model
     orb = config_from_dict({"features": {"point_frontend": "orb"}})
     assert isinstance(make_point_frontend(orb.features), Orb)
+
+
+def test_dynamic_cell_settings_reach_the_tracker():
+    """features.dynamic_cells is read by tracking (it was documented but read by nothing)."""
+    from slslam.datasets.euroc import RectifiedStereoCamera
+    from slslam.tracking.tracker import _core_options
+
+    camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
+    defaults = _core_options(camera, Config())
+    assert defaults.dynamic_cells == _core.TrackerOptions().dynamic_cells == True  # noqa: E712
+    assert defaults.dynamic.sigma_px == _core.DynamicCellOptions().sigma_px
+    config = config_from_dict(
+        {"features": {"dynamic_cells": {"enabled": False, "sigma_px": 5.0, "threshold": 0.3}}}
+    )
+    options = _core_options(camera, config)
+    assert options.dynamic_cells is False
+    assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)

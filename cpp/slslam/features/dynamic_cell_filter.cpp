@@ -1,5 +1,6 @@
 #include "slslam/features/dynamic_cell_filter.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/calib3d.hpp>
@@ -14,6 +15,7 @@ void DynamicCellOptions::Check() const {
   CheckAboveInRange("dynamic.sigma_px", sigma_px, 0.0, 1e6);
   CheckAboveInRange("dynamic.alpha", alpha, 0.0, 1.0);
   CheckInRange("dynamic.threshold", threshold, 0.0, 1.0);
+  CheckInRange("dynamic.min_matches", min_matches, 1, 1000000);
 }
 
 DynamicCellFilter::DynamicCellFilter(int width, int height, const DynamicCellOptions& options)
@@ -40,19 +42,27 @@ const std::vector<bool>& DynamicCellFilter::Update(const PixelArray& observed,
                                                    const PixelArray& predicted) {
   SLSLAM_CHECK(observed.rows() == predicted.rows(), observed.rows(), " observed but ",
                predicted.rows(), " predicted positions");
-  std::vector<double> sum(weights_.size(), 0.0);
-  std::vector<int> count(weights_.size(), 0);
+  std::vector<std::vector<double>> distances(weights_.size());
   for (Eigen::Index i = 0; i < observed.rows(); ++i) {
     const int c = CellOf(observed(i, 0), observed(i, 1));
     const double d = (observed.row(i) - predicted.row(i)).cast<double>().norm();
     if (c < 0 || !std::isfinite(d)) continue;
-    sum[c] += d;
-    ++count[c];
+    distances[c].push_back(d);
   }
   const double two_sigma2 = 2.0 * options_.sigma_px * options_.sigma_px;
   for (size_t c = 0; c < weights_.size(); ++c) {
-    if (count[c] == 0) continue;
-    const double d = sum[c] / count[c];
+    // d: the median distance of the cell's matches (the paper's mean lets one or two mismatches
+    // in repetitive texture, mesh or arches, flag a static cell; a mover shifts all its points).
+    // No match in the cell: nothing disagrees with the motion (G = 1), so a cell the mover has
+    // left recovers instead of staying invalid.
+    std::vector<double>& ds = distances[c];
+    double d = 0.0;
+    if (static_cast<int>(ds.size()) >= options_.min_matches) {
+      const size_t mid = ds.size() / 2;
+      std::nth_element(ds.begin(), ds.begin() + mid, ds.end());
+      d = ds[mid];
+      if (ds.size() % 2 == 0) d = 0.5 * (d + *std::max_element(ds.begin(), ds.begin() + mid));
+    }
     weights_[c] =
         options_.alpha * std::exp(-d * d / two_sigma2) + (1.0 - options_.alpha) * weights_[c];
   }

@@ -1,10 +1,13 @@
 // Invalid-cell filter for moving objects (SPEC A2): cells whose matched keypoints disagree with
 // the camera motion are dropped, together with their 8 neighbours.
 //
-// Per cell g at frame t, over its m matched keypoints: d = (1/m) sum ||p_i - p'_i||, where p_i is
+// Per cell g at frame t, over its m matched keypoints: d = median ||p_i - p'_i|| (the paper: the
+// mean; the median ignores a few mismatches in repetitive texture), where p_i is
 // the keypoint and p'_i its position predicted by the camera motion; w~ = exp(-d^2 / (2 sigma^2));
 // w_t = alpha * w~ + (1 - alpha) * w_{t-1}; a cell with w_t < threshold is invalid and so are its
-// 8 neighbours. Cells without matches keep w_{t-1}. Every cell starts at w = 1.
+// 8 neighbours. A cell without matches (fewer than min_matches) counts as agreeing (w~ = 1), so it
+// recovers once the mover has left it (the paper leaves this case open). Every cell starts at w
+// = 1.
 //
 // The paper predicts p'_i with the constant-velocity model, so any motion-model error flags every
 // cell. Here p'_i comes from the caller; PredictWithRobustPose() provides the better choice: the
@@ -25,6 +28,9 @@ struct DynamicCellOptions {
   double sigma_px = 3.0;   ///< Gaussian width of G(d) [px]
   double alpha = 0.7;      ///< weight of the current frame in the temporal smoothing [-], (0, 1]
   double threshold = 0.5;  ///< l: a cell with smoothed weight below this is invalid [-]
+  /// matches a cell needs in a frame to count as evidence; fewer count as none (G = 1): one
+  /// keypoint's localisation noise (2-4 px at coarse ORB octaves) must not drop 9 cells [-]
+  int min_matches = 2;
 
   void Check() const;
 };

@@ -67,6 +67,10 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
   mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential);
+  if (options_.dynamic_cells) {
+    dynamic_ = std::make_unique<DynamicCellFilter>(options_.rig.camera.width,
+                                                   options_.rig.camera.height, options_.dynamic);
+  }
   if (vocabulary_ && !options_.localise_only &&
       (options_.loop_closing.enabled || options_.loop_closing.merge_maps)) {
     LoopClosingOptions loop = options_.loop_closing;
@@ -315,7 +319,8 @@ bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Ei
 void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
                              const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
                              const std::vector<int>& point_matches,
-                             const std::vector<int>& line_matches) {
+                             const std::vector<int>& line_matches,
+                             const std::vector<bool>& valid_keypoints) {
   Map& map = atlas_.map(active_);
   BowVector bow;
   FeatureVector bow_features;
@@ -335,7 +340,8 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     for (int i = 0; i < frame->NumKeypoints(); ++i) {
       if (point_matches[i] >= 0 && map.point(point_matches[i])) {
         map.AddPointObservation(point_matches[i], kf_id, i);
-      } else if (frame->depth[i] > 0.0) {
+      } else if (frame->depth[i] > 0.0 && (valid_keypoints.empty() || valid_keypoints[i])) {
+        // (a keypoint in a cell the dynamic-cell filter invalidated makes no map point)
         const Eigen::Vector3d p_w = R_wc * frame->Backproject(options_.rig.camera, i) + t_wc;
         auto p = map.AddPoint(p_w, frame->keypoints.descriptors.row(i), kf_id);
         map.AddPointObservation(p->id, kf_id, i);
@@ -366,8 +372,8 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
 
 Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                                               const Eigen::Matrix3d& R_pred,
-                                              const Eigen::Vector3d& t_pred,
-                                              float radius_scale) const {
+                                              const Eigen::Vector3d& t_pred, float radius_scale,
+                                              const std::vector<bool>* valid_keypoints) const {
   const PinholeCamera& camera = options_.rig.camera;
   LocalTracking out;
   const auto match_start = Clock::now();
@@ -424,8 +430,9 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
     }
     for (size_t i = 0; i < candidates.size(); ++i) {
       if (m(i) < 0) continue;
-      out.point_ids.push_back(candidates[i]->id);
-      out.keypoints.push_back(m(i));
+      const bool masked = valid_keypoints && !valid_keypoints->empty() && !(*valid_keypoints)[m(i)];
+      (masked ? out.masked_point_ids : out.point_ids).push_back(candidates[i]->id);
+      (masked ? out.masked_keypoints : out.keypoints).push_back(m(i));
     }
   }
 
@@ -492,6 +499,57 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
   out.weighted_inliers =
       out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
   return out;
+}
+
+void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
+                                 const Eigen::Vector3d& t_cw) {
+  // Frame-to-frame evidence, as the paper's filter: the previous frame's stereo keypoints are
+  // carried into this frame by the camera motion between the two estimated poses and matched
+  // around their predicted pixels; a cell whose matches land far from the prediction moved on
+  // its own. Unlike matches to the map, these exist for a mover too (it makes no map points once
+  // its cells are invalid), so its cells stay invalid while it moves.
+  std::shared_ptr<const StereoFrame> previous = std::move(previous_frame_);
+  previous_frame_ = nullptr;
+  if (!previous || previous->NumKeypoints() == 0 || frame.NumKeypoints() == 0 ||
+      previous->keypoints.descriptors.type() != frame.keypoints.descriptors.type()) {
+    return;
+  }
+  const PinholeCamera& camera = options_.rig.camera;
+  // x_cur = R_cp x_prev + t_cp.
+  const Eigen::Matrix3d R_cp = R_cw * previous_R_.transpose();
+  const Eigen::Vector3d t_cp = t_cw - R_cp * previous_t_;
+  std::vector<int> rows;
+  PixelArray predicted(previous->NumKeypoints(), 2);
+  for (int i = 0; i < previous->NumKeypoints(); ++i) {
+    if (!(previous->depth[i] > 0.0)) continue;
+    const Eigen::Vector3d x_c = R_cp * previous->Backproject(camera, i) + t_cp;
+    if (x_c.z() <= 0.05) continue;
+    const Eigen::Vector2d uv = camera.Project(x_c);
+    if (!InImage(camera, uv)) continue;
+    predicted.row(static_cast<Eigen::Index>(rows.size())) = uv.cast<float>().transpose();
+    rows.push_back(i);
+  }
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  cv::Mat query(static_cast<int>(rows.size()), desc.cols, desc.type());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    previous->keypoints.descriptors.row(rows[r]).copyTo(query.row(static_cast<int>(r)));
+  }
+  GuidedMatchOptions guided;
+  guided.radius_px = options_.search_radius_px;
+  guided.max_distance =
+      desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+  guided.ratio = options_.match_ratio;
+  const PixelArray pred = predicted.topRows(static_cast<Eigen::Index>(rows.size()));
+  const Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, desc, guided);
+  PixelArray observed(m.size(), 2), expected(m.size(), 2);
+  Eigen::Index n = 0;
+  for (Eigen::Index r = 0; r < m.size(); ++r) {
+    if (m(r) < 0) continue;
+    observed.row(n) = frame.keypoints.uv.row(m(r));
+    expected.row(n) = pred.row(r);
+    ++n;
+  }
+  dynamic_->Update(observed.topRows(n), expected.topRows(n));
 }
 
 bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
@@ -704,10 +762,16 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
 
   LocalTracking tracking;
   bool tracked = false, relocalised = false;
+  // Keypoints in cells the dynamic-cell filter invalidated up to the last frame.
+  std::vector<bool> valid;
+  if (dynamic_ && mode_ == Mode::kTracking) {
+    valid = dynamic_->KeypointMask(frame->keypoints.uv);
+    result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
+  }
   auto track_local_map = [&](float scale) {
     Map& map = atlas_.map(active_);
     std::lock_guard<std::mutex> lock(map.mutex());
-    tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale);
+    tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale, &valid);
   };
   if (mode_ != Mode::kLost) {
     track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
@@ -744,6 +808,18 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       std::lock_guard<std::mutex> lock(map.mutex());
       make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
     }
+    if (dynamic_) {
+      if (tracked) {
+        UpdateDynamicCells(*frame, tracking.pose.R_cw, tracking.pose.t_cw);
+        valid = dynamic_->KeypointMask(frame->keypoints.uv);
+      } else {  // relocalised: the cells start afresh from here
+        dynamic_->Reset();
+        valid.clear();
+      }
+      previous_frame_ = frame;
+      previous_R_ = tracking.pose.R_cw;
+      previous_t_ = tracking.pose.t_cw;
+    }
     result.state = relocalised ? TrackingState::kRelocalised : TrackingState::kOk;
     result.R_cw = tracking.pose.R_cw;
     result.t_cw = tracking.pose.t_cw;
@@ -775,7 +851,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     }
     if (make_keyframe && !options_.localise_only) {
       const auto start = Clock::now();
-      InsertKeyFrame(frame, tracking.pose.R_cw, tracking.pose.t_cw, point_match, line_match);
+      InsertKeyFrame(frame, tracking.pose.R_cw, tracking.pose.t_cw, point_match, line_match, valid);
       result.keyframe = true;
       result.mapping_ms = Ms(start);
     }
@@ -784,6 +860,10 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   }
 
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
+  if (dynamic_) {
+    dynamic_->Reset();
+    previous_frame_ = nullptr;
+  }
   if (mode_ == Mode::kTracking) {  // the last estimate and the motion before the loss
     loss_R_ = last_R_;
     loss_t_ = last_t_;

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include "slslam/features/descriptor_matcher.h"
+#include "slslam/features/dynamic_cell_filter.h"
 #include "slslam/map/map.h"
 #include "slslam/mapping/atlas.h"
 #include "slslam/mapping/local_mapper.h"
@@ -109,6 +110,12 @@ struct TrackerOptions {
   LoopClosingOptions loop_closing;  ///< loop closing and map merging (need the vocabulary)
   bool localise_only = false;       ///< track in the loaded maps without changing them: no
                                     ///< keyframes, no mapping, no new maps
+  /// Invalid-cell filter for moving objects (SPEC A2): a cell whose matched keypoints disagree
+  /// with the pose of the frame (motion-only BA over the other cells, i.e. the consensus motion)
+  /// is dropped with its 8 neighbours: its keypoints take no part in the next frames' pose and
+  /// make no map points, but are still matched so that the cell can recover.
+  bool dynamic_cells = true;
+  DynamicCellOptions dynamic;
 
   void Check() const;
 };
@@ -133,6 +140,7 @@ struct TrackResult {
   int matched_lines = 0;
   int inlier_lines = 0;
   bool keyframe = false;           ///< a keyframe was made from this frame
+  int masked_keypoints = 0;        ///< keypoints in cells the dynamic-cell filter invalidated
   double weighted_inliers = 0.0;   ///< point inliers + line_inlier_weight * line inliers [-]
   double relocalisation_ms = 0.0;  ///< BoW query, PnP and local-map tracking when lost [ms]
   double matching_ms = 0.0;        ///< local map projection and guided matching [ms]
@@ -181,6 +189,8 @@ class Tracker {
   struct LocalTracking {
     PoseOptimizerResult pose;
     std::vector<int> point_ids, keypoints, line_ids, segments;  ///< matched pairs
+    /// matches of keypoints in invalid cells: left out of the pose, kept for the cell filter
+    std::vector<int> masked_point_ids, masked_keypoints;
     double weighted_inliers = 0.0;
     double matching_ms = 0.0;
     double optimisation_ms = 0.0;
@@ -194,11 +204,17 @@ class Tracker {
                 const Eigen::Vector3d& t_cw);
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
                       const Eigen::Vector3d& t_cw, const std::vector<int>& point_matches,
-                      const std::vector<int>& line_matches);
+                      const std::vector<int>& line_matches,
+                      const std::vector<bool>& valid_keypoints = {});
   // Caller holds map.mutex().
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
-                              float radius_scale) const;
+                              float radius_scale,
+                              const std::vector<bool>* valid_keypoints = nullptr) const;
+  // Updates the dynamic-cell filter from the previous tracked frame's stereo keypoints matched
+  // into this frame under the two frames' poses.
+  void UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
+                          const Eigen::Vector3d& t_cw);
   // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
   // map.mutex().
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
@@ -222,6 +238,10 @@ class Tracker {
   Atlas atlas_;
   std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
+  std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
+  std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
+  Eigen::Matrix3d previous_R_ = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d previous_t_ = Eigen::Vector3d::Zero();
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
   int lost_count_ = 0;                                    ///< frames since tracking failed

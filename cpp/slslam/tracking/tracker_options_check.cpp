@@ -48,6 +48,7 @@ void TrackerOptions::Check() const {
   pose.Check();
   mapping.Check();
   relocalisation.Check();
+  if (dynamic_cells) dynamic.Check();
   loop_closing.Check();
   CheckInRange("tracking.min_init_points", min_init_points, 3, limits::kMaxKeypoints);
   CheckInRange("tracking.min_inliers", min_inliers, 3, limits::kMaxKeypoints);

@@ -78,6 +78,7 @@ COUNTS = (
     "keyframe",
     "map",
     "weighted_inliers",
+    "masked_keypoints",
 )
 
 

@@ -156,6 +156,10 @@ def _core_options(
         setattr(options, name, getattr(t, name))
     if vocabulary is not None:
         options.vocabulary_path = str(vocabulary)
+    dynamic = config.features.dynamic_cells
+    options.dynamic_cells = dynamic.enabled
+    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches"):
+        setattr(options.dynamic, name, getattr(dynamic, name))
     options.stereo.max_depth_baselines = t.max_depth_baselines
     options.mapping.local_keyframes = t.local_keyframes
     options.pose.line_weight = t.line_weight
@@ -461,6 +465,7 @@ class Tracker:
             "keyframe": int(out["keyframe"]),
             "map": out["map_index"],
             "weighted_inliers": round(float(out["weighted_inliers"]), 3),
+            "masked_keypoints": out["masked_keypoints"],
         }
         result = TrackResult(index, timestamp, out["state"], T_wc, timings, counts)
         self.last_image, self.last_keypoints_uv = left, kl.uv

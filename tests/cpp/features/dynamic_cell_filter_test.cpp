@@ -110,6 +110,7 @@ TEST(DynamicCellFilter, ConstantVelocityPredictionWithAWrongMotionFlagsStaticCel
 TEST(DynamicCellFilter, TemporalSmoothingNeedsRepeatedEvidence) {
   DynamicCellOptions options;
   options.alpha = 0.3;  // a single bad frame moves the weight only by 30 %
+  options.min_matches = 1;
   DynamicCellFilter filter(64, 64, options);
   PixelArray observed(1, 2), predicted(1, 2);
   observed << 10, 10;
@@ -124,6 +125,43 @@ TEST(DynamicCellFilter, TemporalSmoothingNeedsRepeatedEvidence) {
   EXPECT_FALSE(filter.valid()[1]);  // the neighbour goes with it
   EXPECT_FALSE(filter.valid()[3]);  // diagonal neighbour (2 x 2 cells)
   EXPECT_THROW(filter.Update(observed, PixelArray(2, 2)), std::invalid_argument);
+}
+
+TEST(DynamicCellFilter, ACellWithoutMatchesRecovers) {
+  // The mover has left: no match falls in the cell any more, so nothing disagrees with the
+  // motion and the weight climbs back (alpha 0.7: 0.7 + 0.3 w per frame) until the cell is valid.
+  DynamicCellOptions options;
+  options.min_matches = 1;
+  DynamicCellFilter filter(64, 64, options);
+  PixelArray observed(1, 2), predicted(1, 2);
+  observed << 10, 10;
+  predicted << 40, 10;  // 30 px off
+  filter.Update(observed, predicted);
+  filter.Update(observed, predicted);
+  ASSERT_FALSE(filter.valid()[0]);
+  filter.Update(PixelArray(0, 2), PixelArray(0, 2));
+  EXPECT_TRUE(filter.valid()[0]);        // 0.3 * 0.09 + 0.7 = 0.73 >= 0.5
+  EXPECT_GT(filter.weights()[1], 0.99);  // a cell that never had matches stays at 1
+}
+
+TEST(DynamicCellFilter, OneMatchIsNoEvidenceAndAMedianIgnoresAMismatch) {
+  DynamicCellFilter filter(64, 64);  // min_matches 2
+  PixelArray one(1, 2), one_predicted(1, 2);
+  one << 10, 10;
+  one_predicted << 40, 10;  // 30 px off, but alone in its cell
+  for (int k = 0; k < 5; ++k) filter.Update(one, one_predicted);
+  EXPECT_TRUE(filter.valid()[0]);
+  // Three matches, one of them 30 px off (a mismatch): the median is 0.5 px, the cell stays.
+  PixelArray three(3, 2), three_predicted(3, 2);
+  three << 10, 10, 12, 12, 14, 14;
+  three_predicted << 10.5, 10, 12.5, 12, 44, 14;
+  for (int k = 0; k < 5; ++k) filter.Update(three, three_predicted);
+  EXPECT_TRUE(filter.valid()[0]);
+  // All three displaced 10 px (a mover): invalid after two frames.
+  three_predicted << 20, 10, 22, 12, 24, 14;
+  filter.Update(three, three_predicted);
+  filter.Update(three, three_predicted);
+  EXPECT_FALSE(filter.valid()[0]);
 }
 
 }  // namespace
