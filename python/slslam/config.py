@@ -13,6 +13,7 @@ errors that name the file and the key, so a typo never passes silently.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import logging
 import math
 import os
@@ -177,16 +178,25 @@ class TrackingConfig:
     min_inliers: int = _option(15, "[3, 100000]")
     # guided matching window [px] (doubled on a retry)
     search_radius_px: float = _option(15.0, "[1, 10000]")
+    # best / second best inside the guided-matching window
+    match_ratio: float = _option(0.9, "[0.01, 1]")
     # guided matching bound for ORB [Hamming bits]
     max_distance_binary: float = _option(80.0, "[1, 256]")
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
     max_distance_float: float = _option(0.8, "[0.01, 2]")
+    # map line to frame segment: midpoint distance to the predicted line [px], angle [rad], LBD
+    # distance [bits]
+    line_search_px: float = _option(20.0, "[0.1, 10000]")
+    line_max_angle_rad: float = _option(0.2, "[0.001, 3.14]")
+    line_max_lbd: float = _option(80.0, "[1, 256]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
     # no keyframe sooner than this after the last while tracking is strong [frames]
     keyframe_min_frames: int = _option(0, "[0, 1000]")
     # tracked / reference keyframe points below: keyframe
     keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
     keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe
+    # "close" stereo points for the rule above: depth below this many baselines
+    close_depth_baselines: float = _option(40.0, "[0.1, 1e6]")
     # covisible keyframes in the local map and local BA
     local_keyframes: int = _option(10, "[1, 1000]")
     # weight of line terms against point terms in both BAs
@@ -240,7 +250,14 @@ def _build(cls: type, data: Any, where: str, source: Path | None):
     unknown = sorted(str(key) for key in set(data) - names)
     if unknown:
         key = short_repr(unknown[0], 40).strip("'")
-        raise ConfigError(source, f"unknown key '{where}.{key}' (known: {sorted(names)})")
+        if len(names) <= 12:
+            hint = "known: " + ", ".join(sorted(names))
+        else:  # a long section: the likely ones, and where all of them are documented
+            close = difflib.get_close_matches(str(unknown[0]), sorted(names), n=3, cutoff=0.6)
+            hint = (f"did you mean {' or '.join(close)}? " if close else "") + (
+                f"{len(names)} keys, documented in configs/default.yaml"
+            )
+        raise ConfigError(source, f"unknown key '{where}.{key}' ({hint})")
     values = {}
     for key, value in data.items():
         values[key] = _convert(hints[key], value, f"{where}.{key}", source)

@@ -1,3 +1,4 @@
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -122,3 +123,34 @@ def test_dynamic_cell_settings_reach_the_tracker():
     options = _core_options(camera, config)
     assert options.dynamic_cells is False
     assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)
+
+
+def test_every_mirrored_default_equals_the_cpp_default():
+    """One source of defaults: each config key that goes to the C++ tracker options
+    (``TRACKING_TO_CORE`` and its siblings, the table ``_core_options`` applies) has the C++
+    default, field by field; every tracker-section key is either mirrored or read in Python."""
+    from slslam.tracking.tracker import (
+        DYNAMIC_CELLS_TO_CORE,
+        LOOP_CLOSING_TO_CORE,
+        TRACKING_TO_CORE,
+        core_attribute,
+    )
+
+    core = _core.TrackerOptions()
+    config = Config()
+    checked = 0
+    for section, table in (
+        (config.tracking, TRACKING_TO_CORE),
+        (config.tracking.loop_closing, LOOP_CLOSING_TO_CORE),
+        (config.features.dynamic_cells, DYNAMIC_CELLS_TO_CORE),
+    ):
+        for name, paths in table.items():
+            for path in paths:
+                expected = core_attribute(core, path)
+                assert getattr(section, name) == pytest.approx(expected, rel=1e-6), (name, path)
+                checked += 1
+    assert checked >= 40
+    python_only = {"pipeline", "line_detector", "line_detection_scale", "relocalisation"}
+    python_only |= {"vocabulary_path", "loop_closing"}
+    fields = {f.name for f in dataclasses.fields(config.tracking)}
+    assert fields - set(TRACKING_TO_CORE) == python_only

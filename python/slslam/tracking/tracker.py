@@ -123,6 +123,79 @@ class FinalTrajectory:
     T_world_cam: np.ndarray
 
 
+#: Where each config key goes in the C++ options (``_core.TrackerOptions``): the config section's
+#: field -> attribute paths (one key may set several). ``_core_options`` applies it and
+#: tests/python/test_config.py checks, field by field, that every Python default equals the C++
+#: default it mirrors. Keys absent here (pipeline, line_detector, line_detection_scale,
+#: relocalisation, vocabulary_path) are read in Python.
+TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
+    name: (name,)
+    for name in (
+        "use_lines",
+        "sequential",
+        "min_init_points",
+        "min_inliers",
+        "search_radius_px",
+        "match_ratio",
+        "max_distance_binary",
+        "max_distance_float",
+        "line_search_px",
+        "line_max_angle_rad",
+        "line_max_lbd",
+        "keyframe_max_frames",
+        "keyframe_min_frames",
+        "keyframe_track_ratio",
+        "keyframe_min_inliers",
+        "close_depth_baselines",
+        "point_sigma_px",
+        "line_sigma_px",
+        "line_inlier_weight",
+        "recently_lost_frames",
+        "lost_velocity_decay",
+        "lost_search_scale",
+        "weak_keyframe_inliers",
+        "weak_keyframe_frames",
+    )
+} | {
+    "max_depth_baselines": ("stereo.max_depth_baselines",),
+    "local_keyframes": ("mapping.local_keyframes",),
+    "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
+    "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
+}
+LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
+    name: (f"loop_closing.{name}",)
+    for name in (
+        "enabled",
+        "merge_maps",
+        "global_ba",
+        "min_inliers",
+        "consistency",
+        "max_correction_ratio",
+        "max_correction_floor_m",
+    )
+}
+DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
+    name: (f"dynamic.{name}",)
+    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches")
+}
+
+
+def core_attribute(options: _core.TrackerOptions, path: str):
+    """The value at a dotted attribute path of the C++ options (``"mapping.ba.line_weight"``)."""
+    *parents, last = path.split(".")
+    for part in parents:
+        options = getattr(options, part)
+    return getattr(options, last)
+
+
+def _set_core(options: _core.TrackerOptions, path: str, value) -> None:
+    *parents, last = path.split(".")
+    target = options
+    for part in parents:
+        target = getattr(target, part)
+    setattr(target, last, value)
+
+
 def _core_options(
     camera: RectifiedStereoCamera, config: Config, vocabulary: Path | None = None
 ) -> _core.TrackerOptions:
@@ -132,51 +205,16 @@ def _core_options(
     )
     options = _core.TrackerOptions()
     options.rig = _core.StereoRig(pinhole, camera.baseline_m)
-    for name in (
-        "use_lines",
-        "sequential",
-        "min_init_points",
-        "min_inliers",
-        "search_radius_px",
-        "max_distance_binary",
-        "max_distance_float",
-        "keyframe_max_frames",
-        "keyframe_min_frames",
-        "keyframe_track_ratio",
-        "keyframe_min_inliers",
-        "point_sigma_px",
-        "line_sigma_px",
-        "line_inlier_weight",
-        "recently_lost_frames",
-        "lost_velocity_decay",
-        "lost_search_scale",
-        "weak_keyframe_inliers",
-        "weak_keyframe_frames",
+    for section, table in (
+        (t, TRACKING_TO_CORE),
+        (t.loop_closing, LOOP_CLOSING_TO_CORE),
+        (config.features.dynamic_cells, DYNAMIC_CELLS_TO_CORE),
     ):
-        setattr(options, name, getattr(t, name))
+        for name, paths in table.items():
+            for path in paths:
+                _set_core(options, path, getattr(section, name))
     if vocabulary is not None:
         options.vocabulary_path = str(vocabulary)
-    dynamic = config.features.dynamic_cells
-    options.dynamic_cells = dynamic.enabled
-    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches"):
-        setattr(options.dynamic, name, getattr(dynamic, name))
-    options.stereo.max_depth_baselines = t.max_depth_baselines
-    options.mapping.local_keyframes = t.local_keyframes
-    options.pose.line_weight = t.line_weight
-    options.pose.line_angle_weight = t.line_angle_weight
-    options.mapping.ba.line_weight = t.line_weight
-    options.mapping.ba.line_angle_weight = t.line_angle_weight
-    loop = t.loop_closing
-    for name in (
-        "enabled",
-        "merge_maps",
-        "global_ba",
-        "min_inliers",
-        "consistency",
-        "max_correction_ratio",
-        "max_correction_floor_m",
-    ):
-        setattr(options.loop_closing, name, getattr(loop, name))
     try:
         options.check()
     except ValueError as exc:
