@@ -81,3 +81,40 @@ def test_cli_runs_and_reports_bad_input(loop_start, tmp_path, capsys):
 def test_bad_options_name_the_key():
     with pytest.raises(ValueError, match="keyframe_distance_m"):
         LidarSlam(LidarSlamOptions(keyframe_distance_m=-1.0))
+
+
+def _about_z(angle_rad: float, centre: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    T[:2, :2] = [[c, -s], [s, c]]
+    T[:3, 3] = centre - T[:3, :3] @ centre
+    return T
+
+
+@pytest.mark.parametrize(
+    ("slide_rad", "accepted"),
+    # Registration slid along a 10 m arc by 0.1 rad: 1.0 m and 5.7 deg off, the smallest of the 9
+    # false loops benchmarks/lidar_slam.py measured on loop2 (1.0 m / 5.8 deg to 6.0 m / 34.8 deg,
+    # fitness 0.95-0.98, RMSE 2-4 cm). A true loop's correction is registration noise plus drift:
+    # 0.005 rad (true loops on loop2 were within 0.25 deg of ground truth).
+    [(0.1, False), (-0.1, False), (0.6, False), (0.005, True)],
+)
+def test_loop_sliding_along_an_arc_is_rejected(monkeypatch, slide_rad, accepted):
+    """A loop whose rotation correction odometry cannot have drifted is refused even when its
+    translation passes the drift gate (one 63 m lap of a 10 m radius circle, odometry exact)."""
+    from types import SimpleNamespace
+
+    centre = np.array([0.0, 10.0, 0.0])
+    path = np.linspace(0.0, 2 * np.pi, 64)  # keyframes about 1 m apart, the last one = the first
+    kf_T = [_about_z(a, centre) for a in path]
+    kf_path_m = list(10.0 * path)
+    q, c = len(kf_T) - 1, 0
+    T_cq = np.linalg.inv(kf_T[c]) @ _about_z(slide_rad, centre) @ kf_T[q]
+    slam = LidarSlam()
+    monkeypatch.setattr(slam, "_verify", lambda *args: (T_cq, 0.97, 0.03))
+    match = SimpleNamespace(index=c, yaw_rad=0.0, distance=0.01)
+    loop = slam._check_loop([None] * len(kf_T), kf_T, kf_path_m, q, match)
+    assert (loop is not None) == accepted
+    if abs(slide_rad) == 0.1:  # passes the translation gate (1.0 m < 3.6 m): the rotation decides
+        bound_m = 0.5 + slam.options.loop_drift_fraction * (kf_path_m[q] - kf_path_m[c])
+        assert np.linalg.norm(T_cq[:3, 3]) < bound_m

@@ -37,6 +37,11 @@ class LidarSlamOptions:
     loop_max_rmse_m: float = 0.08  # ... and inlier RMSE at most this [m]
     loop_drift_fraction: float = 0.05  # a loop may move the query by at most 0.5 m plus this
     # fraction of the path travelled since the candidate (odometry drifts; places repeat) [-]
+    loop_drift_floor_rad: float = 0.02  # ... and rotate it by at most this plus
+    # loop_drift_fraction rad: a heading error of f rad held over the path L since the candidate
+    # displaces the query by about f * L, the translation gate's bound. A curved roadway of
+    # constant radius lets registration slide along the arc, rotating about its centre: high
+    # fitness, low RMSE, metres and tens of degrees wrong; only the rotation gives it away [rad]
     odometry_sigma_m: float = 0.02  # std. dev. of a keyframe-to-keyframe odometry edge [m]
     odometry_sigma_rad: float = 0.002  # ... and of its rotation [rad]
     loop_sigma_m: float = 0.05  # std. dev. of a loop edge [m]
@@ -50,6 +55,7 @@ class LidarSlamOptions:
             "keyframe_distance_m",
             "keyframe_angle_deg",
             "loop_max_rmse_m",
+            "loop_drift_floor_rad",
             "odometry_sigma_m",
             "odometry_sigma_rad",
             "loop_sigma_m",
@@ -276,8 +282,12 @@ class LidarSlam:
             return None
         # The correction the loop implies must be within what odometry can have drifted.
         T_cq_odometry = _rigid_inverse(kf_T[c]) @ kf_T[q]
-        correction = np.linalg.norm((_rigid_inverse(T_cq_odometry) @ T_cq)[:3, 3])
-        if correction > 0.5 + o.loop_drift_fraction * (kf_path_m[q] - kf_path_m[c]):
+        correction = _rigid_inverse(T_cq_odometry) @ T_cq
+        if np.linalg.norm(correction[:3, 3]) > 0.5 + o.loop_drift_fraction * (
+            kf_path_m[q] - kf_path_m[c]
+        ):
+            return None
+        if _rotation_angle(correction[:3, :3]) > o.loop_drift_floor_rad + o.loop_drift_fraction:
             return None
         return Loop(q, c, T_cq, float(match.distance), fitness, rmse)
 
