@@ -22,7 +22,9 @@ def lidar_run_command(
         Path,
         typer.Argument(
             help="Sequence folder: the simulator's ASL layout (mav0/lidar0 + imu0, from "
-            "`slslam sim`) or a KITTI odometry sequence (velodyne/*.bin, times.txt; LiDAR only)."
+            "`slslam sim`), a KITTI odometry sequence (velodyne/*.bin, times.txt; LiDAR only), "
+            "or a ROS bag (ROS1 .bag, ROS2 folder; sensor_msgs/PointCloud2 + Imu, no ROS "
+            "needed; the LiDAR is taken to sit at the IMU)."
         ),
     ],
     out: Annotated[
@@ -51,6 +53,13 @@ def lidar_run_command(
         float, typer.Option(help="Voxel of the written map in metres.", min=0.01)
     ] = 0.1,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+    lidar_topic: Annotated[
+        str | None,
+        typer.Option(help="ROS bag: the PointCloud2 topic (default: the bag's only one)."),
+    ] = None,
+    imu_topic: Annotated[
+        str | None, typer.Option(help="ROS bag: the Imu topic (default: the bag's only one).")
+    ] = None,
 ) -> None:
     """Run LiDAR(-inertial) SLAM on DATASET and write its results into --out.
 
@@ -65,11 +74,9 @@ def lidar_run_command(
     from slslam.lidar.output import write_outputs
     from slslam.lidar.slam import LidarSlam, LidarSlamOptions
 
-    sequence = open_lidar_sequence(dataset)
+    sequence = open_lidar_sequence(dataset, lidar_topic, imu_topic)
     if max_sweeps is not None and max_sweeps < len(sequence):
-        sequence.scan_paths = sequence.scan_paths[:max_sweeps]
-        sequence.time_paths = sequence.time_paths[:max_sweeps]
-        sequence.t_ns = sequence.t_ns[:max_sweeps]
+        sequence.truncate(max_sweeps)
     options = LidarSlamOptions(loop_closure=not no_loops, map_voxel_m=map_voxel)
     if no_imu:
         sequence.imu = None

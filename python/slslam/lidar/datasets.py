@@ -13,6 +13,16 @@ LiDAR in the IMU/body frame) and ``scan_period_s``.
 
 KITTI odometry: ``velodyne/<frame>.bin`` and ``times.txt`` [s], with optional ``poses.txt``
 (camera poses) and ``calib.txt`` (``Tr``) for ground truth; no IMU, so LiDAR-only odometry.
+
+ROS bags (ROS1 ``.bag``, ROS2 folder or its ``.db3`` / ``.mcap``), read with ``rosbags`` (no ROS
+install): ``sensor_msgs/PointCloud2`` sweeps and optionally ``sensor_msgs/Imu``
+(:class:`RosbagLidarSequence`). A cloud needs float ``x``, ``y``, ``z``; ``intensity`` is kept
+when present. Per-point time, when the cloud has it, is read from the field drivers use: ``t``
+(Ouster: uint32 ns after the stamp), ``time`` (Velodyne: float s after the stamp, negative
+when the stamp is the sweep's end) or ``timestamp`` (Hesai and others: float64 absolute s). The
+sweep then starts at its earliest point, and each point's time counts from there; without such
+a field sweeps are not deskewed. Non-finite points (organised clouds' empty pixels) are dropped.
+The LiDAR-to-IMU transform is not in a bag: pass ``T_body_sensor`` (default identity).
 """
 
 from __future__ import annotations
@@ -75,6 +85,12 @@ class LidarSequence:
 
     def __len__(self) -> int:
         return len(self.scan_paths)
+
+    def truncate(self, count: int) -> None:
+        """Keep only the first ``count`` sweeps."""
+        self.scan_paths = self.scan_paths[:count]
+        self.time_paths = self.time_paths[:count]
+        self.t_ns = self.t_ns[:count]
 
     def sweep(self, k: int) -> Sweep:
         path = self.scan_paths[k]
@@ -254,9 +270,179 @@ def open_kitti(path: Path) -> LidarSequence:
     )
 
 
-def open_lidar_sequence(path: str | Path) -> LidarSequence:
-    """Opens an ASL (simulator) or KITTI odometry sequence; raises DatasetError naming the path."""
+POINTCLOUD2_TYPE = "sensor_msgs/msg/PointCloud2"
+IMU_TYPE = "sensor_msgs/msg/Imu"
+#: sensor_msgs/PointField datatype -> numpy type
+_POINTFIELD_TYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+
+
+def decode_pointcloud2(msg, where: str | Path) -> tuple[int, np.ndarray, np.ndarray | None]:
+    """A PointCloud2 message as (sweep start t_ns, points (N, 4) float32 x y z intensity,
+    per-point times after the start [s] or None); see the module docstring for the time fields."""
+    fields = {f.name: f for f in msg.fields}
+    missing = [name for name in ("x", "y", "z") if name not in fields]
+    if missing:
+        raise DatasetError(
+            where, f"PointCloud2 without field(s) {', '.join(missing)} (has {', '.join(fields)})"
+        )
+    count = int(msg.width) * int(msg.height)
+    step = int(msg.point_step)
+    data = np.asarray(msg.data, dtype=np.uint8)
+    if count == 0 or step <= 0 or data.size < count * step:
+        raise DatasetError(where, f"PointCloud2 of {count} points holds {data.size} bytes")
+    order = ">" if msg.is_bigendian else "<"
+    used = [n for n in ("x", "y", "z", "intensity", "t", "time", "timestamp") if n in fields]
+    for name in used:
+        if fields[name].datatype not in _POINTFIELD_TYPES:
+            raise DatasetError(where, f"PointCloud2 field {name!r}: unknown datatype")
+    dtype = np.dtype(
+        {
+            "names": used,
+            "formats": [order + _POINTFIELD_TYPES[fields[n].datatype] for n in used],
+            "offsets": [int(fields[n].offset) for n in used],
+            "itemsize": step,
+        }
+    )
+    cloud = np.frombuffer(data[: count * step].tobytes(), dtype=dtype, count=count)
+    points = np.zeros((count, 4), dtype=np.float32)
+    for i, name in enumerate(("x", "y", "z")):
+        points[:, i] = cloud[name]
+    if "intensity" in used:
+        points[:, 3] = cloud["intensity"]
+    stamp_ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+    offset_s = None
+    if "t" in used:
+        offset_s = cloud["t"].astype(np.float64) * 1e-9
+    elif "time" in used:
+        offset_s = cloud["time"].astype(np.float64)
+    elif "timestamp" in used:
+        offset_s = cloud["timestamp"].astype(np.float64) - stamp_ns * 1e-9
+    keep = np.isfinite(points[:, :3]).all(axis=1)
+    if offset_s is not None:
+        keep &= np.isfinite(offset_s)
+    points = points[keep]
+    if points.shape[0] == 0:
+        raise DatasetError(where, "PointCloud2 without a finite point")
+    if offset_s is None:
+        return stamp_ns, points, None
+    offset_s = offset_s[keep]
+    # Times count from the stamp, unless points precede it (a stamp at the sweep's end): then
+    # from the earliest point.
+    first = min(0.0, float(offset_s.min()))
+    return stamp_ns + round(first * 1e9), points, offset_s - first
+
+
+class RosbagLidarSequence(LidarSequence):
+    """LiDAR sweeps (and IMU) from a ROS bag, read one sweep at a time (module docstring).
+
+    Args:
+        path: ROS1 ``.bag`` file, ROS2 bag folder or its storage file.
+        lidar_topic, imu_topic: None picks the bag's only PointCloud2 / Imu topic.
+        T_body_sensor: the LiDAR in the IMU (body) frame, 4 x 4.
+        use_imu: False ignores the bag's IMU.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        lidar_topic: str | None = None,
+        imu_topic: str | None = None,
+        T_body_sensor: np.ndarray | None = None,
+        use_imu: bool = True,
+    ) -> None:
+        from slslam.datasets.rosbag import _open_reader
+
+        path = Path(path)
+        self._path = path
+        self._reader = _open_reader(path)
+        topics = {c.topic: c.msgtype for c in self._reader.connections}
+        lidar_topic = self._pick(topics, lidar_topic, POINTCLOUD2_TYPE, required=True)
+        imu_topic = self._pick(topics, imu_topic, IMU_TYPE, required=False) if use_imu else None
+        self._connections = [c for c in self._reader.connections if c.topic == lidar_topic]
+        bag_times, stamps = [], []
+        for connection, bag_time, raw in self._reader.messages(connections=self._connections):
+            msg = self._reader.deserialize(raw, connection.msgtype)
+            bag_times.append(int(bag_time))
+            stamps.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec))
+        order = np.argsort(np.asarray(stamps, dtype=np.int64), kind="stable")
+        self._bag_times = [bag_times[i] for i in order]
+        t_ns = np.asarray(stamps, dtype=np.int64)[order]
+        if np.any(np.diff(t_ns) <= 0):
+            raise DatasetError(path, f"{lidar_topic}: header stamps must increase")
+        period = float(np.median(np.diff(t_ns))) * 1e-9 if len(t_ns) > 1 else 0.1
+        imu = None
+        if imu_topic is not None:
+            conns = [c for c in self._reader.connections if c.topic == imu_topic]
+            rows = []
+            for connection, _, raw in self._reader.messages(connections=conns):
+                m = self._reader.deserialize(raw, connection.msgtype)
+                w, a = m.angular_velocity, m.linear_acceleration
+                t = int(m.header.stamp.sec) * 1_000_000_000 + int(m.header.stamp.nanosec)
+                rows.append((t, w.x, w.y, w.z, a.x, a.y, a.z))
+            rows.sort(key=lambda r: r[0])
+            table = np.array(rows, dtype=np.float64).reshape(-1, 7)
+            imu_t = np.array([r[0] for r in rows], dtype=np.int64)
+            if len(rows) < 2 or np.any(np.diff(imu_t) <= 0):
+                raise DatasetError(path, f"{imu_topic}: needs increasing header stamps")
+            imu = Imu(imu_t, table[:, 1:4].copy(), table[:, 4:7].copy(), {})
+        T = np.eye(4) if T_body_sensor is None else np.asarray(T_body_sensor, dtype=float)
+        super().__init__(
+            name=path.stem if path.is_file() else path.name,
+            t_ns=t_ns,
+            scan_paths=[path] * len(t_ns),
+            time_paths=[None] * len(t_ns),
+            T_body_sensor=T,
+            scan_period_s=min(max(period, 1e-3), 1.0),
+            imu=imu,
+            groundtruth=None,
+            groundtruth_frame="body",
+        )
+        self.lidar_topic, self.imu_topic = lidar_topic, imu_topic
+
+    @staticmethod
+    def _pick(topics: dict[str, str], topic: str | None, msgtype: str, required: bool):
+        if topic is not None:
+            if topics.get(topic) != msgtype:
+                raise DatasetError(
+                    topic, f"no {msgtype} topic of that name (topics: {', '.join(sorted(topics))})"
+                )
+            return topic
+        found = sorted(t for t, kind in topics.items() if kind == msgtype)
+        if len(found) == 1:
+            return found[0]
+        if not found and not required:
+            return None
+        raise DatasetError(
+            msgtype,
+            f"{'no' if not found else len(found)} topics of this type in the bag "
+            f"({', '.join(found) or 'topics: ' + ', '.join(sorted(topics))}): name one",
+        )
+
+    def sweep(self, k: int) -> Sweep:
+        bag_time = self._bag_times[k]
+        for connection, _, raw in self._reader.messages(
+            connections=self._connections, start=bag_time, stop=bag_time + 1
+        ):
+            msg = self._reader.deserialize(raw, connection.msgtype)
+            t_ns, points, times = decode_pointcloud2(msg, f"{self._path} ({self.lidar_topic})")
+            return Sweep(t_ns, points, times)
+        raise DatasetError(self._path, f"sweep {k} of {self.lidar_topic} could not be read back")
+
+    def truncate(self, count: int) -> None:
+        super().truncate(count)
+        self._bag_times = self._bag_times[:count]
+
+
+def open_lidar_sequence(
+    path: str | Path, lidar_topic: str | None = None, imu_topic: str | None = None
+) -> LidarSequence:
+    """Opens an ASL (simulator) or KITTI odometry sequence, or a ROS bag; raises DatasetError
+    naming the path."""
+    from slslam.datasets.rosbag import is_rosbag
+
     path = Path(path)
+    if is_rosbag(path):
+        return RosbagLidarSequence(path, lidar_topic, imu_topic)
     if not path.is_dir():
         raise DatasetError(path, "dataset folder not found")
     if (path / "velodyne").is_dir():
