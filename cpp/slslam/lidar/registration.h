@@ -58,15 +58,15 @@ struct RegistrationOptions {
   bool sac_ia_try_identity = true;  ///< also score the identity (no motion) as a hypothesis [-]
 
   // --- Fine alignment (ICP, coarse-to-fine) ------------------------------------------------
-  bool point_to_plane = true;          ///< point-to-plane (true) or point-to-point ICP objective
-  int icp_iterations_coarse = 30;      ///< iteration bound on the coarse level [-]
-  int icp_iterations_fine = 20;        ///< iteration bound on the fine level [-]
+  bool point_to_plane = true;           ///< point-to-plane (true) or point-to-point ICP objective
+  int icp_iterations_coarse = 30;       ///< iteration bound on the coarse level [-]
+  int icp_iterations_fine = 20;         ///< iteration bound on the fine level [-]
   int icp_source_points_coarse = 1000;  ///< source points (evenly thinned) aligned on the coarse
                                         ///< level; 0: all [-]
   int icp_source_points_fine = 3000;    ///< source points (evenly thinned) aligned on the fine
                                         ///< level; 0: all [-]
-  double icp_max_corr_coarse_m = 2.0;  ///< correspondence rejection distance, coarse level [m]
-  double icp_max_corr_fine_m = 0.6;    ///< correspondence rejection distance, fine level [m]
+  double icp_max_corr_coarse_m = 2.0;   ///< correspondence rejection distance, coarse level [m]
+  double icp_max_corr_fine_m = 0.6;     ///< correspondence rejection distance, fine level [m]
   double icp_transformation_epsilon = 1e-8;  ///< stop when the squared step falls below this in
                                              ///< translation [m^2] and rotation [rad^2]
   double icp_fitness_epsilon = 1e-6;   ///< stop when the mean squared error change is below [m^2]
@@ -99,8 +99,8 @@ struct RegistrationResult {
   double preprocess_ms = 0.0;  ///< range crop, voxel pyramid, outlier removal, normals [ms]
   double features_ms = 0.0;    ///< FPFH / PFH descriptors [ms]
   double coarse_ms = 0.0;      ///< SAC-IA [ms]
-  double fine_ms = 0.0;  ///< ICP or NDT levels, with the target's fine normals that ICP pairs
-                         ///< with (computed on demand) [ms]
+  double fine_ms = 0.0;        ///< ICP or NDT levels, with the target's fine normals that ICP pairs
+                               ///< with (computed on demand) [ms]
   double total_ms = 0.0;       ///< the whole call, input conversion and scoring included [ms]
 };
 
