@@ -388,12 +388,16 @@ def load_config(path: str | Path | None) -> Config:
     return config_from_dict(data, path)
 
 
-def dump_config(config: Config, path: str | Path) -> Path:
-    """Write the complete configuration (every key) as YAML, e.g. next to a run's results."""
+def dump_config(config: Config, path: str | Path, header: str | None = None) -> Path:
+    """Write the complete configuration (every key) as YAML, e.g. next to a run's results;
+    ``header`` lines go first as YAML comments (the file still loads with ``load_config``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     data = dataclasses.asdict(config)
-    path.write_text(yaml.safe_dump(_plain(data), sort_keys=False), encoding="utf-8")
+    text = yaml.safe_dump(_plain(data), sort_keys=False)
+    if header:
+        text = "".join(f"# {line}\n" for line in header.splitlines()) + text
+    path.write_text(text, encoding="utf-8")
     return path
 
 

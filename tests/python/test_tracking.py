@@ -64,6 +64,19 @@ def test_run_on_the_simulated_loop_tracks_every_frame_and_writes_every_file(sim_
     assert load_config(tmp_path / "config.yaml").tracking.use_lines is True
 
 
+def test_the_dumped_config_is_the_one_that_ran(sim_loop, tmp_path, monkeypatch):
+    """SuperPoint requested without weights falls back to ORB: config.yaml says ORB ran (and
+    why, in its header), names the vocabulary relocalisation loaded, and still loads."""
+    monkeypatch.delenv("SLSLAM_SUPERPOINT_MODEL", raising=False)
+    run_sequence(sim_loop, tmp_path, config("superpoint", model=None), max_frames=5, progress=False)
+    text = (tmp_path / "config.yaml").read_text()
+    assert text.startswith("# slslam ")
+    assert "features.point_frontend: superpoint requested, orb ran" in text
+    dumped = load_config(tmp_path / "config.yaml")
+    assert dumped.features.point_frontend == "orb"
+    assert dumped.tracking.vocabulary_path.endswith("orb_vocabulary.slvoc")
+
+
 def test_sequential_mode_is_reproducible_bit_for_bit(sim_loop):
     sequence = EurocSequence(sim_loop)
     runs = []

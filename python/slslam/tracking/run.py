@@ -31,6 +31,7 @@ are written under a temporary name and renamed.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import functools
 import logging
 import os
@@ -352,6 +353,36 @@ def _map_metrics(map_data: MapData) -> dict:
     }
 
 
+#: Front-end class -> its ``features.point_frontend`` name.
+_FRONTEND_KEYS = {"Orb": "orb", "XFeat": "xfeat", "SuperPoint": "superpoint"}
+
+
+def _dump_effective_config(config: Config, tracker: Tracker, path: Path) -> None:
+    """config.yaml as the run used it: the point front end that ran (after a fallback, e.g. to
+    ORB when SuperPoint has no weights) and the vocabulary relocalisation loaded, with the
+    version in a header."""
+    from slslam import __version__, _core
+
+    used = _FRONTEND_KEYS.get(tracker.frontend_name)
+    requested = config.features.point_frontend
+    features = config.features
+    if used is not None and used != requested:
+        features = dataclasses.replace(features, point_frontend=used)
+    vocabulary = str(tracker.vocabulary) if tracker.vocabulary is not None else None
+    tracking = dataclasses.replace(config.tracking, vocabulary_path=vocabulary)
+    effective = dataclasses.replace(config, features=features, tracking=tracking)
+    lines = [
+        f"slslam {__version__} (C++ core {_core.__version__}): the configuration this run used",
+    ]
+    if used is None:
+        lines.append(f"point front end: {tracker.frontend_name} (given by the caller)")
+    elif used != requested:
+        lines.append(f"features.point_frontend: {requested} requested, {used} ran")
+    if config.tracking.vocabulary_path != vocabulary:
+        lines.append(f"tracking.vocabulary_path: {vocabulary or 'none'} (resolved)")
+    dump_config(effective, path, header="\n".join(lines))
+
+
 @_with_signal_handling
 def run_sequence(
     dataset: str | Path | EurocSequence,
@@ -420,6 +451,7 @@ def run_sequence(
             tracker.frontend_name,
             " + lines" if config.tracking.use_lines else "",
         )
+        _dump_effective_config(config, tracker, out / "config.yaml")
         with (
             (out / "trajectory.tum").open("w", encoding="ascii") as traj_file,
             (out / "lost_predictions.tum").open("w", encoding="ascii") as lost_file,
