@@ -332,6 +332,24 @@ def _stamp_ns(msg) -> int:
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
+def read_imu(reader, topic: str) -> dict[str, np.ndarray]:
+    """Every ``sensor_msgs/Imu`` message of ``topic`` in an open reader, sorted by header stamp:
+    ``t_ns`` (int64, N), ``gyro`` [rad/s] and ``acc`` [m/s^2] (N, 3)."""
+    connections = [c for c in reader.connections if c.topic == topic]
+    rows = []
+    for connection, _, raw in reader.messages(connections=connections):
+        msg = reader.deserialize(raw, connection.msgtype)
+        w, a = msg.angular_velocity, msg.linear_acceleration
+        rows.append((_stamp_ns(msg), w.x, w.y, w.z, a.x, a.y, a.z))
+    rows.sort(key=lambda r: r[0])
+    table = np.array([r[1:] for r in rows], dtype=np.float64).reshape(-1, 6)
+    return {
+        "t_ns": np.array([r[0] for r in rows], dtype=np.int64),
+        "gyro": table[:, :3],
+        "acc": table[:, 3:],
+    }
+
+
 def decode_image(msg, msgtype: str, where: str) -> np.ndarray:
     """The pixels of an Image or CompressedImage message: uint8 / uint16, gray or BGR(A)."""
     if msgtype.endswith("CompressedImage"):
@@ -533,20 +551,7 @@ class RosbagSequence:
         """IMU samples of ``imu_topic``: ``t_ns`` (int64, N), ``gyro`` [rad/s], ``acc`` [m/s^2]."""
         if self.imu_topic is None:
             raise DatasetError(self.path, "no IMU topic given")
-        reader = self._reader()
-        connections = [c for c in reader.connections if c.topic == self.imu_topic]
-        rows = []
-        for connection, _, raw in reader.messages(connections=connections):
-            msg = reader.deserialize(raw, connection.msgtype)
-            w, a = msg.angular_velocity, msg.linear_acceleration
-            rows.append((_stamp_ns(msg), w.x, w.y, w.z, a.x, a.y, a.z))
-        rows.sort(key=lambda r: r[0])
-        table = np.array([r[1:] for r in rows], dtype=np.float64).reshape(-1, 6)
-        return {
-            "t_ns": np.array([r[0] for r in rows], dtype=np.int64),
-            "gyro": table[:, :3],
-            "acc": table[:, 3:],
-        }
+        return read_imu(self._reader(), self.imu_topic)
 
     def close(self) -> None:
         """Closes this thread's reader."""

@@ -309,7 +309,9 @@ def decode_pointcloud2(msg, where: str | Path) -> tuple[int, np.ndarray, np.ndar
         points[:, i] = cloud[name]
     if "intensity" in used:
         points[:, 3] = cloud["intensity"]
-    stamp_ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+    from slslam.datasets.rosbag import _stamp_ns
+
+    stamp_ns = _stamp_ns(msg)
     offset_s = None
     if "t" in used:
         offset_s = cloud["t"].astype(np.float64) * 1e-9
@@ -350,7 +352,7 @@ class RosbagLidarSequence(LidarSequence):
         T_body_sensor: np.ndarray | None = None,
         use_imu: bool = True,
     ) -> None:
-        from slslam.datasets.rosbag import _open_reader
+        from slslam.datasets.rosbag import _open_reader, _stamp_ns, read_imu
 
         path = Path(path)
         self._path = path
@@ -361,9 +363,8 @@ class RosbagLidarSequence(LidarSequence):
         self._connections = [c for c in self._reader.connections if c.topic == lidar_topic]
         bag_times, stamps = [], []
         for connection, bag_time, raw in self._reader.messages(connections=self._connections):
-            msg = self._reader.deserialize(raw, connection.msgtype)
             bag_times.append(int(bag_time))
-            stamps.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec))
+            stamps.append(_stamp_ns(self._reader.deserialize(raw, connection.msgtype)))
         order = np.argsort(np.asarray(stamps, dtype=np.int64), kind="stable")
         self._bag_times = [bag_times[i] for i in order]
         t_ns = np.asarray(stamps, dtype=np.int64)[order]
@@ -372,19 +373,10 @@ class RosbagLidarSequence(LidarSequence):
         period = float(np.median(np.diff(t_ns))) * 1e-9 if len(t_ns) > 1 else 0.1
         imu = None
         if imu_topic is not None:
-            conns = [c for c in self._reader.connections if c.topic == imu_topic]
-            rows = []
-            for connection, _, raw in self._reader.messages(connections=conns):
-                m = self._reader.deserialize(raw, connection.msgtype)
-                w, a = m.angular_velocity, m.linear_acceleration
-                t = int(m.header.stamp.sec) * 1_000_000_000 + int(m.header.stamp.nanosec)
-                rows.append((t, w.x, w.y, w.z, a.x, a.y, a.z))
-            rows.sort(key=lambda r: r[0])
-            table = np.array(rows, dtype=np.float64).reshape(-1, 7)
-            imu_t = np.array([r[0] for r in rows], dtype=np.int64)
-            if len(rows) < 2 or np.any(np.diff(imu_t) <= 0):
+            samples = read_imu(self._reader, imu_topic)
+            if len(samples["t_ns"]) < 2 or np.any(np.diff(samples["t_ns"]) <= 0):
                 raise DatasetError(path, f"{imu_topic}: needs increasing header stamps")
-            imu = Imu(imu_t, table[:, 1:4].copy(), table[:, 4:7].copy(), {})
+            imu = Imu(samples["t_ns"], samples["gyro"], samples["acc"], {})
         T = np.eye(4) if T_body_sensor is None else np.asarray(T_body_sensor, dtype=float)
         super().__init__(
             name=path.stem if path.is_file() else path.name,
