@@ -79,26 +79,17 @@ bool VoxelMap::FitPlane(const Eigen::Vector3d& query, int k, double max_distance
   std::pair<double, const Eigen::Vector3d*> best[kMaxNeighbours];
   int found = 0;
   const double max2 = max_distance_m * max_distance_m;
-  const Eigen::Vector3i centre = VoxelOf(query);
   // The 27 voxels around the query: neighbours up to one voxel edge away are all found.
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const auto it = voxels_.find(centre + Eigen::Vector3i(dx, dy, dz));
-        if (it == voxels_.end()) continue;
-        for (const Eigen::Vector3d& p : it->second) {
-          const double d2 = (p - query).squaredNorm();
-          if (d2 > max2 || (found == k && d2 >= best[k - 1].first)) continue;
-          int i = found < k ? found++ : k - 1;
-          while (i > 0 && best[i - 1].first > d2) {
-            best[i] = best[i - 1];
-            --i;
-          }
-          best[i] = {d2, &p};
-        }
-      }
+  VisitNeighbourhood(query, [&](const Eigen::Vector3d& p) {
+    const double d2 = (p - query).squaredNorm();
+    if (d2 > max2 || (found == k && d2 >= best[k - 1].first)) return;
+    int i = found < k ? found++ : k - 1;
+    while (i > 0 && best[i - 1].first > d2) {
+      best[i] = best[i - 1];
+      --i;
     }
-  }
+    best[i] = {d2, &p};
+  });
   if (found < k || k < 3) return false;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (int i = 0; i < k; ++i) mean += *best[i].second;
@@ -134,22 +125,13 @@ bool VoxelMap::Nearest(const Eigen::Vector3d& query, double max_distance_m,
                        Eigen::Vector3d* nearest) const {
   double best = max_distance_m * max_distance_m;
   const Eigen::Vector3d* found = nullptr;
-  const Eigen::Vector3i centre = VoxelOf(query);
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const auto it = voxels_.find(centre + Eigen::Vector3i(dx, dy, dz));
-        if (it == voxels_.end()) continue;
-        for (const Eigen::Vector3d& p : it->second) {
-          const double d2 = (p - query).squaredNorm();
-          if (d2 < best) {
-            best = d2;
-            found = &p;
-          }
-        }
-      }
+  VisitNeighbourhood(query, [&](const Eigen::Vector3d& p) {
+    const double d2 = (p - query).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      found = &p;
     }
-  }
+  });
   if (found) *nearest = *found;
   return found != nullptr;
 }
@@ -157,13 +139,7 @@ bool VoxelMap::Nearest(const Eigen::Vector3d& query, double max_distance_m,
 std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points,
                                              double voxel_m) {
   SLSLAM_CHECK(voxel_m > 0, "voxel size must be > 0 m, got ", voxel_m);
-  struct Hash {
-    size_t operator()(const Eigen::Vector3i& v) const {
-      return static_cast<size_t>(v.x()) * 73856093u ^ static_cast<size_t>(v.y()) * 19349669u ^
-             static_cast<size_t>(v.z()) * 83492791u;
-    }
-  };
-  std::unordered_set<Eigen::Vector3i, Hash> seen;
+  std::unordered_set<Eigen::Vector3i, VoxelKeyHash> seen;
   seen.reserve(points.size());
   std::vector<Eigen::Vector3d> out;
   out.reserve(points.size() / 4);

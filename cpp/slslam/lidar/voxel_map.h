@@ -31,6 +31,14 @@ struct LocalPlane {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 
+// Hash of integer voxel coordinates: large primes (Teschner et al. 2003).
+struct VoxelKeyHash {
+  size_t operator()(const Eigen::Vector3i& v) const {
+    return static_cast<size_t>(v.x()) * 73856093u ^ static_cast<size_t>(v.y()) * 19349669u ^
+           static_cast<size_t>(v.z()) * 83492791u;
+  }
+};
+
 class VoxelMap {
  public:
   explicit VoxelMap(const VoxelMapOptions& options = {});
@@ -58,17 +66,24 @@ class VoxelMap {
   const VoxelMapOptions& options() const { return options_; }
 
  private:
-  struct VoxelHash {
-    size_t operator()(const Eigen::Vector3i& v) const {
-      // Large primes (Teschner et al. 2003).
-      return static_cast<size_t>(v.x()) * 73856093u ^ static_cast<size_t>(v.y()) * 19349669u ^
-             static_cast<size_t>(v.z()) * 83492791u;
-    }
-  };
   Eigen::Vector3i VoxelOf(const Eigen::Vector3d& p) const;
+  // Calls visit(point) for every map point in the 27 voxels around `query`'s voxel.
+  template <typename Visit>
+  void VisitNeighbourhood(const Eigen::Vector3d& query, Visit&& visit) const {
+    const Eigen::Vector3i centre = VoxelOf(query);
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = voxels_.find(centre + Eigen::Vector3i(dx, dy, dz));
+          if (it == voxels_.end()) continue;
+          for (const Eigen::Vector3d& p : it->second) visit(p);
+        }
+      }
+    }
+  }
 
   VoxelMapOptions options_;
-  std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3d>, VoxelHash> voxels_;
+  std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3d>, VoxelKeyHash> voxels_;
 };
 
 // First point per voxel of edge `voxel_m` (order kept), like a voxel grid without averaging.

@@ -418,11 +418,7 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
       pred.row(i) = predicted[i].transpose();
       candidates[i]->descriptor.copyTo(query.row(static_cast<int>(i)));
     }
-    GuidedMatchOptions guided;
-    guided.radius_px = options_.search_radius_px * radius_scale;
-    guided.max_distance =
-        frame_desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
-    guided.ratio = options_.match_ratio;
+    GuidedMatchOptions guided = GuidedOptions(frame_desc.type(), radius_scale);
     Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, frame_desc, guided);
     if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
       guided.radius_px *= 2.0f;
@@ -501,6 +497,15 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
   return out;
 }
 
+GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scale) const {
+  GuidedMatchOptions guided;
+  guided.radius_px = options_.search_radius_px * radius_scale;
+  guided.max_distance =
+      descriptor_type == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+  guided.ratio = options_.match_ratio;
+  return guided;
+}
+
 void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
                                  const Eigen::Vector3d& t_cw) {
   // Frame-to-frame evidence, as the paper's filter: the previous frame's stereo keypoints are
@@ -508,8 +513,8 @@ void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d
   // around their predicted pixels; a cell whose matches land far from the prediction moved on
   // its own. Unlike matches to the map, these exist for a mover too (it makes no map points once
   // its cells are invalid), so its cells stay invalid while it moves.
-  std::shared_ptr<const StereoFrame> previous = std::move(previous_frame_);
-  previous_frame_ = nullptr;
+  // The caller replaces previous_frame_ with this frame afterwards.
+  const StereoFrame* previous = previous_frame_.get();
   if (!previous || previous->NumKeypoints() == 0 || frame.NumKeypoints() == 0 ||
       previous->keypoints.descriptors.type() != frame.keypoints.descriptors.type()) {
     return;
@@ -534,11 +539,7 @@ void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d
   for (size_t r = 0; r < rows.size(); ++r) {
     previous->keypoints.descriptors.row(rows[r]).copyTo(query.row(static_cast<int>(r)));
   }
-  GuidedMatchOptions guided;
-  guided.radius_px = options_.search_radius_px;
-  guided.max_distance =
-      desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
-  guided.ratio = options_.match_ratio;
+  const GuidedMatchOptions guided = GuidedOptions(desc.type(), 1.0f);
   const PixelArray pred = predicted.topRows(static_cast<Eigen::Index>(rows.size()));
   const Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, desc, guided);
   PixelArray observed(m.size(), 2), expected(m.size(), 2);

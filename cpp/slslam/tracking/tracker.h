@@ -211,6 +211,8 @@ class Tracker {
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
                               float radius_scale,
                               const std::vector<bool>* valid_keypoints = nullptr) const;
+  // Guided matching bounds for descriptors of this type, window scaled by radius_scale.
+  GuidedMatchOptions GuidedOptions(int descriptor_type, float radius_scale) const;
   // Updates the dynamic-cell filter from the previous tracked frame's stereo keypoints matched
   // into this frame under the two frames' poses.
   void UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
