@@ -91,3 +91,28 @@ def make_euroc(tmp_path: Path) -> MakeEuroc:
         return root
 
     return make
+
+
+def ros_header(typestore, t_ns: int, frame_id: str = "cam"):
+    """A std_msgs/Header stamped ``t_ns`` for a rosbags typestore (ROS1's has ``seq``)."""
+    Time = typestore.types["builtin_interfaces/msg/Time"]
+    Header = typestore.types["std_msgs/msg/Header"]
+    stamp = Time(sec=t_ns // 10**9, nanosec=t_ns % 10**9)
+    if "seq" in Header.__dataclass_fields__:  # ROS1's Header
+        return Header(seq=0, stamp=stamp, frame_id=frame_id)
+    return Header(stamp=stamp, frame_id=frame_id)
+
+
+def ros_imu_message(typestore, t_ns: int, gyro, acc):
+    """A sensor_msgs/Imu with the given angular velocity [rad/s] and acceleration [m/s^2]."""
+    Vector3 = typestore.types["geometry_msgs/msg/Vector3"]
+    Quaternion = typestore.types["geometry_msgs/msg/Quaternion"]
+    return typestore.types["sensor_msgs/msg/Imu"](
+        header=ros_header(typestore, t_ns, "imu"),
+        orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
+        orientation_covariance=np.zeros(9),
+        angular_velocity=Vector3(x=gyro[0], y=gyro[1], z=gyro[2]),
+        angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=Vector3(x=acc[0], y=acc[1], z=acc[2]),
+        linear_acceleration_covariance=np.zeros(9),
+    )

@@ -18,6 +18,8 @@ from slslam.lidar.output import write_outputs
 from slslam.lidar.slam import LidarSlam, LidarSlamOptions
 from slslam.sim import SimOptions, Simulator
 
+from conftest import ros_header, ros_imu_message
+
 
 @pytest.fixture(scope="module")
 def loop_start(tmp_path_factory):
@@ -136,12 +138,6 @@ def _write_lidar_bag(sequence, out, storage: str):
         T["sensor_msgs/msg/PointField"],
         T["sensor_msgs/msg/Imu"],
     )
-    Vector3, Quaternion = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
-
-    def header(t_ns: int):
-        stamp = T["builtin_interfaces/msg/Time"](sec=t_ns // 10**9, nanosec=t_ns % 10**9)
-        return T["std_msgs/msg/Header"](**({"seq": 0} if ros1 else {}), stamp=stamp, frame_id="l")
-
     fields = [Field(name=n, offset=4 * i, datatype=7, count=1) for i, n in enumerate("xyz")]
     fields += [
         Field(name="intensity", offset=12, datatype=7, count=1),
@@ -155,22 +151,14 @@ def _write_lidar_bag(sequence, out, storage: str):
         lidar = writer.add_connection("/os/points", Cloud.__msgtype__, typestore=store)
         imu = writer.add_connection("/imu", Imu.__msgtype__, typestore=store)
         for t, w, a in zip(sequence.imu.t_ns, sequence.imu.gyro, sequence.imu.acc, strict=True):
-            msg = Imu(
-                header=header(int(t)),
-                orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
-                orientation_covariance=np.zeros(9),
-                angular_velocity=Vector3(x=w[0], y=w[1], z=w[2]),
-                angular_velocity_covariance=np.zeros(9),
-                linear_acceleration=Vector3(x=a[0], y=a[1], z=a[2]),
-                linear_acceleration_covariance=np.zeros(9),
-            )
+            msg = ros_imu_message(store, int(t), w, a)
             writer.write(imu, int(t), serialize(msg, Imu.__msgtype__))
         for sweep in sequence:
             data = np.zeros(len(sweep.points), dtype=record)
             data["p"] = sweep.points
             data["t"] = np.round(sweep.point_time_s * 1e9).astype(np.uint32)
             msg = Cloud(
-                header=header(sweep.t_ns),
+                header=ros_header(store, sweep.t_ns, "lidar"),
                 height=1,
                 width=len(sweep.points),
                 fields=fields,

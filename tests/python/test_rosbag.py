@@ -28,6 +28,8 @@ from slslam.geometry import invert_transform
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import run_sequence
 
+from conftest import ros_header, ros_imu_message
+
 FRAMES = 24
 LEFT, RIGHT, IMU = "/cam0/image_raw", "/cam1/image_raw", "/imu0"
 
@@ -39,28 +41,19 @@ def asl(tmp_path_factory) -> Path:
     return out
 
 
-def _header(typestore, t_ns: int):
-    Time = typestore.types["builtin_interfaces/msg/Time"]
-    Header = typestore.types["std_msgs/msg/Header"]
-    stamp = Time(sec=t_ns // 10**9, nanosec=t_ns % 10**9)
-    if "seq" in Header.__dataclass_fields__:  # ROS1's Header
-        return Header(seq=0, stamp=stamp, frame_id="cam")
-    return Header(stamp=stamp, frame_id="cam")
-
-
 def _image_msg(typestore, image: np.ndarray, t_ns: int, kind: str):
     """``kind``: mono8 / bgr8 / rgb8 (Image) or png (CompressedImage)."""
     if kind == "png":
         ok, data = cv2.imencode(".png", image)
         assert ok
         return typestore.types["sensor_msgs/msg/CompressedImage"](
-            header=_header(typestore, t_ns), format="png", data=data.reshape(-1)
+            header=ros_header(typestore, t_ns), format="png", data=data.reshape(-1)
         )
     if kind in ("bgr8", "rgb8"):
         image = np.repeat(image[:, :, None], 3, axis=2)
     channels = 1 if image.ndim == 2 else image.shape[2]
     return typestore.types["sensor_msgs/msg/Image"](
-        header=_header(typestore, t_ns),
+        header=ros_header(typestore, t_ns),
         height=image.shape[0],
         width=image.shape[1],
         encoding=kind,
@@ -90,7 +83,7 @@ def _camera_info_msgs(typestore, seq: EurocSequence, t_ns: int):
                   "p": proj.reshape(-1)}  # fmt: skip
         messages.append(
             Info(
-                header=_header(typestore, t_ns),
+                header=ros_header(typestore, t_ns),
                 height=c.height,
                 width=c.width,
                 distortion_model="plumb_bob",
@@ -137,22 +130,12 @@ def write_bag(asl: Path, out: Path, storage: str, kind: str, camera_info: bool =
             ):
                 conn = writer.add_connection(topic, info_type, typestore=typestore)
                 writer.write(conn, t0, serialize(msg, info_type))
-        Vector3 = typestore.types["geometry_msgs/msg/Vector3"]
-        Quaternion = typestore.types["geometry_msgs/msg/Quaternion"]
         Imu = typestore.types["sensor_msgs/msg/Imu"]
         in_span = imu["t_ns"] <= seq.timestamps_ns[-1]
         for t, w, a in zip(
             imu["t_ns"][in_span], imu["gyro"][in_span], imu["acc"][in_span], strict=True
         ):
-            msg = Imu(
-                header=_header(typestore, int(t)),
-                orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
-                orientation_covariance=np.zeros(9),
-                angular_velocity=Vector3(x=w[0], y=w[1], z=w[2]),
-                angular_velocity_covariance=np.zeros(9),
-                linear_acceleration=Vector3(x=a[0], y=a[1], z=a[2]),
-                linear_acceleration_covariance=np.zeros(9),
-            )
+            msg = ros_imu_message(typestore, int(t), w, a)
             writer.write(imu_conn, int(t), serialize(msg, Imu.__msgtype__))
         for frame in seq:
             # Received a few ms after the exposure, right before left: the header stamp counts.
@@ -311,7 +294,7 @@ def test_image_encodings_decode_to_the_same_gray():
     deep = rng.integers(0, 65536, (4, 5), dtype=np.uint16)
     padded = np.zeros((4, 12), np.uint8)
     padded[:, :10] = deep.astype(">u2").view(np.uint8).reshape(4, 10)
-    msg = Image(header=_header(typestore, 1), height=4, width=5, encoding="mono16",
+    msg = Image(header=ros_header(typestore, 1), height=4, width=5, encoding="mono16",
                 is_bigendian=1, step=12, data=padded.reshape(-1))  # fmt: skip
     assert np.array_equal(decode_image(msg, "sensor_msgs/msg/Image", "t"), deep)
     msg.encoding = "yuv422"
