@@ -124,6 +124,8 @@ class TrackerSession {
     out["global_ba_runs"] = loops.global_ba_runs;
     out["loop_closing_ms"] = loops.loop_ms;
     out["global_ba_ms"] = loops.global_ba_ms;
+    out["global_ba_lock_ms"] = loops.global_ba_lock_ms;
+    out["global_ba_cancelled"] = loops.global_ba_cancelled;
     py::list loop_events;
     for (const LoopEvent& e : events) {
       py::dict d;

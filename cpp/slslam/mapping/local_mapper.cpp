@@ -6,6 +6,8 @@
 #include <set>
 #include <unordered_map>
 
+#include "slslam/mapping/map_bundle_adjustment.h"
+
 namespace slslam {
 
 LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential)
@@ -81,12 +83,7 @@ void LocalMapper::Run() {
 
 void LocalMapper::Process(Map* map, int keyframe_id) {
   const auto start = std::chrono::steady_clock::now();
-  BaProblem problem;
-  std::vector<int> pose_kf;   // BaProblem pose index -> keyframe id
-  std::vector<int> point_id;  // BaProblem point index -> map point id
-  std::vector<int> line_id;
-  std::vector<std::pair<int, int>> point_obs_ref;  // (map point id, keyframe id) per observation
-  std::vector<std::pair<int, int>> line_obs_ref;
+  MapBundleAdjustment ba;
   TriangulationStats triangulated;
   {
     std::lock_guard<std::mutex> lock(map->mutex());
@@ -96,17 +93,14 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
       triangulated = CreateNewLandmarks(map, keyframe_id, rig_, options_.triangulation);
       if (triangulated.points > 0) map->UpdateConnections(keyframe_id);
     }
+    ba = MapBundleAdjustment(map->correction_epoch());
     std::vector<int> local = {keyframe_id};
     for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
       if (map->keyframe(id)) local.push_back(id);
     }
-    const std::set<int> local_set(local.begin(), local.end());
     std::unordered_map<int, int> pose_index;
     auto add_pose = [&](int kf_id, bool fixed) {
-      auto kf = map->keyframe(kf_id);
-      pose_index[kf_id] = static_cast<int>(problem.poses.size());
-      problem.poses.push_back({kf->R_cw, kf->t_cw, fixed});
-      pose_kf.push_back(kf_id);
+      pose_index[kf_id] = ba.AddPose(*map->keyframe(kf_id), fixed);
     };
     // The gauge: the map's first keyframe when it is in the window, else the window's oldest.
     const int first_keyframe = map->keyframes().begin()->first;
@@ -135,92 +129,21 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
     };
     for (int pid : local_points) {
       auto p = map->point(pid);
-      if (!p || p->bad) continue;
-      const int index = static_cast<int>(problem.points.size());
-      problem.points.push_back(p->position);
-      point_id.push_back(pid);
-      for (const auto& [kf_id, kp] : p->observations) {
-        const int pose = ensure_pose(kf_id);
-        if (pose < 0) continue;
-        const StereoFrame& f = *map->keyframe(kf_id)->frame;
-        BaPointObservation o;
-        o.pose = pose;
-        o.point = index;
-        o.stereo = f.u_right[kp] >= 0.0;
-        o.observed << f.keypoints.uv(kp, 0), f.keypoints.uv(kp, 1), f.u_right[kp];
-        o.sigma_px = options_.point_sigma_px;
-        problem.point_observations.push_back(o);
-        point_obs_ref.emplace_back(pid, kf_id);
-      }
+      if (p && !p->bad) ba.AddPoint(*map, *p, options_.point_sigma_px, ensure_pose);
     }
     for (int lid : local_lines) {
       auto l = map->line(lid);
-      if (!l || l->bad) continue;
-      const int index = static_cast<int>(problem.lines.size());
-      problem.lines.push_back(l->line);
-      line_id.push_back(lid);
-      for (const auto& [kf_id, seg] : l->observations) {
-        const int pose = ensure_pose(kf_id);
-        if (pose < 0) continue;
-        const StereoFrame& f = *map->keyframe(kf_id)->frame;
-        BaLineObservation o;
-        o.pose = pose;
-        o.line = index;
-        o.start_px = f.lines[seg].start.cast<double>();
-        o.end_px = f.lines[seg].end.cast<double>();
-        o.sigma_px = options_.line_sigma_px;
-        problem.line_observations.push_back(o);
-        line_obs_ref.emplace_back(lid, kf_id);
-      }
+      if (l && !l->bad) ba.AddLine(*map, *l, options_.line_sigma_px, ensure_pose);
     }
   }
 
   // The solve runs without the map lock: tracking goes on meanwhile.
-  const BundleAdjustmentReport report = SolveBundleAdjustment(rig_, &problem, options_.ba);
+  const BundleAdjustmentReport report = SolveBundleAdjustment(rig_, &ba.problem(), options_.ba);
 
   std::lock_guard<std::mutex> lock(map->mutex());
-  if (report.solved) {
-    for (size_t i = 0; i < problem.poses.size(); ++i) {
-      if (problem.poses[i].fixed) continue;
-      if (auto kf = map->keyframe(pose_kf[i])) {
-        kf->R_cw = problem.poses[i].R_cw;
-        kf->t_cw = problem.poses[i].t_cw;
-      }
-    }
-    for (size_t i = 0; i < point_id.size(); ++i) {
-      if (auto p = map->point(point_id[i])) p->position = problem.points[i];
-    }
-    for (size_t i = 0; i < line_id.size(); ++i) {
-      if (auto l = map->line(line_id[i])) {
-        l->line = problem.lines[i];
-        l->start = l->line.ClosestPointTo(l->start);
-        l->end = l->line.ClosestPointTo(l->end);
-      }
-    }
-    // Outlier observations leave the map.
-    for (size_t i = 0; i < point_obs_ref.size(); ++i) {
-      if (!report.point_outlier[i]) continue;
-      const auto [pid, kf_id] = point_obs_ref[i];
-      auto p = map->point(pid);
-      auto kf = map->keyframe(kf_id);
-      if (!p || !kf) continue;
-      auto it = p->observations.find(kf_id);
-      if (it == p->observations.end()) continue;
-      kf->point_ids[it->second] = -1;
-      p->observations.erase(it);
-    }
-    for (size_t i = 0; i < line_obs_ref.size(); ++i) {
-      if (!report.line_outlier[i]) continue;
-      const auto [lid, kf_id] = line_obs_ref[i];
-      auto l = map->line(lid);
-      auto kf = map->keyframe(kf_id);
-      if (!l || !kf) continue;
-      auto it = l->observations.find(kf_id);
-      if (it == l->observations.end()) continue;
-      kf->line_ids[it->second] = -1;
-      l->observations.erase(it);
-    }
-  }
+  // A global BA that finished meanwhile moved the map (threaded mode): this window's solution
+  // is in the old world and is dropped (the next keyframe's window starts from the new one).
+  if (report.solved && map->correction_epoch() == ba.correction_epoch()) ba.Apply(map, report);
 
   // Landmark culling: unobserved points and lines, and those tracking rarely finds where it
   // expects them.

@@ -4,15 +4,18 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <tuple>
 #include <unordered_map>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 
 #include "slslam/core/check.h"
 #include "slslam/features/descriptor_matcher.h"
+#include "slslam/mapping/map_bundle_adjustment.h"
 
 namespace slslam {
 
@@ -130,15 +133,30 @@ bool PoseFromMatches(const StereoFrame& frame, const Map& map,
 
 LoopCloser::LoopCloser(const StereoRig& rig, const LoopClosingOptions& options,
                        const Vocabulary* vocabulary, float max_descriptor_distance_binary,
-                       float max_descriptor_distance_float, LocalMapVerifier verifier)
+                       float max_descriptor_distance_float, LocalMapVerifier verifier,
+                       bool background_global_ba)
     : rig_(rig),
       options_(options),
       vocabulary_(vocabulary),
       max_distance_binary_(max_descriptor_distance_binary),
       max_distance_float_(max_descriptor_distance_float),
-      verifier_(std::move(verifier)) {
+      verifier_(std::move(verifier)),
+      background_global_ba_(background_global_ba) {
   options_.Check();
   Require(static_cast<bool>(verifier_), "the loop closer needs a local-map verifier");
+}
+
+LoopCloser::~LoopCloser() { CancelGlobalBa(); }
+
+void LoopCloser::CancelGlobalBa() {
+  if (!global_ba_thread_.joinable()) return;
+  global_ba_abort_ = true;
+  global_ba_thread_.join();
+}
+
+void LoopCloser::WaitForGlobalBa() {
+  if (global_ba_thread_.joinable()) global_ba_thread_.join();
+  if (global_ba_error_) std::rethrow_exception(std::exchange(global_ba_error_, nullptr));
 }
 
 LoopClosingStats LoopCloser::stats() const {
@@ -309,7 +327,10 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   }
 
   bool changed = false;
+  int corrected_map = -1;
   if (accept) {
+    // A global BA in flight works on the world this correction is about to change.
+    CancelGlobalBa();
     pending_.erase(source);
     const int target = verified.target_map;
     Map& target_map = atlas->map(target);
@@ -338,6 +359,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         std::lock_guard<std::mutex> stats_lock(stats_mutex_);
         ++stats_.loops_accepted;
         changed = true;
+        corrected_map = source;
       }
     } else {
       std::scoped_lock lock(source_map.mutex(), target_map.mutex());
@@ -358,12 +380,16 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         std::lock_guard<std::mutex> stats_lock(stats_mutex_);
         ++stats_.merges;
         changed = true;
+        corrected_map = target;
       }
     }
   }
-  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-  ++stats_.keyframes_checked;
-  stats_.loop_ms += Ms(start);
+  {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.keyframes_checked;
+    stats_.loop_ms += Ms(start);
+  }
+  if (corrected_map >= 0 && options_.global_ba) GlobalBundleAdjustment(atlas, corrected_map);
   return changed;
 }
 
@@ -504,7 +530,6 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
   Fuse(map, keyframe_id, verified.match);
   for (int g : group) map->UpdateConnections(g);
   map->BumpCorrectionEpoch();
-  if (options_.global_ba) GlobalBundleAdjustment(map);
 }
 
 void LoopCloser::Fuse(Map* map, int keyframe_id, const LocalMapMatch& match) {
@@ -556,96 +581,74 @@ void LoopCloser::Fuse(Map* map, int keyframe_id, const LocalMapMatch& match) {
   }
 }
 
-void LoopCloser::GlobalBundleAdjustment(Map* map) {
+void LoopCloser::GlobalBundleAdjustment(Atlas* atlas, int map_index) {
   const auto start = Clock::now();
-  BaProblem problem;
-  std::unordered_map<int, int> pose_index;
-  std::vector<int> pose_kf, point_id, line_id;
-  std::vector<std::pair<int, int>> point_obs_ref, line_obs_ref;
-  const int root = map->keyframes().begin()->first;
-  for (const auto& [id, kf] : map->keyframes()) {
-    pose_index[id] = static_cast<int>(problem.poses.size());
-    problem.poses.push_back({kf->R_cw, kf->t_cw, id == root});
-    pose_kf.push_back(id);
-  }
-  for (const auto& [pid, p] : map->points()) {
-    if (p->bad || p->observations.empty()) continue;
-    const int index = static_cast<int>(problem.points.size());
-    problem.points.push_back(p->position);
-    point_id.push_back(pid);
-    for (const auto& [kf_id, kp] : p->observations) {
+  Map& map = atlas->map(map_index);
+  auto ba = std::make_shared<MapBundleAdjustment>();
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    if (map.keyframes().empty()) return;
+    std::unordered_map<int, int> pose_index;
+    const int root = map.keyframes().begin()->first;
+    for (const auto& [id, kf] : map.keyframes()) pose_index[id] = ba->AddPose(*kf, id == root);
+    auto pose_of = [&](int kf_id) {
       auto it = pose_index.find(kf_id);
-      if (it == pose_index.end()) continue;
-      const StereoFrame& f = *map->keyframe(kf_id)->frame;
-      BaPointObservation o;
-      o.pose = it->second;
-      o.point = index;
-      o.stereo = f.u_right[kp] >= 0.0;
-      o.observed << f.keypoints.uv(kp, 0), f.keypoints.uv(kp, 1), f.u_right[kp];
-      o.sigma_px = options_.point_sigma_px;
-      problem.point_observations.push_back(o);
-      point_obs_ref.emplace_back(pid, kf_id);
+      return it == pose_index.end() ? -1 : it->second;
+    };
+    for (const auto& [pid, p] : map.points()) {
+      (void)pid;
+      if (!p->bad && !p->observations.empty()) {
+        ba->AddPoint(map, *p, options_.point_sigma_px, pose_of);
+      }
+    }
+    for (const auto& [lid, l] : map.lines()) {
+      (void)lid;
+      if (!l->bad && !l->observations.empty()) {
+        ba->AddLine(map, *l, options_.line_sigma_px, pose_of);
+      }
     }
   }
-  for (const auto& [lid, l] : map->lines()) {
-    if (l->bad || l->observations.empty()) continue;
-    const int index = static_cast<int>(problem.lines.size());
-    problem.lines.push_back(l->line);
-    line_id.push_back(lid);
-    for (const auto& [kf_id, seg] : l->observations) {
-      auto it = pose_index.find(kf_id);
-      if (it == pose_index.end()) continue;
-      const StereoFrame& f = *map->keyframe(kf_id)->frame;
-      BaLineObservation o;
-      o.pose = it->second;
-      o.line = index;
-      o.start_px = f.lines[seg].start.cast<double>();
-      o.end_px = f.lines[seg].end.cast<double>();
-      o.sigma_px = options_.line_sigma_px;
-      problem.line_observations.push_back(o);
-      line_obs_ref.emplace_back(lid, kf_id);
+  const double build_ms = Ms(start);
+  auto run = [this, atlas, map_index, ba, start, build_ms] {
+    const BundleAdjustmentReport report =
+        SolveBundleAdjustment(rig_, &ba->problem(), options_.global_ba_options,
+                              background_global_ba_ ? &global_ba_abort_ : nullptr);
+    double apply_ms = 0.0;
+    bool cancelled = global_ba_abort_;
+    if (report.solved && !cancelled) {
+      Map& map = atlas->map(map_index);
+      std::lock_guard<std::mutex> lock(map.mutex());
+      const auto apply_start = Clock::now();
+      // Merged into another map meanwhile: that merge cancelled this run (checked again under
+      // the lock all the same).
+      cancelled = global_ba_abort_ || atlas->merged(map_index);
+      if (!cancelled) {
+        ba->Apply(&map, report, /*carry_new=*/background_global_ba_);
+        map.BumpCorrectionEpoch();
+      }
+      apply_ms = Ms(apply_start);
     }
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    if (cancelled) {
+      ++stats_.global_ba_cancelled;
+      return;
+    }
+    ++stats_.global_ba_runs;
+    stats_.global_ba_ms += Ms(start);
+    stats_.global_ba_lock_ms += build_ms + apply_ms;
+  };
+  if (!background_global_ba_) {
+    run();
+    return;
   }
-  const BundleAdjustmentReport report =
-      SolveBundleAdjustment(rig_, &problem, options_.global_ba_options);
-  if (report.solved) {
-    for (size_t i = 0; i < problem.poses.size(); ++i) {
-      if (problem.poses[i].fixed) continue;
-      auto kf = map->keyframe(pose_kf[i]);
-      kf->R_cw = problem.poses[i].R_cw;
-      kf->t_cw = problem.poses[i].t_cw;
+  global_ba_abort_ = false;
+  global_ba_thread_ = std::thread([this, run] {
+    try {
+      run();
+    } catch (...) {  // rethrown by WaitForGlobalBa (the end of the run)
+      global_ba_error_ = std::current_exception();
     }
-    for (size_t i = 0; i < point_id.size(); ++i)
-      map->point(point_id[i])->position = problem.points[i];
-    for (size_t i = 0; i < line_id.size(); ++i) {
-      auto l = map->line(line_id[i]);
-      l->line = problem.lines[i];
-      l->start = l->line.ClosestPointTo(l->start);
-      l->end = l->line.ClosestPointTo(l->end);
-    }
-    for (size_t i = 0; i < point_obs_ref.size(); ++i) {
-      if (!report.point_outlier[i]) continue;
-      auto p = map->point(point_obs_ref[i].first);
-      auto kf = map->keyframe(point_obs_ref[i].second);
-      auto it = p->observations.find(point_obs_ref[i].second);
-      if (it == p->observations.end()) continue;
-      kf->point_ids[it->second] = -1;
-      p->observations.erase(it);
-    }
-    for (size_t i = 0; i < line_obs_ref.size(); ++i) {
-      if (!report.line_outlier[i]) continue;
-      auto l = map->line(line_obs_ref[i].first);
-      auto kf = map->keyframe(line_obs_ref[i].second);
-      auto it = l->observations.find(line_obs_ref[i].second);
-      if (it == l->observations.end()) continue;
-      kf->line_ids[it->second] = -1;
-      l->observations.erase(it);
-    }
-    map->BumpCorrectionEpoch();
-  }
-  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-  ++stats_.global_ba_runs;
-  stats_.global_ba_ms += Ms(start);
+  });
 }
 
 }  // namespace slslam

@@ -19,11 +19,19 @@
 //     adjustment over points and lines.
 //     Another map, a merge: the active map is transformed into the older one and absorbed, then
 //     the same fusion, graph and bundle adjustment weld the two.
+//  6. Global BA runs inline in sequential mode (reproducible) and in the background otherwise:
+//     built under the map's lock, solved on its own thread without the lock while tracking and
+//     local mapping go on, written back under the lock, with what they added meanwhile carried
+//     along by the correction of its nearest keyframe (ORB-SLAM3's RunGlobalBundleAdjustment).
+//     A new loop or merge cancels a run in flight (its result would be in a stale world).
 #pragma once
 
+#include <atomic>
+#include <exception>
 #include <functional>
 #include <map>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
@@ -65,14 +73,16 @@ struct LoopClosingOptions {
 
 struct LoopClosingStats {
   int keyframes_checked = 0;
-  int candidates_verified = 0;  ///< candidates that passed geometric verification
-  int loops_detected = 0;       ///< verified and plausible hypotheses (before consistency)
-  int loops_rejected = 0;       ///< verified but implausible (drift gate) or inconsistent
-  int loops_accepted = 0;       ///< loops closed within a map
-  int merges = 0;               ///< maps merged into an older one
-  int global_ba_runs = 0;
-  double loop_ms = 0.0;       ///< detection + verification + correction [ms]
-  double global_ba_ms = 0.0;  ///< [ms]
+  int candidates_verified = 0;     ///< candidates that passed geometric verification
+  int loops_detected = 0;          ///< verified and plausible hypotheses (before consistency)
+  int loops_rejected = 0;          ///< verified but implausible (drift gate) or inconsistent
+  int loops_accepted = 0;          ///< loops closed within a map
+  int merges = 0;                  ///< maps merged into an older one
+  int global_ba_runs = 0;          ///< finished global BAs (not counting cancelled ones)
+  int global_ba_cancelled = 0;     ///< background global BAs a newer loop or merge cancelled
+  double loop_ms = 0.0;            ///< detection + verification + correction [ms]
+  double global_ba_ms = 0.0;       ///< build + solve + write back of the finished runs [ms]
+  double global_ba_lock_ms = 0.0;  ///< of which the map's lock was held (build, write back) [ms]
 };
 
 // What the tracker found when tracking the candidate's local map in the keyframe's frame from a
@@ -116,15 +126,22 @@ struct LoopEvent {
 
 class LoopCloser {
  public:
+  // `background_global_ba`: global BA on its own thread (threaded mode) instead of inline.
   LoopCloser(const StereoRig& rig, const LoopClosingOptions& options, const Vocabulary* vocabulary,
              float max_descriptor_distance_binary, float max_descriptor_distance_float,
-             LocalMapVerifier verifier);
+             LocalMapVerifier verifier, bool background_global_ba = false);
+  ~LoopCloser();  // cancels and joins a global BA in flight
+  LoopCloser(const LoopCloser&) = delete;
+  LoopCloser& operator=(const LoopCloser&) = delete;
 
   // Looks for a loop or a merge for a keyframe local mapping has processed, and closes it.
   // Returns true when the atlas changed (a loop was corrected or maps were merged).
   bool Process(Atlas* atlas, int map_index, int keyframe_id);
   LoopClosingStats stats() const;
   std::vector<LoopEvent> events() const;
+  // Waits until a global BA running in the background has been written back (end of a run,
+  // before saving or exporting the map). No-op inline.
+  void WaitForGlobalBa();
 
  private:
   struct Verified {
@@ -156,7 +173,9 @@ class LoopCloser {
   // Fusion, essential graph and global BA in `map` after K got its verified pose. Caller locks.
   void Correct(Map* map, int keyframe_id, const Verified& verified);
   void Fuse(Map* map, int keyframe_id, const LocalMapMatch& match);
-  void GlobalBundleAdjustment(Map* map);
+  // Global BA over every keyframe, point and line of the atlas's map `map_index` (see 6. above).
+  void GlobalBundleAdjustment(Atlas* atlas, int map_index);
+  void CancelGlobalBa();
 
   StereoRig rig_;
   LoopClosingOptions options_;
@@ -168,6 +187,10 @@ class LoopCloser {
   mutable std::mutex stats_mutex_;
   LoopClosingStats stats_;
   std::vector<LoopEvent> events_;
+  bool background_global_ba_ = false;
+  std::thread global_ba_thread_;
+  std::atomic<bool> global_ba_abort_{false};
+  std::exception_ptr global_ba_error_;  ///< from the background thread, joined before read
 };
 
 }  // namespace slslam

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 
+#include <ceres/iteration_callback.h>
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
@@ -14,6 +15,18 @@
 namespace slslam {
 
 namespace {
+
+// Stops a solve once `abort` is set (checked after every iteration).
+class AbortCallback : public ceres::IterationCallback {
+ public:
+  explicit AbortCallback(const std::atomic<bool>* abort) : abort_(abort) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return abort_ && abort_->load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* abort_;
+};
 
 struct Parameters {
   std::vector<std::array<double, kPoseSize>> poses;
@@ -45,8 +58,8 @@ double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservati
   const PluckerLine line = ParametersToLine(p.lines[o.line].data()).ToPlucker();
   Eigen::Vector3d e;
   if (!LineResidual(rig.camera, R, t, line, o.start_px, o.end_px, 0.0, &e)) return INFINITY;
-  const Eigen::Vector3d middle = line.Transformed(R, t).ClosestPointToRay(
-      rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
+  const Eigen::Vector3d middle =
+      line.Transformed(R, t).ClosestPointToRay(rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;
   return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);
 }
@@ -64,7 +77,8 @@ void BundleAdjustmentOptions::Check() const {
 }
 
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
-                                             const BundleAdjustmentOptions& options) {
+                                             const BundleAdjustmentOptions& options,
+                                             const std::atomic<bool>* abort) {
   rig.Check();
   options.Check();
   Require(problem != nullptr, "bundle adjustment needs a problem");
@@ -113,11 +127,13 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       if (report.point_outlier[i]) continue;
       const BaPointObservation& o = ba.point_observations[i];
       ceres::CostFunction* cost =
-          o.stereo ? static_cast<ceres::CostFunction*>(new StereoPointCost(rig, o.observed, o.sigma_px))
-                   : new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px);
+          o.stereo
+              ? static_cast<ceres::CostFunction*>(new StereoPointCost(rig, o.observed, o.sigma_px))
+              : new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px);
       ceres::LossFunction* loss =
-          robust ? new ceres::HuberLoss(std::sqrt(o.stereo ? options.chi2_stereo : options.chi2_mono))
-                 : nullptr;
+          robust
+              ? new ceres::HuberLoss(std::sqrt(o.stereo ? options.chi2_stereo : options.chi2_mono))
+              : nullptr;
       solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
                                       params.points[o.point].data());
       pose_used[o.pose] = true;
@@ -128,13 +144,15 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       const BaLineObservation& o = ba.line_observations[i];
       ceres::CostFunction* cost =
           new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px);
-      ceres::LossFunction* loss = robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
+      ceres::LossFunction* loss =
+          robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
       if (options.line_weight != 1.0) {
         loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
       }
       solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
                                       params.lines[o.line].data());
-      if (!line_used[o.line]) solver_problem.SetManifold(params.lines[o.line].data(), new LineManifold);
+      if (!line_used[o.line])
+        solver_problem.SetManifold(params.lines[o.line].data(), new LineManifold);
       line_used[o.line] = true;
       pose_used[o.pose] = true;
       ++blocks;
@@ -148,11 +166,18 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
 
     ceres::Solver::Options solver_options;
     solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-    solver_options.max_num_iterations = robust ? options.robust_iterations : options.refine_iterations;
+    solver_options.max_num_iterations =
+        robust ? options.robust_iterations : options.refine_iterations;
     solver_options.num_threads = 1;
     solver_options.logging_type = ceres::SILENT;
+    AbortCallback abort_callback(abort);
+    if (abort) solver_options.callbacks.push_back(&abort_callback);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &solver_problem, &summary);
+    if (abort && abort->load()) {
+      report.solved = false;
+      return report;
+    }
     if (pass == 0) report.initial_cost = summary.initial_cost;
     report.final_cost = summary.final_cost;
     report.solved = summary.IsSolutionUsable();
@@ -163,7 +188,8 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       report.point_outlier[i] = !(PointChi2(rig, params, o) <= bound);
     }
     for (size_t i = 0; i < ba.line_observations.size(); ++i) {
-      report.line_outlier[i] = !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
+      report.line_outlier[i] =
+          !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
     }
   }
 

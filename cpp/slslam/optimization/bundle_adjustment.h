@@ -3,6 +3,7 @@
 // more pass without the outliers (ORB-SLAM3's LocalBundleAdjustment schedule).
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,8 +20,8 @@ struct BaPose {
 };
 
 struct BaPointObservation {
-  int pose = 0;   ///< index into BaProblem::poses
-  int point = 0;  ///< index into BaProblem::points
+  int pose = 0;                                        ///< index into BaProblem::poses
+  int point = 0;                                       ///< index into BaProblem::points
   Eigen::Vector3d observed = Eigen::Vector3d::Zero();  ///< (u_left, v, u_right) [px]
   bool stereo = false;
   double sigma_px = 1.0;
@@ -43,11 +44,11 @@ struct BaProblem {
 };
 
 struct BundleAdjustmentOptions {
-  int robust_iterations = 5;   ///< iterations of the robust pass [-]
-  int refine_iterations = 10;  ///< iterations after outlier removal [-]
-  double chi2_mono = 5.991;    ///< [-]
-  double chi2_stereo = 7.815;  ///< [-]
-  double chi2_line = 5.991;    ///< on the two endpoint distances [-]
+  int robust_iterations = 5;        ///< iterations of the robust pass [-]
+  int refine_iterations = 10;       ///< iterations after outlier removal [-]
+  double chi2_mono = 5.991;         ///< [-]
+  double chi2_stereo = 7.815;       ///< [-]
+  double chi2_line = 5.991;         ///< on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< [px]
   double line_weight = 1.0;         ///< [-]
 
@@ -64,7 +65,10 @@ struct BundleAdjustmentReport {
 
 // Optimises the problem in place (poses that are not fixed, every point and line observed at
 // least once). Deterministic (single-threaded Ceres, Schur solver).
+// `abort`, when given, is polled between iterations: once true the solve stops and the report is
+// not solved (a background global BA that a newer correction made stale).
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
-                                             const BundleAdjustmentOptions& options = {});
+                                             const BundleAdjustmentOptions& options = {},
+                                             const std::atomic<bool>* abort = nullptr);
 
 }  // namespace slslam

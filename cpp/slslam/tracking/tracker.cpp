@@ -101,7 +101,8 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
     };
     loop_closer_ = std::make_unique<LoopCloser>(options_.rig, loop, vocabulary_.get(),
                                                 options_.max_distance_binary,
-                                                options_.max_distance_float, verifier);
+                                                options_.max_distance_float, verifier,
+                                                /*background_global_ba=*/!options_.sequential);
     mapper_->SetAfterKeyFrame([this](Map* map, int keyframe_id) {
       for (int m = 0; m < atlas_.size(); ++m) {
         if (&atlas_.map(m) == map) {
@@ -118,7 +119,7 @@ LoopClosingStats Tracker::loop_stats() const {
 }
 
 void Tracker::SaveMap(const std::string& path, const std::string& version) {
-  mapper_->Flush();
+  Flush();
   MapFileHeader header;
   header.slslam_version = version;
   header.rig = options_.rig;
@@ -233,6 +234,10 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   }
   Map& map = atlas_.map(active_);
   std::lock_guard<std::mutex> lock(map.mutex());
+  if (FollowAnchor(map, {{&last_R_, &last_t_}})) {
+    r.R_cw = last_R_;
+    r.t_cw = last_t_;
+  }
   Eigen::Matrix3d R_rw;
   Eigen::Vector3d t_rw;
   if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
@@ -243,6 +248,35 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   }
   seen_epoch_ = map.correction_epoch();
   records_.push_back(r);
+}
+
+void Tracker::SetAnchor(const Map& map, int keyframe) {
+  anchor_ = Anchor{};
+  if (keyframe < 0 || !map.KeyFramePose(keyframe, &anchor_.R_rw, &anchor_.t_rw)) return;
+  anchor_.keyframe = keyframe;
+  anchor_.map = &map;
+  anchor_.epoch = map.correction_epoch();
+}
+
+bool Tracker::FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses) {
+  if (anchor_.keyframe < 0 || (&map == anchor_.map && map.correction_epoch() == anchor_.epoch)) {
+    return false;
+  }
+  Eigen::Matrix3d R_rw;
+  Eigen::Vector3d t_rw;
+  if (!map.KeyFramePose(anchor_.keyframe, &R_rw, &t_rw)) return false;
+  // T_cw' = T_cw T_rw_old^-1 T_rw_new: the same pose relative to the reference keyframe.
+  const Eigen::Matrix3d R_d = anchor_.R_rw.transpose() * R_rw;
+  const Eigen::Vector3d t_d = anchor_.R_rw.transpose() * (t_rw - anchor_.t_rw);
+  for (const auto& [R, t] : poses) {
+    *t = *R * t_d + *t;
+    *R = *R * R_d;
+  }
+  anchor_.map = &map;
+  anchor_.epoch = map.correction_epoch();
+  anchor_.R_rw = R_rw;
+  anchor_.t_rw = t_rw;
+  return true;
 }
 
 std::vector<FramePose> Tracker::Trajectory() const {
@@ -269,10 +303,14 @@ std::vector<FramePose> Tracker::Trajectory() const {
 }
 
 Tracker::~Tracker() {
-  mapper_.reset();  // drains and joins the mapping thread before the maps go
+  mapper_.reset();       // drains and joins the mapping thread before the maps go,
+  loop_closer_.reset();  // then a global BA still running in the background
 }
 
-void Tracker::Flush() { mapper_->Flush(); }
+void Tracker::Flush() {
+  mapper_->Flush();
+  if (loop_closer_) loop_closer_->WaitForGlobalBa();
+}
 
 void Tracker::Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const {
   *R_pred = last_R_;
@@ -316,9 +354,8 @@ bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Ei
   return true;
 }
 
-void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
-                             const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
-                             const std::vector<int>& point_matches,
+void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Eigen::Matrix3d R_cw,
+                             Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches,
                              const std::vector<bool>& valid_keypoints) {
   Map& map = atlas_.map(active_);
@@ -331,6 +368,10 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
   int kf_id = -1;
   {
     std::lock_guard<std::mutex> lock(map.mutex());
+    // (the frame's pose is the last pose: both move with a correction written meanwhile)
+    if (FollowAnchor(map, {{&R_cw, &t_cw}, {&last_R_, &last_t_}})) {
+      seen_epoch_ = map.correction_epoch();
+    }
     auto kf = map.AddKeyFrame(R_cw, t_cw, frame);
     kf_id = kf->id;
     kf->bow = bow;
@@ -737,6 +778,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   // A loop correction or a merge may have moved the last pose (a merge into another map's
   // world): the prediction starts from where it is now.
   FollowCorrections();
+  anchor_ = Anchor{};
   Eigen::Matrix3d R_pred;
   Eigen::Vector3d t_pred;
   Predict(&R_pred, &t_pred);
@@ -773,6 +815,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     Map& map = atlas_.map(active_);
     std::lock_guard<std::mutex> lock(map.mutex());
     tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale, &valid);
+    SetAnchor(map, last_keyframe_);
   };
   if (mode_ != Mode::kLost) {
     track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
@@ -801,12 +844,23 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   result.optimisation_ms = tracking.optimisation_ms;
 
   if (tracked || relocalised) {
+    active_ = atlas_.Resolve(active_);  // merged into another map meanwhile (threaded mode)
     Map& map = atlas_.map(active_);
     std::vector<int> point_match(frame->NumKeypoints(), -1);
     std::vector<int> line_match(frame->NumLines(), -1);
     bool make_keyframe = false;
+    bool velocity_known = mode_ == Mode::kTracking;
     {
       std::lock_guard<std::mutex> lock(map.mutex());
+      // The last pose moves too when it was in the world the estimate was made in; otherwise
+      // (a merge meanwhile) the motion between the two is unknown.
+      const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
+      PoseRef estimate{&tracking.pose.R_cw, &tracking.pose.t_cw};
+      if (move_last ? FollowAnchor(map, {estimate, {&last_R_, &last_t_}})
+                    : FollowAnchor(map, {estimate})) {
+        if (move_last) seen_epoch_ = map.correction_epoch();
+        velocity_known = velocity_known && move_last;
+      }
       make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
     }
     if (dynamic_) {
@@ -826,7 +880,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     result.t_cw = tracking.pose.t_cw;
     result.map_index = active_;
     // After a loss the velocity is unknown: start again from rest.
-    SetPose(tracking.pose.R_cw, tracking.pose.t_cw, /*update_velocity=*/mode_ == Mode::kTracking);
+    SetPose(tracking.pose.R_cw, tracking.pose.t_cw, /*update_velocity=*/velocity_known);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     if (options_.localise_only) {
@@ -861,6 +915,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   }
 
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
+  anchor_ = Anchor{};
   if (dynamic_) {
     dynamic_->Reset();
     previous_frame_ = nullptr;

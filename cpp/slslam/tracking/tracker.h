@@ -12,8 +12,10 @@
 // make a keyframe and to start a map, so lines carry the low-texture stretches.
 #pragma once
 
+#include <initializer_list>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -164,7 +166,8 @@ class Tracker {
   Tracker& operator=(const Tracker&) = delete;
 
   TrackResult Track(std::shared_ptr<const StereoFrame> frame);
-  // Waits for local mapping to finish its queue (threaded mode).
+  // Waits for local mapping to finish its queue and for a global BA running in the background
+  // to be written back (threaded mode).
   void Flush();
   MapExport ExportMap() const;
   LocalMappingStats mapping_stats() const { return mapper_->stats(); }
@@ -202,8 +205,9 @@ class Tracker {
   }
   bool StartMap(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
                 const Eigen::Vector3d& t_cw);
-  void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
-                      const Eigen::Vector3d& t_cw, const std::vector<int>& point_matches,
+  // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
+  void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Eigen::Matrix3d R_cw,
+                      Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
                       const std::vector<int>& line_matches,
                       const std::vector<bool>& valid_keypoints = {});
   // Caller holds map.mutex().
@@ -263,6 +267,24 @@ class Tracker {
   // pose follow (the pose through its reference keyframe).
   void FollowCorrections();
   void RecordFrame(const StereoFrame& frame, bool keyframe);
+
+  // Threaded mode: the mapping thread may correct the map (a background global BA, a loop, a
+  // merge) after this frame's pose was estimated against it and before the frame is recorded or
+  // made a keyframe. The anchor is the reference keyframe's pose at estimation time; under each
+  // later lock FollowAnchor moves the given poses with that keyframe into the corrected world
+  // and returns true when it did. Never fires in sequential mode (nothing runs in between).
+  // Caller holds the map's lock for both.
+  using PoseRef = std::pair<Eigen::Matrix3d*, Eigen::Vector3d*>;
+  void SetAnchor(const Map& map, int keyframe);
+  bool FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses);
+  struct Anchor {
+    int keyframe = -1;  ///< -1: none for this frame
+    const Map* map = nullptr;
+    int epoch = -1;
+    Eigen::Matrix3d R_rw = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_rw = Eigen::Vector3d::Zero();
+  };
+  Anchor anchor_;
 
   struct FrameRecord {
     int index = 0;

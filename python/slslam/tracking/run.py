@@ -349,6 +349,8 @@ def _map_metrics(map_data: MapData) -> dict:
         "global_ba_runs": map_data.stats.get("global_ba_runs", 0),
         "loop_closing_ms": map_data.stats.get("loop_closing_ms", 0.0),
         "global_ba_ms": map_data.stats.get("global_ba_ms", 0.0),
+        "global_ba_lock_ms": map_data.stats.get("global_ba_lock_ms", 0.0),
+        "global_ba_cancelled": map_data.stats.get("global_ba_cancelled", 0),
         "loop_events": map_data.stats.get("loop_events", []),
     }
 

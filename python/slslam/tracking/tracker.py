@@ -553,6 +553,8 @@ class Tracker:
                     "global_ba_runs",
                     "loop_closing_ms",
                     "global_ba_ms",
+                    "global_ba_lock_ms",
+                    "global_ba_cancelled",
                     "loop_events",
                 )
             },

@@ -398,14 +398,14 @@ Eigen::Vector3d TrueCenterIn(int k, int origin) {
   return R0 * (-R.transpose() * t) + t0;
 }
 
-TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
-  // Map 1 from 3.0-4.5 m along the roadway; a long blackout; the robot reappears at 0 m and
-  // drives forward again. Relocalisation is switched off (its inlier bar is out of reach), so a
-  // second map starts at the frozen pose, 4.5 m off; once its keyframes see map 1's landmarks,
-  // loop closing merges it into map 1, and every frame of the second stretch ends up at its
-  // true place in map 1's frame.
+// Map 1 from 3.0-4.5 m along the roadway; a long blackout; the robot reappears at 0 m and drives
+// forward again. Relocalisation is switched off (its inlier bar is out of reach), so a second map
+// starts at the frozen pose, 4.5 m off; once its keyframes see map 1's landmarks, loop closing
+// merges it into map 1, and every frame of the second stretch ends up at its true place in map
+// 1's frame.
+void ExpectASecondMapMergedIntoTheFirst(bool sequential) {
   const Scene scene;
-  TrackerOptions options = Options(true, /*lines=*/false);
+  TrackerOptions options = Options(sequential, /*lines=*/false);
   options.vocabulary_path = SceneVocabulary(scene);
   options.relocalisation.min_inliers = 1e9;
   Tracker tracker(options);
@@ -419,10 +419,12 @@ TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
   for (int i = 56; i < 145; ++i) {
     ASSERT_NE(tracker.Track(RenderAt(scene, i - 55, i, 0.5)).state, TrackingState::kLost) << i;
   }
+  tracker.Flush();  // threaded: local mapping, loop closing and the global BA are done
   EXPECT_EQ(tracker.num_maps(), 2);
   EXPECT_EQ(tracker.live_maps(), 1);
   EXPECT_EQ(tracker.loop_stats().merges, 1);
   EXPECT_EQ(tracker.loop_stats().loops_accepted, 0);
+  EXPECT_EQ(tracker.loop_stats().global_ba_runs, 1);
   // The final trajectory: the second stretch sits where it truly was, in map 1's frame (1.6 cm
   // at most measured; the frozen start was 4.5 m off). Before the tracker followed the merge
   // (prediction and frame record from the merged keyframe), tracking was lost right after it.
@@ -434,6 +436,17 @@ TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
     second += f.index >= 55;
   }
   EXPECT_EQ(second, 90);
+}
+
+TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
+  ExpectASecondMapMergedIntoTheFirst(/*sequential=*/true);
+}
+
+// The same in threaded mode: loop closing on the mapping thread, the global BA after the merge on
+// its own thread while tracking goes on; frames and keyframes made meanwhile follow its
+// correction, and Flush waits for it (Trajectory flushes).
+TEST(TrackerTest, ThreadedModeMergesAndRunsTheGlobalBaInTheBackground) {
+  ExpectASecondMapMergedIntoTheFirst(/*sequential=*/false);
 }
 
 // The scene's first 5 m of walls repeated every 5 m with the same descriptors: one arch after

@@ -1,0 +1,133 @@
+#include "slslam/mapping/map_bundle_adjustment.h"
+
+#include <unordered_set>
+
+namespace slslam {
+
+namespace {
+
+// A correction of the world: x_after = R x_before + t.
+struct WorldCorrection {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
+  const int index = static_cast<int>(problem_.poses.size());
+  problem_.poses.push_back({kf.R_cw, kf.t_cw, fixed});
+  pose_kf_.push_back(kf.id);
+  return index;
+}
+
+int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
+                               bool carry_new) const {
+  // Per keyframe of the problem: how its world moved (before = its pose now, which local mapping
+  // may have changed since the problem was built; after = the solution).
+  std::unordered_map<int, WorldCorrection> moved;
+  for (size_t i = 0; i < problem_.poses.size(); ++i) {
+    auto kf = map->keyframe(pose_kf_[i]);
+    if (!kf) continue;
+    if (problem_.poses[i].fixed) {
+      if (carry_new) moved[kf->id] = WorldCorrection{};
+      continue;
+    }
+    const BaPose& after = problem_.poses[i];
+    if (carry_new) {
+      WorldCorrection w;
+      w.R = after.R_cw.transpose() * kf->R_cw;
+      w.t = after.R_cw.transpose() * (kf->t_cw - after.t_cw);
+      moved[kf->id] = w;
+    }
+    kf->R_cw = after.R_cw;
+    kf->t_cw = after.t_cw;
+  }
+  for (size_t i = 0; i < point_id_.size(); ++i) {
+    if (auto p = map->point(point_id_[i])) p->position = problem_.points[i];
+  }
+  for (size_t i = 0; i < line_id_.size(); ++i) {
+    if (auto l = map->line(line_id_[i])) {
+      l->line = problem_.lines[i];
+      l->start = l->line.ClosestPointTo(l->start);
+      l->end = l->line.ClosestPointTo(l->end);
+    }
+  }
+  // Outlier observations leave the map.
+  for (size_t i = 0; i < point_obs_ref_.size(); ++i) {
+    if (!report.point_outlier[i]) continue;
+    const auto [pid, kf_id] = point_obs_ref_[i];
+    auto p = map->point(pid);
+    auto kf = map->keyframe(kf_id);
+    if (!p || !kf) continue;
+    auto it = p->observations.find(kf_id);
+    if (it == p->observations.end()) continue;
+    kf->point_ids[it->second] = -1;
+    p->observations.erase(it);
+  }
+  for (size_t i = 0; i < line_obs_ref_.size(); ++i) {
+    if (!report.line_outlier[i]) continue;
+    const auto [lid, kf_id] = line_obs_ref_[i];
+    auto l = map->line(lid);
+    auto kf = map->keyframe(kf_id);
+    if (!l || !kf) continue;
+    auto it = l->observations.find(kf_id);
+    if (it == l->observations.end()) continue;
+    kf->line_ids[it->second] = -1;
+    l->observations.erase(it);
+  }
+  if (!carry_new) return 0;
+
+  // Keyframes made while the solve ran follow their first ancestor in the problem.
+  int carried = 0;
+  std::vector<std::shared_ptr<KeyFrame>> fresh;
+  for (const auto& [id, kf] : map->keyframes()) {
+    if (!moved.count(id)) fresh.push_back(kf);
+  }
+  for (const auto& kf : fresh) {
+    const WorldCorrection* w = nullptr;
+    int ancestor = kf->parent;
+    for (size_t hops = 0; ancestor >= 0 && hops <= map->keyframes().size(); ++hops) {
+      if (auto it = moved.find(ancestor); it != moved.end()) {
+        w = &it->second;
+        break;
+      }
+      auto a = map->keyframe(ancestor);
+      ancestor = a ? a->parent : -1;
+    }
+    if (!w) continue;
+    const WorldCorrection correction = *w;
+    // y = R_cw x + t_cw for x = R^T (x' - t): R_cw' = R_cw R^T, t_cw' = t_cw - R_cw' t.
+    kf->R_cw = kf->R_cw * correction.R.transpose();
+    kf->t_cw = kf->t_cw - kf->R_cw * correction.t;
+    moved[kf->id] = correction;
+    ++carried;
+  }
+  // Landmarks outside the problem follow their oldest observer that moved.
+  const std::unordered_set<int> solved_points(point_id_.begin(), point_id_.end());
+  const std::unordered_set<int> solved_lines(line_id_.begin(), line_id_.end());
+  auto reference = [&](const std::map<int, int>& observations) -> const WorldCorrection* {
+    for (const auto& [kf_id, idx] : observations) {
+      (void)idx;
+      if (auto it = moved.find(kf_id); it != moved.end()) return &it->second;
+    }
+    return nullptr;
+  };
+  for (auto& [id, p] : map->points()) {
+    if (solved_points.count(id)) continue;
+    if (const WorldCorrection* w = reference(p->observations)) {
+      p->position = w->R * p->position + w->t;
+    }
+  }
+  for (auto& [id, l] : map->lines()) {
+    if (solved_lines.count(id)) continue;
+    if (const WorldCorrection* w = reference(l->observations)) {
+      l->line = l->line.Transformed(w->R, w->t);
+      l->start = w->R * l->start + w->t;
+      l->end = w->R * l->end + w->t;
+    }
+  }
+  return carried;
+}
+
+}  // namespace slslam
