@@ -64,3 +64,20 @@ def transfer_pixels(
         [cam.fx * q[:, 0] / q[:, 2] + cam.cx, cam.fx * q[:, 1] / q[:, 2] + cam.cy]
     )
     return uv_b, z, q[:, 2]
+
+
+def parse_overrides(items: list[str]) -> dict:
+    """``a.b.c=value`` pairs as a nested dict (values parsed as YAML scalars)."""
+    import yaml
+
+    tree: dict = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SystemExit(f"--set {item!r}: expected KEY=VALUE, e.g. tracking.use_lines=false")
+        node = tree
+        *parents, leaf = key.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = yaml.safe_load(value)
+    return tree

@@ -50,7 +50,7 @@ from slslam.sim import SimOptions, Simulator
 from slslam.tracking import Tracker
 from slslam.tracking.run import tracked_trajectory
 
-from common import RESULTS_DIR, write_results
+from common import RESULTS_DIR, parse_overrides, write_results
 
 SHARED_SUPERPOINT = (
     Path(__file__).resolve().parents[1].parent
@@ -93,23 +93,6 @@ def simulate(light: float, frames: int, data_dir: Path) -> Path:
         out, progress=False
     )
     return out
-
-
-def parse_overrides(items: list[str]) -> dict:
-    """``a.b.c=value`` pairs as a nested dict (values parsed as YAML scalars)."""
-    import yaml
-
-    tree: dict = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise SystemExit(f"--set {item!r}: expected KEY=VALUE, e.g. tracking.use_lines=false")
-        node = tree
-        *parents, leaf = key.split(".")
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = yaml.safe_load(value)
-    return tree
 
 
 def config_for(name: str, overrides: dict, model: str | None) -> Config:

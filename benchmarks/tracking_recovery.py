@@ -2,7 +2,7 @@
 
     python benchmarks/tracking_recovery.py [--sequences loop_l100 loop_l015_dust junction_hard
         junction_spin] [--configs orb_lines,orb_lines_plain,orb] [--frames 600]
-        [--data-dir DIR] [--out DIR]
+        [--data-dir DIR] [--out DIR] [--set tracking.KEY=VALUE ...]
 
 Sequences (seed 0, no LiDAR, simulated once into --data-dir): the loop at light 1.0
 (loop_l100) and at 0.15 with dust (loop_l015_dust); the junction at 0.15 with dust, exposure
@@ -29,11 +29,11 @@ import sys
 import time
 from pathlib import Path
 
-from slslam.config import Config
+from slslam.config import Config, config_from_dict
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import run_sequence
 
-from common import RESULTS_DIR, write_results
+from common import RESULTS_DIR, parse_overrides, write_results
 
 SEQUENCES = {
     "loop_l100": {"preset": "loop", "light": 1.0},
@@ -69,9 +69,9 @@ def simulate(name: str, frames: int, data_dir: Path) -> Path | None:
     return out
 
 
-def config_for(name: str) -> Config:
+def config_for(name: str, overrides: dict | None = None) -> Config:
     _, fallback, lines = CONFIGS[name]
-    base = Config()
+    base = config_from_dict(overrides) if overrides else Config()
     features = dataclasses.replace(
         base.features, point_frontend="orb", low_texture_fallback=fallback
     )
@@ -135,7 +135,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--data-dir", type=Path, default=RESULTS_DIR / "tracking_recovery_data")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "tracking_recovery")
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="config override"
+    )
     args = parser.parse_args(argv)
+    overrides = parse_overrides(args.set)
     configs = [c for c in args.configs.split(",") if c]
     unknown = sorted(set(configs) - set(CONFIGS))
     if unknown:
@@ -150,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
         for cfg in configs:
             out = args.out / seq / cfg
             start = time.perf_counter()
-            summary = run_sequence(data, out, config=config_for(cfg), progress=False)
+            summary = run_sequence(data, out, config=config_for(cfg, overrides), progress=False)
             r = summarise(out, summary.metrics)
             print(
                 f"{seq:15s} {cfg:16s} posed {r['posed_after_init']:.3f} ATE "
@@ -165,7 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     (args.out / "tracking_recovery.md").write_text(text + "\n")
     path = write_results(
         "tracking_recovery",
-        {"frames": args.frames, "results": results},
+        {"frames": args.frames, "overrides": overrides, "results": results},
         args.out / "tracking_recovery.json",
     )
     print(f"wrote {path}")

@@ -230,6 +230,15 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   const auto start = Clock::now();
   const int source = atlas->Resolve(map_index);
   Map& source_map = atlas->map(source);
+  // Threaded mode: a keyframe the tracker made before the last correction of its map was
+  // queued in the world that correction has since fixed, and sees the place just closed again.
+  // (Inline, every later keyframe is newer than the correction: nothing is skipped.)
+  if (auto it = corrected_before_.find(source);
+      it != corrected_before_.end() && keyframe_id < it->second) {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.keyframes_checked;
+    return false;
+  }
   std::shared_ptr<KeyFrame> kf;
   std::set<int> exclude = {keyframe_id};
   std::vector<BowVector> neighbour_bows;
@@ -360,6 +369,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         ++stats_.loops_accepted;
         changed = true;
         corrected_map = source;
+        corrected_before_[source] = source_map.ids().next_keyframe;
       }
     } else {
       std::scoped_lock lock(source_map.mutex(), target_map.mutex());
@@ -381,6 +391,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         ++stats_.merges;
         changed = true;
         corrected_map = target;
+        corrected_before_[target] = target_map.ids().next_keyframe;
       }
     }
   }

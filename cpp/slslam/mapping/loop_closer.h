@@ -184,6 +184,8 @@ class LoopCloser {
   LocalMapVerifier verifier_;
   std::map<int, Pending> pending_;                   ///< per source map
   std::map<int, std::vector<LoopEdge>> loop_edges_;  ///< per map, kept for later graphs
+  std::map<int, int> corrected_before_;  ///< per map: keyframe ids below this predate its last
+                                         ///< correction (no loop search for them)
   mutable std::mutex stats_mutex_;
   LoopClosingStats stats_;
   std::vector<LoopEvent> events_;
