@@ -5,12 +5,14 @@
 
 Run it after changing a binding and reinstalling (scripts/setup.sh); tests/python/test_stubs.py
 fails while the checked-in stubs are stale. Default arguments that are option objects print as
-``...`` (they have no Python literal); RegistrationMethod is named where pybind11 gives its repr.
+``...`` (they have no Python literal); RegistrationMethod is named where pybind11 gives its repr;
+``__git_commit__`` is declared without its value (it changes with every commit).
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import subprocess
 import sys
 import tempfile
@@ -35,7 +37,9 @@ def generate() -> str:
         )
         if done.returncode != 0:
             raise RuntimeError(f"pybind11-stubgen failed:\n{done.stderr[-3000:]}")
-        return (Path(tmp) / "slslam" / "_core.pyi").read_text(encoding="utf-8")
+        text = (Path(tmp) / "slslam" / "_core.pyi").read_text(encoding="utf-8")
+    # The build's commit changes with every commit: declared, not given a value.
+    return re.sub(r"^__git_commit__: str = .*$", "__git_commit__: str", text, flags=re.M)
 
 
 def main() -> int:

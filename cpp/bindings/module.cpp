@@ -23,6 +23,7 @@ void BindLidar(py::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "slslam C++ core (camera geometry, rectification, features)";
   m.attr("__version__") = SLSLAM_VERSION;
+  m.attr("__git_commit__") = SLSLAM_GIT_COMMIT;
   // A failed check (std::invalid_argument: an option's Check(), a Require on an input) reaches
   // Python as slslam.errors.InputError, the project's error type (a ValueError): one line that
   // names the option or input, which the command line prints without a traceback.

@@ -2156,4 +2156,5 @@ def write_image(path: str, image: numpy.ndarray) -> None:
     """
     Write a uint8 gray image (format from the extension).
     """
+__git_commit__: str
 __version__: str = '0.1.0'

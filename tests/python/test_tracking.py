@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from slslam import _core
 from slslam.config import Config, load_config
 from slslam.datasets import EurocSequence
 from slslam.errors import DatasetError, InputError
@@ -71,6 +73,9 @@ def test_the_dumped_config_is_the_one_that_ran(sim_loop, tmp_path, monkeypatch):
     run_sequence(sim_loop, tmp_path, config("superpoint", model=None), max_frames=5, progress=False)
     text = (tmp_path / "config.yaml").read_text()
     assert text.startswith("# slslam ")
+    # The commit the core was built from (a git checkout here; "unknown" outside one).
+    assert re.search(r"commit ([0-9a-f]{12}(-dirty)?|unknown)\)", text.splitlines()[0])
+    assert f"commit {_core.__git_commit__})" in text.splitlines()[0]
     assert "features.point_frontend: superpoint requested, orb ran" in text
     dumped = load_config(tmp_path / "config.yaml")
     assert dumped.features.point_frontend == "orb"

@@ -374,7 +374,8 @@ def _dump_effective_config(config: Config, tracker: Tracker, path: Path) -> None
     tracking = dataclasses.replace(config.tracking, vocabulary_path=vocabulary)
     effective = dataclasses.replace(config, features=features, tracking=tracking)
     lines = [
-        f"slslam {__version__} (C++ core {_core.__version__}): the configuration this run used",
+        f"slslam {__version__} (C++ core {_core.__version__}, commit "
+        f"{getattr(_core, '__git_commit__', 'unknown')}): the configuration this run used",
     ]
     if used is None:
         lines.append(f"point front end: {tracker.frontend_name} (given by the caller)")
