@@ -333,16 +333,27 @@ void BindTracking(py::module_& m) {
       .def_readwrite("dynamic", &TrackerOptions::dynamic)
       .def("check", &TrackerOptions::Check);
 
+  py::class_<LineExtractorOptions>(m, "LineExtractorOptions",
+                                   "Line front end of the tracker: detector, scale, preprocessing, "
+                                   "cap (tracking.line_* keys).")
+      .def(py::init<>())
+      .def_readwrite("preprocess", &LineExtractorOptions::preprocess)
+      .def_readwrite("detection_scale", &LineExtractorOptions::detection_scale)
+      .def_readwrite("max_lines", &LineExtractorOptions::max_lines)
+      .def_property(
+          "detector", [](const LineExtractorOptions& o) { return LineDetectorName(o.detector); },
+          [](LineExtractorOptions& o, const std::string& name) {
+            o.detector = ParseLineDetector(name);
+          },
+          "lsd or fld")
+      .def("check", &LineExtractorOptions::Check);
+
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
-      .def(py::init([](const TrackerOptions& options, const LinePreprocessOptions& preprocess,
-                       float line_detection_scale, const std::string& line_detector) {
-             LineExtractorOptions lines{preprocess, true, line_detection_scale,
-                                        ParseLineDetector(line_detector)};
+      .def(py::init([](const TrackerOptions& options, const LineExtractorOptions& lines) {
              return std::make_unique<TrackerSession>(options, lines);
            }),
-           py::arg("options"), py::arg("line_preprocess"), py::arg("line_detection_scale") = 1.0f,
-           py::arg("line_detector") = "lsd")
+           py::arg("options"), py::arg("lines") = LineExtractorOptions{})
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -1202,11 +1202,40 @@ class TrackerOptions:
     @weak_keyframe_inliers.setter
     def weak_keyframe_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class LineExtractorOptions:
+    """
+    Line front end of the tracker: detector, scale, preprocessing, cap (tracking.line_* keys).
+    """
+    preprocess: LinePreprocessOptions
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def detection_scale(self) -> float:
+        ...
+    @detection_scale.setter
+    def detection_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def detector(self) -> str:
+        """
+        lsd or fld
+        """
+    @detector.setter
+    def detector(self, arg1: str) -> None:
+        ...
+    @property
+    def max_lines(self) -> int:
+        ...
+    @max_lines.setter
+    def max_lines(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class TrackerCore:
     """
     Stereo point-line tracker with local mapping (use slslam.Tracker).
     """
-    def __init__(self, options: TrackerOptions, line_preprocess: LinePreprocessOptions, line_detection_scale: typing.SupportsFloat | typing.SupportsIndex = 1.0, line_detector: str = 'lsd') -> None:
+    def __init__(self, options: TrackerOptions, lines: LineExtractorOptions = ...) -> None:
         ...
     def flush(self) -> None:
         ...

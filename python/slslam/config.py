@@ -213,6 +213,9 @@ class TrackingConfig:
     line_detection_scale: float = _option(1.0, "[0.1, 1]")
     # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
     line_detector: Literal["lsd", "fld"] = "lsd"
+    # keep at most this many segments per image after preprocessing, the longest (0: all); LBD
+    # costs about 60 us a segment
+    max_lines: int = _option(0, "[0, 100000]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
     line_inlier_weight: float = _option(1.0, "[0, 100]")

@@ -131,6 +131,7 @@ def test_every_mirrored_default_equals_the_cpp_default():
     default, field by field; every tracker-section key is either mirrored or read in Python."""
     from slslam.tracking.tracker import (
         DYNAMIC_CELLS_TO_CORE,
+        LINES_TO_CORE,
         LOOP_CLOSING_TO_CORE,
         TRACKING_TO_CORE,
         core_attribute,
@@ -149,8 +150,17 @@ def test_every_mirrored_default_equals_the_cpp_default():
                 expected = core_attribute(core, path)
                 assert getattr(section, name) == pytest.approx(expected, rel=1e-6), (name, path)
                 checked += 1
-    assert checked >= 40
-    python_only = {"pipeline", "line_detector", "line_detection_scale", "relocalisation"}
-    python_only |= {"vocabulary_path", "loop_closing"}
+    lines = _core.LineExtractorOptions()
+    for name, paths in LINES_TO_CORE.items():
+        for path in paths:
+            expected = core_attribute(lines, path)
+            value = getattr(config.tracking, name)
+            if isinstance(expected, str):
+                assert value == expected, (name, path)
+            else:
+                assert value == pytest.approx(expected, rel=1e-6), (name, path)
+            checked += 1
+    assert checked >= 43
+    python_only = {"pipeline", "relocalisation", "vocabulary_path", "loop_closing"}
     fields = {f.name for f in dataclasses.fields(config.tracking)}
-    assert fields - set(TRACKING_TO_CORE) == python_only
+    assert fields - set(TRACKING_TO_CORE) - set(LINES_TO_CORE) == python_only

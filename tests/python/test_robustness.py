@@ -779,7 +779,7 @@ def test_cpp_failures_arrive_as_input_error():
     options.rig = _core.StereoRig(_core.PinholeCamera(400.0, 400.0, 320.0, 240.0, 640, 480), 0.1)
     options.mapping.ba.line_weight = math.nan  # aborted the process inside Ceres before
     with pytest.raises(InputError, match=r"ba\.line_weight"):
-        _core.TrackerCore(options, _core.LinePreprocessOptions())
+        _core.TrackerCore(options, _core.LineExtractorOptions())
     with pytest.raises(InputError, match="baseline"):
         _core.StereoRig(_core.PinholeCamera(400.0, 400.0, 320.0, 240.0, 640, 480), 0.0)
     CASES["C++ options"] += 2

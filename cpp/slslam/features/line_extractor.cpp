@@ -1,5 +1,7 @@
 #include "slslam/features/line_extractor.h"
 
+#include <algorithm>
+
 #include <opencv2/imgproc.hpp>
 #include <opencv2/line_descriptor.hpp>
 #include <opencv2/ximgproc/fast_line_detector.hpp>
@@ -68,9 +70,14 @@ LineDetector ParseLineDetector(const std::string& name) {
   return LineDetector::kLsd;
 }
 
+std::string LineDetectorName(LineDetector detector) {
+  return detector == LineDetector::kFld ? "fld" : "lsd";
+}
+
 void LineExtractorOptions::Check() const {
   preprocess.Check();
   CheckAboveInRange("lines.detection_scale", detection_scale, 0.0f, 1.0f);
+  SLSLAM_CHECK(max_lines >= 0, "lines.max_lines must be >= 0 (0: all), got ", max_lines);
 }
 
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options) {
@@ -99,6 +106,14 @@ LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& opti
   out.segments = options.run_preprocess
                      ? PreprocessLines(segments, image.cols, image.rows, options.preprocess)
                      : segments;
+  if (options.max_lines > 0 && static_cast<int>(out.segments.size()) > options.max_lines) {
+    if (!options.run_preprocess) {  // preprocessing returns them longest first
+      std::stable_sort(
+          out.segments.begin(), out.segments.end(),
+          [](const LineSegment& a, const LineSegment& b) { return a.Length() > b.Length(); });
+    }
+    out.segments.resize(options.max_lines);
+  }
   // Keep segments within the image so LBD's bands stay valid.
   Segments inside;
   for (const LineSegment& s : out.segments) {

@@ -126,8 +126,9 @@ class FinalTrajectory:
 #: Where each config key goes in the C++ options (``_core.TrackerOptions``): the config section's
 #: field -> attribute paths (one key may set several). ``_core_options`` applies it and
 #: tests/python/test_config.py checks, field by field, that every Python default equals the C++
-#: default it mirrors. Keys absent here (pipeline, line_detector, line_detection_scale,
-#: relocalisation, vocabulary_path) are read in Python.
+#: default it mirrors. The line front end's keys go to ``_core.LineExtractorOptions``
+#: (LINES_TO_CORE); keys absent from both (pipeline, relocalisation, vocabulary_path) are read in
+#: Python.
 TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     name: (name,)
     for name in (
@@ -174,13 +175,18 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
         "max_correction_floor_m",
     )
 }
+LINES_TO_CORE: dict[str, tuple[str, ...]] = {
+    "line_detection_scale": ("detection_scale",),
+    "line_detector": ("detector",),
+    "max_lines": ("max_lines",),
+}
 DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
     name: (f"dynamic.{name}",)
     for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches")
 }
 
 
-def core_attribute(options: _core.TrackerOptions, path: str):
+def core_attribute(options, path: str):
     """The value at a dotted attribute path of the C++ options (``"mapping.ba.line_weight"``)."""
     *parents, last = path.split(".")
     for part in parents:
@@ -188,12 +194,25 @@ def core_attribute(options: _core.TrackerOptions, path: str):
     return getattr(options, last)
 
 
-def _set_core(options: _core.TrackerOptions, path: str, value) -> None:
+def _set_core(options, path: str, value) -> None:
     *parents, last = path.split(".")
     target = options
     for part in parents:
         target = getattr(target, part)
     setattr(target, last, value)
+
+
+def _line_options(config: Config) -> _core.LineExtractorOptions:
+    """The line front end's options from the tracking section (LINES_TO_CORE)."""
+    options = _core.LineExtractorOptions()
+    for name, paths in LINES_TO_CORE.items():
+        for path in paths:
+            _set_core(options, path, getattr(config.tracking, name))
+    try:
+        options.check()
+    except ValueError as exc:
+        raise InputError("tracking config", str(exc)) from exc
+    return options
 
 
 def _core_options(
@@ -297,12 +316,7 @@ class Tracker:
         if localise_only and load_map is None:
             raise InputError("--localise-only", "localisation-only mode needs a map (--load-map)")
         options.localise_only = localise_only
-        self._core = _core.TrackerCore(
-            options,
-            _core.LinePreprocessOptions(),
-            self.config.tracking.line_detection_scale,
-            self.config.tracking.line_detector,
-        )
+        self._core = _core.TrackerCore(options, _line_options(self.config))
         if load_map is not None:
             path = Path(load_map).expanduser()
             if not path.is_file():

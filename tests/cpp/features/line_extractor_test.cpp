@@ -54,6 +54,25 @@ TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
   EXPECT_THROW(bad.Check(), std::invalid_argument);
 }
 
+TEST(LineExtractor, MaxLinesKeepsTheLongestSegments) {
+  const cv::Mat image = Rectangles();
+  LineExtractorOptions all, capped;
+  const LineFeatures a = ExtractLines(image, all);
+  ASSERT_GE(a.segments.size(), 6u);
+  capped.max_lines = 3;
+  const LineFeatures b = ExtractLines(image, capped);
+  ASSERT_EQ(b.segments.size(), 3u);
+  EXPECT_EQ(b.descriptors.rows, 3);
+  for (int i = 0; i < 3; ++i) {  // the three longest, with the same descriptors
+    EXPECT_EQ((a.segments[i].start - b.segments[i].start).norm(), 0.0f);
+    EXPECT_EQ(cv::norm(a.descriptors.row(i), b.descriptors.row(i), cv::NORM_HAMMING), 0.0);
+  }
+  EXPECT_GE(b.segments[2].Length(), a.segments[3].Length());
+  LineExtractorOptions bad;
+  bad.max_lines = -1;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
 TEST(LineExtractor, FastLineDetectorFindsTheLinesLsdFinds) {
   const cv::Mat image = Rectangles();
   LineExtractorOptions lsd, fld;
