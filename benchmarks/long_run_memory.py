@@ -211,12 +211,12 @@ def main(argv: list[str] | None = None) -> int:
                     "points": len(m.points),
                     "lines": len(m.lines),
                     "maps": m.maps,
-                    "keyframes_culled": m.stats["keyframes_culled"],
-                    "points_culled": m.stats["points_culled"],
-                    "lines_culled": m.stats["lines_culled"],
+                    "keyframes_culled": m.stats.keyframes_culled,
+                    "points_culled": m.stats.points_culled,
+                    "lines_culled": m.stats.lines_culled,
                     "tracked_share_window": round(tracked_window / args.every, 3),
-                    "loops_accepted": m.stats.get("loops_accepted", 0),
-                    "merges": m.stats.get("merges", 0),
+                    "loops_accepted": m.stats.loops_accepted,
+                    "merges": m.stats.merges,
                 }
                 tracked_window = 0
                 rows.append(row)

@@ -2,12 +2,22 @@
 (a whole dataset with files written as it goes)."""
 
 from slslam.tracking.run import RunSummary, open_dataset, run_sequence, write_ply
-from slslam.tracking.tracker import STATES, TRACKED_STATES, MapData, Tracker, TrackResult
+from slslam.tracking.tracker import (
+    STATES,
+    TRACKED_STATES,
+    LoopEvent,
+    MapData,
+    MapStats,
+    Tracker,
+    TrackResult,
+)
 
 __all__ = [
     "STATES",
     "TRACKED_STATES",
+    "LoopEvent",
     "MapData",
+    "MapStats",
     "RunSummary",
     "TrackResult",
     "Tracker",

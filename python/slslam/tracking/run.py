@@ -336,22 +336,25 @@ def _stereo_frames(sequence: EurocSequence, n: int) -> Iterator[tuple]:
 
 
 def _map_metrics(map_data: MapData) -> dict:
+    stats = map_data.stats
     return {
         "keyframes": map_data.keyframes,
         "maps": map_data.maps,
         "map_points": len(map_data.points),
         "map_lines": len(map_data.lines),
-        "local_mapping": map_data.stats,
+        "local_mapping": stats.as_dict(),
         "loops": {
-            k: map_data.stats.get(f"loops_{k}", 0) for k in ("detected", "accepted", "rejected")
+            "detected": stats.loops_detected,
+            "accepted": stats.loops_accepted,
+            "rejected": stats.loops_rejected,
         },
-        "merges": map_data.stats.get("merges", 0),
-        "global_ba_runs": map_data.stats.get("global_ba_runs", 0),
-        "loop_closing_ms": map_data.stats.get("loop_closing_ms", 0.0),
-        "global_ba_ms": map_data.stats.get("global_ba_ms", 0.0),
-        "global_ba_lock_ms": map_data.stats.get("global_ba_lock_ms", 0.0),
-        "global_ba_cancelled": map_data.stats.get("global_ba_cancelled", 0),
-        "loop_events": map_data.stats.get("loop_events", []),
+        "merges": stats.merges,
+        "global_ba_runs": stats.global_ba_runs,
+        "loop_closing_ms": stats.loop_closing_ms,
+        "global_ba_ms": stats.global_ba_ms,
+        "global_ba_lock_ms": stats.global_ba_lock_ms,
+        "global_ba_cancelled": stats.global_ba_cancelled,
+        "loop_events": [dataclasses.asdict(e) for e in stats.loop_events],
     }
 
 

@@ -19,6 +19,7 @@ same (the front end has no state from frame to frame).
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import logging
 import math
@@ -99,17 +100,78 @@ class _Prepared:
 _END = object()  # the pipeline's worker has read every frame
 
 
+@dataclass(frozen=True)
+class LoopEvent:
+    """One accepted loop or map merge, by the input frames of the two keyframes it joined."""
+
+    frame_index: int  #: input frame of the keyframe that closed it
+    candidate_frame_index: int  #: input frame of the older keyframe it matched
+    merge: bool  #: maps merged (else a loop within one map)
+    correction_m: float  #: how far the keyframe moved [m] (0 for a merge: two worlds)
+
+
+@dataclass(frozen=True)
+class MapStats:
+    """Counters of local mapping, relocalisation and loop closing over a run (times in ms)."""
+
+    keyframes_processed: int = 0
+    keyframes_culled: int = 0
+    points_triangulated: int = 0
+    lines_triangulated: int = 0
+    points_culled: int = 0
+    lines_culled: int = 0
+    local_mapping_ms: float = 0.0  #: local mapping in all (triangulation, local BA, culling)
+    relocalisations: int = 0
+    relocalisation_attempts: int = 0
+    maps_started: int = 0
+    loop_keyframes_checked: int = 0
+    loop_candidates_verified: int = 0
+    loops_detected: int = 0  #: verified and plausible hypotheses (before consistency)
+    loops_rejected: int = 0  #: implausible (drift gate) or inconsistent
+    loops_accepted: int = 0  #: loops closed within a map
+    merges: int = 0  #: maps merged into an older one
+    global_ba_runs: int = 0  #: finished global bundle adjustments
+    loop_closing_ms: float = 0.0  #: detection, verification, correction
+    global_ba_ms: float = 0.0  #: build, solve and write back of the finished global BAs
+    global_ba_lock_ms: float = 0.0  #: of which the map was locked (the rest ran beside tracking)
+    global_ba_cancelled: int = 0  #: background global BAs a newer loop or merge cancelled
+    loop_events: tuple[LoopEvent, ...] = ()
+
+    def as_dict(self) -> dict:
+        """Plain values (loop events as dicts), e.g. for metrics.json."""
+        return dataclasses.asdict(self) | {
+            "loop_events": [dataclasses.asdict(e) for e in self.loop_events]
+        }
+
+    # Deprecated dict-style access (MapData.stats was a dict up to 0.1): for one release.
+    def __getitem__(self, key: str):
+        warnings.warn(
+            "MapData.stats[key] is deprecated: use the attribute (stats.key)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.as_dict()[key]
+
+    def get(self, key: str, default=None):
+        """Deprecated: use the attribute."""
+        warnings.warn(
+            "MapData.stats.get(key) is deprecated: use the attribute (stats.key)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.as_dict().get(key, default)
+
+
 @dataclass
 class MapData:
     """Sparse map: ``points`` (N, 3) and ``lines`` (M, 6: start xyz, end xyz) in metres, the
-    number of keyframes and maps, and local-mapping counters (``stats``: keyframes processed and
-    culled, points / lines triangulated and culled, local mapping time in ms)."""
+    number of keyframes and maps, and the run's counters (``stats``)."""
 
     points: np.ndarray
     lines: np.ndarray
     keyframes: int
     maps: int
-    stats: dict[str, float] = field(default_factory=dict)
+    stats: MapStats = field(default_factory=MapStats)
 
 
 @dataclass(frozen=True)
@@ -540,38 +602,22 @@ class Tracker:
     def map(self) -> MapData:
         """The sparse map of every map of the atlas (waits for local mapping first)."""
         m = self._core.map()
+        names = {f.name for f in dataclasses.fields(MapStats)} - {"loop_events"}
+        events = tuple(
+            LoopEvent(
+                int(e["frame_index"]),
+                int(e["candidate_frame_index"]),
+                bool(e["merge"]),
+                float(e["correction_m"]),
+            )
+            for e in m["loop_events"]
+        )
         return MapData(
             np.asarray(m["points"]).reshape(-1, 3),
             np.asarray(m["lines"]).reshape(-1, 6),
             int(m["keyframes"]),
             int(m["maps"]),
-            {
-                k: m[k]
-                for k in (
-                    "keyframes_processed",
-                    "keyframes_culled",
-                    "points_triangulated",
-                    "lines_triangulated",
-                    "points_culled",
-                    "lines_culled",
-                    "local_mapping_ms",
-                    "relocalisations",
-                    "relocalisation_attempts",
-                    "maps_started",
-                    "loop_keyframes_checked",
-                    "loop_candidates_verified",
-                    "loops_detected",
-                    "loops_rejected",
-                    "loops_accepted",
-                    "merges",
-                    "global_ba_runs",
-                    "loop_closing_ms",
-                    "global_ba_ms",
-                    "global_ba_lock_ms",
-                    "global_ba_cancelled",
-                    "loop_events",
-                )
-            },
+            MapStats(**{k: m[k] for k in names}, loop_events=events),
         )
 
     def final_trajectory(self) -> FinalTrajectory:
