@@ -3,7 +3,7 @@
 // paper's comparison methods (NDT, PFH + SAC-IA + ICP, plain ICP) behind the same call.
 //
 // This header is PCL-free (Eigen in, Eigen out) so that the bindings and other modules can use it
-// without PCL's include paths; the PCL work lives in registration.cpp.
+// without PCL's include paths; the PCL work lives in registration*.cpp (registration_internal.h).
 #pragma once
 
 #include <string>
