@@ -65,10 +65,20 @@ def _precision(pairs: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray, transfer
     )
 
 
+def full_resolution_lines() -> _core.LineExtractorOptions:
+    """The paper's extractor: LSD at full resolution, every segment preprocessing keeps (the
+    numbers in benchmarks/README.md; the tracker's defaults detect at half resolution and keep
+    the 150 longest)."""
+    options = _core.LineExtractorOptions()
+    options.detection_scale = 1.0
+    options.max_lines = 0
+    return options
+
+
 def evaluate_pair(img_a, img_b, transfer, points, figure: Path | None = None) -> dict:
     h, w = img_a.shape
-    seg_a, lbd_a, raw_a = _core.extract_lines(img_a)
-    seg_b, lbd_b, raw_b = _core.extract_lines(img_b)
+    seg_a, lbd_a, raw_a = _core.extract_lines(img_a, full_resolution_lines())
+    seg_b, lbd_b, raw_b = _core.extract_lines(img_b, full_resolution_lines())
     kp_a, kp_b = points.detect(img_a), points.detect(img_b)
     match_options = _core.MatchOptions()
     if kp_a.descriptors.dtype == np.uint8:

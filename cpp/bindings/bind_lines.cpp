@@ -74,13 +74,25 @@ void BindLines(py::module_& m) {
       .def_readwrite("min_disparity_px", &StereoLineOptions::min_disparity_px)
       .def("check", &StereoLineOptions::Check);
 
+  py::class_<LineExtractorOptions>(m, "LineExtractorOptions",
+                                   "Line front end of the tracker: detector, scale, preprocessing, "
+                                   "cap (tracking.line_* keys).")
+      .def(py::init<>())
+      .def_readwrite("preprocess", &LineExtractorOptions::preprocess)
+      .def_readwrite("detection_scale", &LineExtractorOptions::detection_scale)
+      .def_readwrite("max_lines", &LineExtractorOptions::max_lines)
+      .def_property(
+          "detector", [](const LineExtractorOptions& o) { return LineDetectorName(o.detector); },
+          [](LineExtractorOptions& o, const std::string& name) {
+            o.detector = ParseLineDetector(name);
+          },
+          "lsd or fld")
+      .def("check", &LineExtractorOptions::Check);
+
   m.def(
       "extract_lines",
-      [](const py::array& image, const LinePreprocessOptions& preprocess, bool run_preprocess,
-         const std::string& detector) {
+      [](const py::array& image, const LineExtractorOptions& options) {
         const cv::Mat img = WrapGray(image, "image");
-        LineExtractorOptions options{preprocess, run_preprocess};
-        options.detector = ParseLineDetector(detector);
         LineFeatures f;
         {
           py::gil_scoped_release release;
@@ -88,10 +100,10 @@ void BindLines(py::module_& m) {
         }
         return py::make_tuple(ToArray(f.segments), ToNumpy(f.descriptors), f.raw_count);
       },
-      py::arg("image"), py::arg("preprocess") = LinePreprocessOptions{},
-      py::arg("run_preprocess") = true, py::arg("detector") = "lsd",
-      "Segments (detector: lsd or fld) + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 "
-      "u1 v1, LBD uint8 (N, 32), number of raw segments).");
+      py::arg("image"), py::arg("options") = LineExtractorOptions{},
+      "Segments + preprocessing + LBD with the tracker's line options (detector, detection "
+      "scale, cap): (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw "
+      "segments).");
   m.def(
       "preprocess_lines",
       [](const SegmentArray& segments, int width, int height,

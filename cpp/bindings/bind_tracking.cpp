@@ -333,21 +333,6 @@ void BindTracking(py::module_& m) {
       .def_readwrite("dynamic", &TrackerOptions::dynamic)
       .def("check", &TrackerOptions::Check);
 
-  py::class_<LineExtractorOptions>(m, "LineExtractorOptions",
-                                   "Line front end of the tracker: detector, scale, preprocessing, "
-                                   "cap (tracking.line_* keys).")
-      .def(py::init<>())
-      .def_readwrite("preprocess", &LineExtractorOptions::preprocess)
-      .def_readwrite("detection_scale", &LineExtractorOptions::detection_scale)
-      .def_readwrite("max_lines", &LineExtractorOptions::max_lines)
-      .def_property(
-          "detector", [](const LineExtractorOptions& o) { return LineDetectorName(o.detector); },
-          [](LineExtractorOptions& o, const std::string& name) {
-            o.detector = ParseLineDetector(name);
-          },
-          "lsd or fld")
-      .def("check", &LineExtractorOptions::Check);
-
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
       .def(py::init([](const TrackerOptions& options, const LineExtractorOptions& lines) {

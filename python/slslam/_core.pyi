@@ -698,6 +698,35 @@ class StereoLineOptions:
     @min_row_overlap.setter
     def min_row_overlap(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
+class LineExtractorOptions:
+    """
+    Line front end of the tracker: detector, scale, preprocessing, cap (tracking.line_* keys).
+    """
+    preprocess: LinePreprocessOptions
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def detection_scale(self) -> float:
+        ...
+    @detection_scale.setter
+    def detection_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def detector(self) -> str:
+        """
+        lsd or fld
+        """
+    @detector.setter
+    def detector(self, arg1: str) -> None:
+        ...
+    @property
+    def max_lines(self) -> int:
+        ...
+    @max_lines.setter
+    def max_lines(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class StereoRig:
     """
     Rectified stereo pair: left intrinsics and baseline.
@@ -1201,35 +1230,6 @@ class TrackerOptions:
         ...
     @weak_keyframe_inliers.setter
     def weak_keyframe_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
-        ...
-class LineExtractorOptions:
-    """
-    Line front end of the tracker: detector, scale, preprocessing, cap (tracking.line_* keys).
-    """
-    preprocess: LinePreprocessOptions
-    def __init__(self) -> None:
-        ...
-    def check(self) -> None:
-        ...
-    @property
-    def detection_scale(self) -> float:
-        ...
-    @detection_scale.setter
-    def detection_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
-        ...
-    @property
-    def detector(self) -> str:
-        """
-        lsd or fld
-        """
-    @detector.setter
-    def detector(self, arg1: str) -> None:
-        ...
-    @property
-    def max_lines(self) -> int:
-        ...
-    @max_lines.setter
-    def max_lines(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
 class TrackerCore:
     """
@@ -2111,9 +2111,9 @@ def associate_points_to_lines(keypoints: typing.Annotated[numpy.typing.ArrayLike
     """
     For every segment, the indices of its associated keypoints.
     """
-def extract_lines(image: numpy.ndarray, preprocess: LinePreprocessOptions = ..., run_preprocess: bool = True, detector: str = 'lsd') -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
+def extract_lines(image: numpy.ndarray, options: LineExtractorOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
     """
-    Segments (detector: lsd or fld) + preprocessing + LBD: (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw segments).
+    Segments + preprocessing + LBD with the tracker's line options (detector, detection scale, cap): (segments float32 (N, 4) as u0 v0 u1 v1, LBD uint8 (N, 32), number of raw segments).
     """
 def extract_orb(image: numpy.ndarray, options: OrbOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 2]"], typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 1]"], numpy.ndarray]:
     """

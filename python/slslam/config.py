@@ -191,7 +191,7 @@ class TrackingConfig:
     line_max_lbd: float = _option(80.0, "[1, 256]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
     # no keyframe sooner than this after the last while tracking is strong [frames]
-    keyframe_min_frames: int = _option(0, "[0, 1000]")
+    keyframe_min_frames: int = _option(2, "[0, 1000]")
     # tracked / reference keyframe points below: keyframe
     keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
     keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe
@@ -210,12 +210,12 @@ class TrackingConfig:
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _option(3.0, "[0.01, 1000]")
     # LSD runs on the image scaled by this (segments mapped back; LBD at full resolution)
-    line_detection_scale: float = _option(1.0, "[0.1, 1]")
+    line_detection_scale: float = _option(0.5, "[0.1, 1]")
     # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
     line_detector: Literal["lsd", "fld"] = "lsd"
     # keep at most this many segments per image after preprocessing, the longest (0: all); LBD
     # costs about 60 us a segment
-    max_lines: int = _option(0, "[0, 100000]")
+    max_lines: int = _option(150, "[0, 100000]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
     line_inlier_weight: float = _option(1.0, "[0, 100]")

@@ -32,12 +32,14 @@ struct LineExtractorOptions {
   bool run_preprocess = true;  ///< false: LSD segments as they come (for comparisons)
   /// LSD runs on the image resized by this factor (area averaging), segments are mapped back to
   /// full resolution; LBD and everything after work at full resolution. 0.5 cuts LSD's time about
-  /// 4x (benchmarks/README.md) and keeps the long segments preprocessing keeps anyway [-], (0, 1]
-  float detection_scale = 1.0f;
+  /// 4x and keeps the long segments preprocessing keeps anyway; with max_lines 150 and
+  /// keyframe_min_frames 2 it gave equal or lower ATE on the four hard simulated sequences of
+  /// benchmarks/tracking_recovery.py (benchmarks/README.md) [-], (0, 1]
+  float detection_scale = 0.5f;
   LineDetector detector = LineDetector::kLsd;
   /// Keep at most this many segments after preprocessing, the longest (0: all). LBD costs about
   /// 60 us per segment (a 752 x 480 mine frame gives 250 after preprocessing) [-], >= 0
-  int max_lines = 0;
+  int max_lines = 150;
 
   void Check() const;
 };

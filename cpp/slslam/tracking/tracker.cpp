@@ -807,7 +807,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   bool tracked = false, relocalised = false;
   // Keypoints in cells the dynamic-cell filter invalidated up to the last frame.
   std::vector<bool> valid;
-  if (dynamic_ && mode_ == Mode::kTracking) {
+  if (dynamic_ && mode_ == Mode::kTracking && dynamic_masks_) {
     valid = dynamic_->KeypointMask(frame->keypoints.uv);
     result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
   }
@@ -864,13 +864,16 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
     }
     if (dynamic_) {
-      if (tracked) {
-        UpdateDynamicCells(*frame, tracking.pose.R_cw, tracking.pose.t_cw);
-        valid = dynamic_->KeypointMask(frame->keypoints.uv);
-      } else {  // relocalised: the cells start afresh from here
-        dynamic_->Reset();
-        valid.clear();
-      }
+      // Thin tracking (low texture, dark, dust) masks nothing: its sparse frame-to-frame
+      // evidence is noise-dominated, and every keypoint counts there (measured on the junction
+      // with flicker, dust and a blackout: masking there lost 33 frames and split the map). The
+      // weights still follow the evidence, so a mover seen while tracking is thin is masked as
+      // soon as tracking is strong again.
+      dynamic_masks_ = tracked && tracking.weighted_inliers >= options_.weak_keyframe_inliers;
+      if (tracked) UpdateDynamicCells(*frame, tracking.pose.R_cw, tracking.pose.t_cw);
+      if (!tracked) dynamic_->Reset();  // relocalised: the cells start afresh from here
+      valid.clear();
+      if (dynamic_masks_) valid = dynamic_->KeypointMask(frame->keypoints.uv);
       previous_frame_ = frame;
       previous_R_ = tracking.pose.R_cw;
       previous_t_ = tracking.pose.t_cw;
@@ -919,6 +922,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   if (dynamic_) {
     dynamic_->Reset();
     previous_frame_ = nullptr;
+    dynamic_masks_ = false;
   }
   if (mode_ == Mode::kTracking) {  // the last estimate and the motion before the loss
     loss_R_ = last_R_;

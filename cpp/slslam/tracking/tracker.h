@@ -87,7 +87,7 @@ struct TrackerOptions {
   float line_max_angle_rad = 0.2f;     ///< [rad]
   float line_max_lbd = 80.0f;          ///< [bits]
   int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
-  int keyframe_min_frames = 0;         ///< no keyframe sooner than this after the last [frames]
+  int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
   double keyframe_track_ratio = 0.75;  ///< tracked / reference-keyframe points (those seen by
                                        ///< >= 3 keyframes) below this: keyframe [-]
   int keyframe_min_inliers = 100;      ///< fewer tracked close points (and > 70 untracked
@@ -115,7 +115,8 @@ struct TrackerOptions {
   /// Invalid-cell filter for moving objects (SPEC A2): a cell whose matched keypoints disagree
   /// with the pose of the frame (motion-only BA over the other cells, i.e. the consensus motion)
   /// is dropped with its 8 neighbours: its keypoints take no part in the next frames' pose and
-  /// make no map points, but are still matched so that the cell can recover.
+  /// make no map points, but are still matched so that the cell can recover. The mask applies
+  /// only after a frame tracked with at least `weak_keyframe_inliers` weighted inliers.
   bool dynamic_cells = true;
   DynamicCellOptions dynamic;
 
@@ -250,7 +251,8 @@ class Tracker {
   Eigen::Vector3d previous_t_ = Eigen::Vector3d::Zero();
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
-  int lost_count_ = 0;                                    ///< frames since tracking failed
+  int lost_count_ = 0;          ///< frames since tracking failed
+  bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
   Eigen::Matrix3d loss_R_ = Eigen::Matrix3d::Identity();  ///< last estimated pose before a loss
   Eigen::Vector3d loss_t_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d loss_velocity_R_ = Eigen::Matrix3d::Identity();  ///< motion before the loss

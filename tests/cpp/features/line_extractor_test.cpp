@@ -43,6 +43,7 @@ void ExpectOnTheSameLines(const Segments& a, const Segments& b, float tolerance_
 TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
   const cv::Mat image = Rectangles();
   LineExtractorOptions full, half;
+  full.detection_scale = 1.0f;
   half.detection_scale = 0.5f;
   const LineFeatures a = ExtractLines(image, full), b = ExtractLines(image, half);
   ASSERT_GE(a.segments.size(), 6u);
@@ -57,6 +58,7 @@ TEST(LineExtractor, HalfResolutionDetectionFindsTheSameLinesAtFullResolution) {
 TEST(LineExtractor, MaxLinesKeepsTheLongestSegments) {
   const cv::Mat image = Rectangles();
   LineExtractorOptions all, capped;
+  all.max_lines = 0;
   const LineFeatures a = ExtractLines(image, all);
   ASSERT_GE(a.segments.size(), 6u);
   capped.max_lines = 3;
@@ -75,7 +77,8 @@ TEST(LineExtractor, MaxLinesKeepsTheLongestSegments) {
 
 TEST(LineExtractor, FastLineDetectorFindsTheLinesLsdFinds) {
   const cv::Mat image = Rectangles();
-  LineExtractorOptions lsd, fld;
+  LineExtractorOptions lsd, fld;  // the detectors at full resolution
+  lsd.detection_scale = fld.detection_scale = 1.0f;
   fld.detector = LineDetector::kFld;
   const LineFeatures a = ExtractLines(image, lsd), b = ExtractLines(image, fld);
   ASSERT_GE(b.segments.size(), 6u);
