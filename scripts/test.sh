@@ -13,5 +13,11 @@ source "$root/scripts/python_env.sh"
 echo "[slslam] C++ tests"
 ctest --test-dir "$build_dir" --output-on-failure -j2
 
+# The threaded tracker under ThreadSanitizer (its own build in build/tsan, about 6 minutes on two
+# cores the first time); SLSLAM_SKIP_TSAN=1 skips it.
+if [[ "${SLSLAM_SKIP_TSAN:-0}" != "1" ]]; then
+  bash scripts/tsan.sh
+fi
+
 echo "[slslam] Python tests"
 "$PYTHON" -m pytest tests/python "$@"

@@ -6,7 +6,10 @@
 
 #include <limits>
 
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__))
+// Not under a sanitizer: the loader runs the clones' resolver before the sanitizer's runtime is
+// up, and an instrumented resolver crashes the program at start (SLSLAM_SANITIZED, CMakeLists).
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(SLSLAM_SANITIZED)
 #define SLSLAM_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
 #else
 #define SLSLAM_POPCNT_CLONES

@@ -411,13 +411,13 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
   mapper_->Insert(&map, kf_id);
 }
 
-Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
-                                              const Eigen::Matrix3d& R_pred,
-                                              const Eigen::Vector3d& t_pred, float radius_scale,
-                                              const std::vector<bool>* valid_keypoints) const {
+Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Map& map,
+                                                    int reference_kf,
+                                                    const Eigen::Matrix3d& R_pred,
+                                                    const Eigen::Vector3d& t_pred) const {
   const PinholeCamera& camera = options_.rig.camera;
-  LocalTracking out;
-  const auto match_start = Clock::now();
+  const auto start = Clock::now();
+  LocalMapSnapshot snap;
   // Local map: the reference keyframe and its covisible keyframes.
   std::vector<int> local = {reference_kf};
   if (!map.keyframe(reference_kf)) local.clear();
@@ -437,8 +437,8 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
     }
   }
 
-  // Points: project with the prediction, match in a window around it.
-  std::vector<std::shared_ptr<MapPoint>> candidates;
+  // Points in front of the predicted camera and inside the image.
+  std::vector<std::shared_ptr<MapPoint>> points;
   std::vector<Eigen::Vector2f> predicted;
   for (int pid : point_ids) {
     auto p = map.point(pid);
@@ -447,36 +447,26 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
-    candidates.push_back(p);
+    points.push_back(p);
     predicted.push_back(uv.cast<float>());
     p->visible += 1;
   }
   const cv::Mat& frame_desc = frame.keypoints.descriptors;
-  if (!candidates.empty() && frame.NumKeypoints() > 0) {
-    Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> pred(candidates.size(), 2);
-    cv::Mat query(static_cast<int>(candidates.size()), frame_desc.cols, frame_desc.type());
-    for (size_t i = 0; i < candidates.size(); ++i) {
-      pred.row(i) = predicted[i].transpose();
-      candidates[i]->descriptor.copyTo(query.row(static_cast<int>(i)));
-    }
-    GuidedMatchOptions guided = GuidedOptions(frame_desc.type(), radius_scale);
-    Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, frame_desc, guided);
-    if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
-      guided.radius_px *= 2.0f;
-      m = GuidedMatch(pred, query, frame.keypoints.uv, frame_desc, guided);
-    }
-    for (size_t i = 0; i < candidates.size(); ++i) {
-      if (m(i) < 0) continue;
-      const bool masked = valid_keypoints && !valid_keypoints->empty() && !(*valid_keypoints)[m(i)];
-      (masked ? out.masked_point_ids : out.point_ids).push_back(candidates[i]->id);
-      (masked ? out.masked_keypoints : out.keypoints).push_back(m(i));
+  if (!points.empty() && frame.NumKeypoints() > 0) {
+    snap.point_uv.resize(static_cast<Eigen::Index>(points.size()), 2);
+    snap.point_descriptors =
+        cv::Mat(static_cast<int>(points.size()), frame_desc.cols, frame_desc.type());
+    for (size_t i = 0; i < points.size(); ++i) {
+      snap.point_ids.push_back(points[i]->id);
+      snap.point_w.push_back(points[i]->position);
+      snap.point_uv.row(static_cast<Eigen::Index>(i)) = predicted[i].transpose();
+      points[i]->descriptor.copyTo(snap.point_descriptors.row(static_cast<int>(i)));
     }
   }
 
-  // Lines: projected map segments against frame segments (angle, distance, LBD).
+  // Lines whose predicted segment is in front of the camera, long enough and centred inside.
   if (options_.use_lines && frame.NumLines() > 0) {
-    const float line_search = options_.line_search_px * radius_scale;
-    std::vector<std::tuple<float, int, int>> pairs;  // (LBD distance, map line, segment)
+    std::vector<std::shared_ptr<MapLine>> lines;
     for (int lid : line_ids) {
       auto l = map.line(lid);
       if (!l || l->bad) continue;
@@ -489,6 +479,57 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
       const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
       if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
       l->visible += 1;
+      lines.push_back(l);
+      snap.line_px.push_back(proj);
+    }
+    if (!lines.empty()) {
+      const cv::Mat& first = lines.front()->descriptor;
+      snap.line_descriptors = cv::Mat(static_cast<int>(lines.size()), first.cols, first.type());
+      for (size_t i = 0; i < lines.size(); ++i) {
+        snap.line_ids.push_back(lines[i]->id);
+        snap.lines_w.push_back(lines[i]->line);
+        lines[i]->descriptor.copyTo(snap.line_descriptors.row(static_cast<int>(i)));
+      }
+    }
+  }
+  snap.ms = Ms(start);
+  return snap;
+}
+
+Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
+                                              const LocalMapSnapshot& local,
+                                              const Eigen::Matrix3d& R_pred,
+                                              const Eigen::Vector3d& t_pred, float radius_scale,
+                                              const std::vector<bool>* valid_keypoints) const {
+  LocalTracking out;
+  const auto match_start = Clock::now();
+  // Points: matched in a window around the predicted position.
+  const cv::Mat& frame_desc = frame.keypoints.descriptors;
+  if (!local.point_ids.empty() && frame.NumKeypoints() > 0) {
+    GuidedMatchOptions guided = GuidedOptions(frame_desc.type(), radius_scale);
+    Eigen::VectorXi m = GuidedMatch(local.point_uv, local.point_descriptors, frame.keypoints.uv,
+                                    frame_desc, guided);
+    if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
+      guided.radius_px *= 2.0f;
+      m = GuidedMatch(local.point_uv, local.point_descriptors, frame.keypoints.uv, frame_desc,
+                      guided);
+    }
+    for (size_t i = 0; i < local.point_ids.size(); ++i) {
+      if (m(i) < 0) continue;
+      const bool masked = valid_keypoints && !valid_keypoints->empty() && !(*valid_keypoints)[m(i)];
+      (masked ? out.masked_point_ids : out.point_ids).push_back(static_cast<int>(i));
+      (masked ? out.masked_keypoints : out.keypoints).push_back(m(i));
+    }
+  }
+
+  // Lines: predicted segments against frame segments (angle, distance, LBD).
+  std::vector<int> line_rows;  // snapshot rows of the matched lines
+  if (options_.use_lines && frame.NumLines() > 0) {
+    const float line_search = options_.line_search_px * radius_scale;
+    std::vector<std::tuple<float, int, int>> pairs;  // (LBD distance, snapshot row, segment)
+    for (size_t r = 0; r < local.line_ids.size(); ++r) {
+      const LineSegment& proj = local.line_px[r];
+      const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
       for (int j = 0; j < frame.NumLines(); ++j) {
         const LineSegment& seg = frame.lines[j];
         if (AngleDifference(seg.Angle(), proj.Angle()) > options_.line_max_angle_rad) continue;
@@ -497,36 +538,38 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
         if ((seg_mid - mid).norm() > 0.5f * (proj.Length() + seg.Length()) + line_search) {
           continue;
         }
-        const float d = DescriptorDistance(l->descriptor, 0, frame.line_descriptors, j);
-        if (d <= options_.line_max_lbd) pairs.emplace_back(d, lid, j);
+        const float d =
+            DescriptorDistance(local.line_descriptors, static_cast<int>(r), frame.line_descriptors, j);
+        if (d <= options_.line_max_lbd) pairs.emplace_back(d, static_cast<int>(r), j);
       }
     }
+    // Rows are in id order, so (distance, row, segment) sorts as (distance, id, segment).
     std::sort(pairs.begin(), pairs.end());
-    std::set<int> used_lines, used_segments;
-    for (const auto& [d, lid, j] : pairs) {
+    std::set<int> used_rows, used_segments;
+    for (const auto& [d, r, j] : pairs) {
       (void)d;
-      if (used_lines.count(lid) || used_segments.count(j)) continue;
-      used_lines.insert(lid);
+      if (used_rows.count(r) || used_segments.count(j)) continue;
+      used_rows.insert(r);
       used_segments.insert(j);
-      out.line_ids.push_back(lid);
+      line_rows.push_back(r);
       out.segments.push_back(j);
     }
   }
-  out.matching_ms = Ms(match_start);
+  out.matching_ms = local.ms + Ms(match_start);
 
   // Motion-only BA.
   const auto opt_start = Clock::now();
   std::vector<PointObservation> points(out.point_ids.size());
   for (size_t i = 0; i < out.point_ids.size(); ++i) {
     const int k = out.keypoints[i];
-    points[i].point_w = map.point(out.point_ids[i])->position;
+    points[i].point_w = local.point_w[out.point_ids[i]];
     points[i].stereo = frame.u_right[k] >= 0.0;
     points[i].observed << frame.keypoints.uv(k, 0), frame.keypoints.uv(k, 1), frame.u_right[k];
     points[i].sigma_px = options_.point_sigma_px;
   }
-  std::vector<LineObservation> lines(out.line_ids.size());
-  for (size_t i = 0; i < out.line_ids.size(); ++i) {
-    lines[i].line_w = map.line(out.line_ids[i])->line;
+  std::vector<LineObservation> lines(line_rows.size());
+  for (size_t i = 0; i < line_rows.size(); ++i) {
+    lines[i].line_w = local.lines_w[line_rows[i]];
     lines[i].start_px = frame.lines[out.segments[i]].start.cast<double>();
     lines[i].end_px = frame.lines[out.segments[i]].end.cast<double>();
     lines[i].sigma_px = options_.line_sigma_px;
@@ -535,7 +578,19 @@ Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map
   out.optimisation_ms = Ms(opt_start);
   out.weighted_inliers =
       out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
+  // Snapshot rows to map ids.
+  for (int& row : out.point_ids) row = local.point_ids[row];
+  for (int& row : out.masked_point_ids) row = local.point_ids[row];
+  for (int row : line_rows) out.line_ids.push_back(local.line_ids[row]);
   return out;
+}
+
+Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
+                                              const Eigen::Matrix3d& R_pred,
+                                              const Eigen::Vector3d& t_pred, float radius_scale,
+                                              const std::vector<bool>* valid_keypoints) const {
+  return TrackSnapshot(frame, SnapshotLocalMap(frame, map, reference_kf, R_pred, t_pred), R_pred,
+                       t_pred, radius_scale, valid_keypoints);
 }
 
 GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scale) const {
@@ -813,9 +868,16 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   }
   auto track_local_map = [&](float scale) {
     Map& map = atlas_.map(active_);
-    std::lock_guard<std::mutex> lock(map.mutex());
-    tracking = TrackLocalMap(*frame, map, last_keyframe_, R_pred, t_pred, scale, &valid);
-    SetAnchor(map, last_keyframe_);
+    LocalMapSnapshot local;
+    {
+      // The lock covers the copy only; matching and the pose run beside local mapping. The
+      // anchor records the world the snapshot was taken in (FollowAnchor moves the estimate
+      // with a correction written meanwhile).
+      std::lock_guard<std::mutex> lock(map.mutex());
+      local = SnapshotLocalMap(*frame, map, last_keyframe_, R_pred, t_pred);
+      SetAnchor(map, last_keyframe_);
+    }
+    tracking = TrackSnapshot(*frame, local, R_pred, t_pred, scale, &valid);
   };
   if (mode_ != Mode::kLost) {
     track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);

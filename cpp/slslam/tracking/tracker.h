@@ -211,7 +211,31 @@ class Tracker {
                       Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
                       const std::vector<int>& line_matches,
                       const std::vector<bool>& valid_keypoints = {});
-  // Caller holds map.mutex().
+  // What tracking needs of the local map around a reference keyframe, copied under the map
+  // lock: the landmarks in front of the predicted camera, with their positions, descriptors and
+  // predicted image positions, in id order. Matching and the motion-only BA run on it without
+  // the lock (threaded mode: local mapping and loop closing go on meanwhile).
+  struct LocalMapSnapshot {
+    std::vector<int> point_ids;
+    std::vector<Eigen::Vector3d> point_w;
+    Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> point_uv;  ///< predicted [px]
+    cv::Mat point_descriptors;                                            ///< one row per point
+    std::vector<int> line_ids;
+    std::vector<PluckerLine> lines_w;
+    std::vector<LineSegment> line_px;  ///< predicted segments [px]
+    cv::Mat line_descriptors;          ///< one row per line
+    double ms = 0.0;                   ///< time taken to copy it
+  };
+  // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling).
+  LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
+                                    const Eigen::Matrix3d& R_pred,
+                                    const Eigen::Vector3d& t_pred) const;
+  // No lock: guided matching of the snapshot in the frame and the motion-only BA.
+  LocalTracking TrackSnapshot(const StereoFrame& frame, const LocalMapSnapshot& local,
+                              const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
+                              float radius_scale,
+                              const std::vector<bool>* valid_keypoints = nullptr) const;
+  // Both in one (caller holds map.mutex()): relocalisation, loop verification.
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
                               float radius_scale,
