@@ -365,6 +365,12 @@ def run_command(
         bool, typer.Option("--no-lines", help="Points only (overrides the config).")
     ] = False,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+    quiet: Annotated[
+        bool,
+        typer.Option(
+            "--quiet", "-q", help="No progress bar and no info lines (as `slslam --quiet run`)."
+        ),
+    ] = False,
     viewer: Annotated[
         bool,
         typer.Option(
@@ -421,6 +427,11 @@ def run_command(
     from slslam.tracking.run import RunInterrupted
 
     _check_output_folder(out)
+    if quiet:
+        from slslam.progress import set_quiet
+
+        set_quiet(True)
+        logging.getLogger().setLevel(logging.WARNING)
     cfg = load_config(config)
     if orb:
         cfg = dataclasses.replace(
@@ -670,11 +681,22 @@ def version_command() -> None:
 @app.callback()
 def _main(
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Debug logging.")] = False,
+    quiet: Annotated[
+        bool,
+        typer.Option(
+            "--quiet",
+            "-q",
+            help="No progress bars and no info lines: warnings, errors and the final summary "
+            "only (also `slslam run --quiet`).",
+        ),
+    ] = False,
 ) -> None:
-    logging.basicConfig(
-        level=logging.DEBUG if verbose else logging.INFO,
-        format="%(levelname)s %(name)s: %(message)s",
-    )
+    from slslam.progress import set_quiet
+
+    set_quiet(quiet)
+    level = logging.DEBUG if verbose else (logging.WARNING if quiet else logging.INFO)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    logging.getLogger().setLevel(level)  # also when logging was configured before (tests)
     # evo logs every statistic at INFO; slslam prints its own table instead.
     logging.getLogger("evo").setLevel(logging.DEBUG if verbose else logging.WARNING)
 

@@ -18,15 +18,24 @@ T = TypeVar("T")
 #: Seconds between two progress lines when stderr is not a terminal.
 LOG_INTERVAL_S = 10.0
 
+_quiet = False
+
+
+def set_quiet(quiet: bool) -> None:
+    """Turns every progress bar of the process off (``slslam --quiet``) or back on."""
+    global _quiet
+    _quiet = bool(quiet)
+
 
 def progress_bar(
     iterable: Iterable[T], desc: str, unit: str, enabled: bool = True, **kwargs
 ) -> tqdm:
     """A tqdm bar over ``iterable`` on stderr: live on a terminal, one line every
-    ``LOG_INTERVAL_S`` seconds otherwise; nothing when ``enabled`` is false."""
+    ``LOG_INTERVAL_S`` seconds otherwise; nothing when ``enabled`` is false or the process is
+    quiet (:func:`set_quiet`)."""
     interactive = sys.stderr.isatty()
     options = (
         {"mininterval": 0.1} if interactive else {"mininterval": LOG_INTERVAL_S, "ascii": True}
     )
     options.update(kwargs)
-    return tqdm(iterable, desc=desc, unit=unit, disable=not enabled, file=sys.stderr, **options)
+    return tqdm(iterable, desc=desc, unit=unit, disable=not enabled or _quiet, file=sys.stderr, **options)
