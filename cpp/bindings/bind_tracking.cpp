@@ -126,6 +126,8 @@ class TrackerSession {
     out["global_ba_ms"] = loops.global_ba_ms;
     out["global_ba_lock_ms"] = loops.global_ba_lock_ms;
     out["global_ba_cancelled"] = loops.global_ba_cancelled;
+    out["welding_ba_runs"] = loops.welding_ba_runs;
+    out["welding_ba_ms"] = loops.welding_ba_ms;
     py::list loop_events;
     for (const LoopEvent& e : events) {
       py::dict d;
@@ -292,6 +294,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("max_correction_rad", &LoopClosingOptions::max_correction_rad)
       .def_readwrite("strong_covisibility", &LoopClosingOptions::strong_covisibility)
       .def_readwrite("global_ba", &LoopClosingOptions::global_ba)
+      .def_readwrite("welding_keyframes", &LoopClosingOptions::welding_keyframes)
       .def_readwrite("pose_graph", &LoopClosingOptions::pose_graph)
       .def("check", &LoopClosingOptions::Check);
 

@@ -1079,6 +1079,12 @@ class LoopClosingOptions:
     @strong_covisibility.setter
     def strong_covisibility(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+    @property
+    def welding_keyframes(self) -> int:
+        ...
+    @welding_keyframes.setter
+    def welding_keyframes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class TrackerOptions:
     """
     Tracking, mapping and front-end thresholds.

@@ -163,6 +163,9 @@ class LoopClosingConfig:
     # repeated arch seen as the old one gives a confident, implausibly large jump)
     max_correction_ratio: float = _option(0.05, "[0, 1]")
     max_correction_floor_m: float = _option(0.5, "[0, 1000]")  # correction always allowed [m]
+    # welding BA after a merge: the merged keyframe and the candidate, each with this many best
+    # covisible keyframes, optimised before the global BA (0: none)
+    welding_keyframes: int = _option(10, "[0, 1000]")
 
 
 @dataclass(frozen=True)

@@ -52,6 +52,7 @@ def test_loop_closing_defaults_agree_with_cpp():
         "consistency",
         "max_correction_ratio",
         "max_correction_floor_m",
+        "welding_keyframes",
     ):
         assert getattr(loop, name) == pytest.approx(getattr(core, name)), name
     assert loop.min_inliers == pytest.approx(core.min_inliers)

@@ -63,6 +63,9 @@ void LoopClosingOptions::Check() const {
   SLSLAM_CHECK(std::isfinite(max_correction_rad) && max_correction_rad > 0.0,
                "tracking.loop_closing.max_correction_rad must be > 0");
   SLSLAM_CHECK(strong_covisibility >= 1, "tracking.loop_closing.strong_covisibility must be >= 1");
+  SLSLAM_CHECK(welding_keyframes >= 0 && welding_keyframes <= 1000,
+               "tracking.loop_closing.welding_keyframes must be in [0, 1000], got ",
+               welding_keyframes);
   SLSLAM_CHECK(vocabulary_levels_up >= 0,
                "tracking.loop_closing.vocabulary_levels_up must be >= 0");
   SLSLAM_CHECK(std::isfinite(point_sigma_px) && point_sigma_px > 0.0 &&
@@ -387,6 +390,12 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         for (const LoopEdge& e : loop_edges_[source]) edges.push_back(e);
         loop_edges_.erase(source);
         Correct(&target_map, keyframe_id, verified);
+        // Inline, a global BA over the whole map follows at once and subsumes it.
+        if (!options_.global_ba || background_global_ba_) {
+          std::set<int> merged_side;
+          for (const auto& [id, bow] : moved) merged_side.insert(id);
+          WeldingBundleAdjustment(&target_map, keyframe_id, verified.candidate, merged_side);
+        }
         std::lock_guard<std::mutex> stats_lock(stats_mutex_);
         ++stats_.merges;
         changed = true;
@@ -590,6 +599,71 @@ void LoopCloser::Fuse(Map* map, int keyframe_id, const LocalMapMatch& match) {
     }
     map->AddLineObservation(keep->id, keyframe_id, s);
   }
+}
+
+void LoopCloser::WeldingBundleAdjustment(Map* map, int keyframe_id, int candidate_id,
+                                         const std::set<int>& merged_side) {
+  if (options_.welding_keyframes <= 0) return;
+  const auto start = Clock::now();
+  // The window: both sides of the seam, each keyframe with its best covisible ones (after the
+  // fusion, covisibility crosses the seam). As in ORB-SLAM3 the older map's side is fixed (it
+  // holds the world the merged map was moved into) and the merged map's side moves onto it.
+  std::set<int> window;
+  for (int side : {keyframe_id, candidate_id}) {
+    if (!map->keyframe(side)) continue;
+    window.insert(side);
+    for (int id : map->BestCovisible(side, options_.welding_keyframes)) {
+      if (map->keyframe(id)) window.insert(id);
+    }
+  }
+  int free_poses = 0;
+  for (int id : window) free_poses += merged_side.count(id) > 0;
+  if (free_poses == 0 || !window.count(candidate_id)) return;
+  MapBundleAdjustment ba(map->correction_epoch());
+  std::unordered_map<int, int> pose_index;
+  for (int id : window) {
+    pose_index[id] = ba.AddPose(*map->keyframe(id), /*fixed=*/merged_side.count(id) == 0);
+  }
+  // Other observers of the window's landmarks anchor it too, fixed (at most as many as the
+  // window has).
+  int fixed_added = 0;
+  const int max_fixed = static_cast<int>(window.size());
+  auto pose_of = [&](int kf_id) -> int {
+    auto it = pose_index.find(kf_id);
+    if (it != pose_index.end()) return it->second;
+    if (fixed_added >= max_fixed || !map->keyframe(kf_id)) return -1;
+    ++fixed_added;
+    return pose_index[kf_id] = ba.AddPose(*map->keyframe(kf_id), /*fixed=*/true);
+  };
+  std::set<int> points, lines;
+  for (int id : window) {
+    auto kf = map->keyframe(id);
+    for (int pid : kf->point_ids) {
+      if (pid >= 0) points.insert(pid);
+    }
+    for (int lid : kf->line_ids) {
+      if (lid >= 0) lines.insert(lid);
+    }
+  }
+  for (int pid : points) {
+    auto p = map->point(pid);
+    if (p && !p->bad) ba.AddPoint(*map, *p, options_.point_sigma_px, pose_of);
+  }
+  for (int lid : lines) {
+    auto l = map->line(lid);
+    if (l && !l->bad) ba.AddLine(*map, *l, options_.line_sigma_px, pose_of);
+  }
+  // Solved under the maps' locks, as the merge itself (a window of about 20 keyframes: tens of
+  // milliseconds, benchmarks/README.md).
+  const BundleAdjustmentReport report =
+      SolveBundleAdjustment(rig_, &ba.problem(), options_.global_ba_options);
+  if (!report.solved) return;
+  ba.Apply(map, report);
+  for (int id : window) map->UpdateConnections(id);
+  map->BumpCorrectionEpoch();
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  ++stats_.welding_ba_runs;
+  stats_.welding_ba_ms += Ms(start);
 }
 
 void LoopCloser::GlobalBundleAdjustment(Atlas* atlas, int map_index) {

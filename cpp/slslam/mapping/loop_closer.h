@@ -31,6 +31,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -62,6 +63,12 @@ struct LoopClosingOptions {
   double max_correction_rad = 0.3;      ///< same map: largest rotation correction [rad]
   int strong_covisibility = 100;  ///< shared points for an essential-graph covisibility edge [-]
   bool global_ba = true;          ///< global bundle adjustment after a loop or merge
+  /// Welding BA after a merge (ORB-SLAM3's): the merged keyframe and the candidate, each with
+  /// this many of its best covisible keyframes, with the points and lines they see; the older
+  /// map's keyframes and the landmarks' other observers fixed, the merged map's side free. It
+  /// makes the seam consistent before a background global BA, or without one; sequential mode
+  /// with global_ba skips it (the inline global BA follows at once) [-]; 0: no welding BA
+  int welding_keyframes = 10;
   int vocabulary_levels_up = 2;   ///< direct-index level of the keyframes' words
   double point_sigma_px = 1.0;    ///< global BA point sigma [px] (the tracker sets its own)
   double line_sigma_px = 3.0;     ///< global BA line sigma [px]
@@ -83,6 +90,8 @@ struct LoopClosingStats {
   double loop_ms = 0.0;            ///< detection + verification + correction [ms]
   double global_ba_ms = 0.0;       ///< build + solve + write back of the finished runs [ms]
   double global_ba_lock_ms = 0.0;  ///< of which the map's lock was held (build, write back) [ms]
+  int welding_ba_runs = 0;         ///< welding BAs after merges
+  double welding_ba_ms = 0.0;      ///< their build + solve + write back [ms]
 };
 
 // What the tracker found when tracking the candidate's local map in the keyframe's frame from a
@@ -174,6 +183,11 @@ class LoopCloser {
   void Correct(Map* map, int keyframe_id, const Verified& verified);
   void Fuse(Map* map, int keyframe_id, const LocalMapMatch& match);
   // Global BA over every keyframe, point and line of the atlas's map `map_index` (see 6. above).
+  // After a merge, under the map's lock: local BA over the two sides of the seam (see
+  // LoopClosingOptions::welding_keyframes), inline; `merged_side` holds the keyframes of the map
+  // just merged (free), the others are fixed.
+  void WeldingBundleAdjustment(Map* map, int keyframe_id, int candidate_id,
+                               const std::set<int>& merged_side);
   void GlobalBundleAdjustment(Atlas* atlas, int map_index);
   void CancelGlobalBa();
 

@@ -27,6 +27,11 @@ double Ms(Clock::time_point since) {
   return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
 }
 
+// One descriptor row of the same type and width as the rows of `rows`.
+bool SameKind(const cv::Mat& descriptor, const cv::Mat& rows) {
+  return descriptor.rows == 1 && descriptor.cols == rows.cols && descriptor.type() == rows.type();
+}
+
 bool InImage(const PinholeCamera& camera, const Eigen::Vector2d& uv, double margin = 0.0) {
   return uv.x() >= -margin && uv.y() >= -margin && uv.x() <= camera.width - 1 + margin &&
          uv.y() <= camera.height - 1 + margin;
@@ -216,6 +221,19 @@ void Tracker::FollowCorrections() {
   last_t_ = r.R_fr * t_rw + r.t_fr;
 }
 
+std::unique_lock<std::mutex> Tracker::LockActiveMap() {
+  // A merge marks the source map merged under the locks of both maps, so once the lock of a map
+  // that is not merged is held, it stays the live one until the lock is released.
+  for (;;) {
+    const int live = atlas_.Resolve(active_);
+    std::unique_lock<std::mutex> lock(atlas_.map(live).mutex());
+    if (!atlas_.merged(live)) {
+      active_ = live;
+      return lock;
+    }
+  }
+}
+
 void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   FrameRecord r;
   r.index = frame.index;
@@ -232,8 +250,9 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
     records_.push_back(r);
     return;
   }
+  const std::unique_lock<std::mutex> lock = LockActiveMap();
   Map& map = atlas_.map(active_);
-  std::lock_guard<std::mutex> lock(map.mutex());
+  r.map_index = active_;
   if (FollowAnchor(map, {{&last_R_, &last_t_}})) {
     r.R_cw = last_R_;
     r.t_cw = last_t_;
@@ -358,7 +377,6 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
                              Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches,
                              const std::vector<bool>& valid_keypoints) {
-  Map& map = atlas_.map(active_);
   BowVector bow;
   FeatureVector bow_features;
   if (vocabulary_ && frame->NumKeypoints() > 0) {
@@ -366,8 +384,13 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
                            options_.relocalisation.vocabulary_levels_up);
   }
   int kf_id = -1;
+  Map* live = nullptr;
   {
-    std::lock_guard<std::mutex> lock(map.mutex());
+    // The map the frame was tracked in may have been merged into another since (threaded mode):
+    // the keyframe goes into the live one, its pose follows the merge (FollowAnchor).
+    const std::unique_lock<std::mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    live = &map;
     // (the frame's pose is the last pose: both move with a correction written meanwhile)
     if (FollowAnchor(map, {{&R_cw, &t_cw}, {&last_R_, &last_t_}})) {
       seen_epoch_ = map.correction_epoch();
@@ -408,7 +431,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
   last_keyframe_ = kf_id;
   last_keyframe_frame_ = frame->index;
   first_tracked_ = 0;
-  mapper_->Insert(&map, kf_id);
+  mapper_->Insert(live, kf_id);
 }
 
 Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Map& map,
@@ -447,6 +470,10 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
+    // A descriptor of another kind (a loaded map of another front end) cannot be matched.
+    if (frame.NumKeypoints() > 0 && !SameKind(p->descriptor, frame.keypoints.descriptors)) {
+      continue;
+    }
     points.push_back(p);
     predicted.push_back(uv.cast<float>());
     p->visible += 1;
@@ -478,13 +505,14 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
       proj.end = camera.Project(e_c).cast<float>();
       const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
       if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
+      if (!SameKind(l->descriptor, frame.line_descriptors)) continue;
       l->visible += 1;
       lines.push_back(l);
       snap.line_px.push_back(proj);
     }
     if (!lines.empty()) {
-      const cv::Mat& first = lines.front()->descriptor;
-      snap.line_descriptors = cv::Mat(static_cast<int>(lines.size()), first.cols, first.type());
+      const cv::Mat& kind = frame.line_descriptors;
+      snap.line_descriptors = cv::Mat(static_cast<int>(lines.size()), kind.cols, kind.type());
       for (size_t i = 0; i < lines.size(); ++i) {
         snap.line_ids.push_back(lines[i]->id);
         snap.lines_w.push_back(lines[i]->line);
@@ -742,6 +770,8 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
     if (!local.pose.success || local.weighted_inliers < ro.min_inliers) continue;
     *tracking = std::move(local);
     *keyframe_id = kf->id;
+    // The pose is in the map's world as of now (not as of an earlier, failed local tracking).
+    SetAnchor(map, kf->id);
     return true;
   }
   return false;
@@ -806,9 +836,9 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     hypotheses.emplace_back(R, t);
   }
   LocalTracking best;
-  Map& map = atlas_.map(active_);
   for (const auto& [R, t] : hypotheses) {
-    std::lock_guard<std::mutex> lock(map.mutex());
+    const std::unique_lock<std::mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
     LocalTracking attempt =
         TrackLocalMap(frame, map, last_keyframe_, R, t, options_.lost_search_scale);
     if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
@@ -867,13 +897,13 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
   }
   auto track_local_map = [&](float scale) {
-    Map& map = atlas_.map(active_);
     LocalMapSnapshot local;
     {
       // The lock covers the copy only; matching and the pose run beside local mapping. The
       // anchor records the world the snapshot was taken in (FollowAnchor moves the estimate
       // with a correction written meanwhile).
-      std::lock_guard<std::mutex> lock(map.mutex());
+      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      Map& map = atlas_.map(active_);
       local = SnapshotLocalMap(*frame, map, last_keyframe_, R_pred, t_pred);
       SetAnchor(map, last_keyframe_);
     }
@@ -906,14 +936,14 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   result.optimisation_ms = tracking.optimisation_ms;
 
   if (tracked || relocalised) {
-    active_ = atlas_.Resolve(active_);  // merged into another map meanwhile (threaded mode)
-    Map& map = atlas_.map(active_);
     std::vector<int> point_match(frame->NumKeypoints(), -1);
     std::vector<int> line_match(frame->NumLines(), -1);
     bool make_keyframe = false;
     bool velocity_known = mode_ == Mode::kTracking;
     {
-      std::lock_guard<std::mutex> lock(map.mutex());
+      // (the live map: merged into another meanwhile in threaded mode, see LockActiveMap)
+      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      Map& map = atlas_.map(active_);
       // The last pose moves too when it was in the world the estimate was made in; otherwise
       // (a merge meanwhile) the motion between the two is unknown.
       const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
@@ -951,7 +981,8 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     if (options_.localise_only) {
       // No keyframes are made: the reference keyframe (centre of the local map) moves to the
       // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
-      std::lock_guard<std::mutex> lock(map.mutex());
+      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      const Map& map = atlas_.map(active_);
       std::map<int, int> seen;
       for (int pid : point_match) {
         auto p = pid >= 0 ? map.point(pid) : nullptr;

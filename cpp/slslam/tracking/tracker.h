@@ -14,6 +14,7 @@
 
 #include <initializer_list>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -240,6 +241,9 @@ class Tracker {
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
                               float radius_scale,
                               const std::vector<bool>* valid_keypoints = nullptr) const;
+  // Locks the live map of the active one (where a merge has moved it, threaded mode), makes it
+  // the active map and returns its lock.
+  std::unique_lock<std::mutex> LockActiveMap();
   // Guided matching bounds for descriptors of this type, window scaled by radius_scale.
   GuidedMatchOptions GuidedOptions(int descriptor_type, float radius_scale) const;
   // Updates the dynamic-cell filter from the previous tracked frame's stereo keypoints matched

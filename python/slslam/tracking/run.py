@@ -354,6 +354,8 @@ def _map_metrics(map_data: MapData) -> dict:
         "global_ba_ms": stats.global_ba_ms,
         "global_ba_lock_ms": stats.global_ba_lock_ms,
         "global_ba_cancelled": stats.global_ba_cancelled,
+        "welding_ba_runs": stats.welding_ba_runs,
+        "welding_ba_ms": stats.welding_ba_ms,
         "loop_events": [dataclasses.asdict(e) for e in stats.loop_events],
     }
 

@@ -135,6 +135,8 @@ class MapStats:
     global_ba_ms: float = 0.0  #: build, solve and write back of the finished global BAs
     global_ba_lock_ms: float = 0.0  #: of which the map was locked (the rest ran beside tracking)
     global_ba_cancelled: int = 0  #: background global BAs a newer loop or merge cancelled
+    welding_ba_runs: int = 0  #: welding BAs over the seam of a merge
+    welding_ba_ms: float = 0.0  #: their build, solve and write back
     loop_events: tuple[LoopEvent, ...] = ()
 
     def as_dict(self) -> dict:
@@ -235,6 +237,7 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
         "consistency",
         "max_correction_ratio",
         "max_correction_floor_m",
+        "welding_keyframes",
     )
 }
 LINES_TO_CORE: dict[str, tuple[str, ...]] = {

@@ -403,9 +403,10 @@ Eigen::Vector3d TrueCenterIn(int k, int origin) {
 // starts at the frozen pose, 4.5 m off; once its keyframes see map 1's landmarks, loop closing
 // merges it into map 1, and every frame of the second stretch ends up at its true place in map
 // 1's frame.
-void ExpectASecondMapMergedIntoTheFirst(bool sequential) {
+void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true) {
   const Scene scene;
   TrackerOptions options = Options(sequential, /*lines=*/false);
+  options.loop_closing.global_ba = global_ba;
   options.vocabulary_path = SceneVocabulary(scene);
   options.relocalisation.min_inliers = 1e9;
   Tracker tracker(options);
@@ -424,7 +425,9 @@ void ExpectASecondMapMergedIntoTheFirst(bool sequential) {
   EXPECT_EQ(tracker.live_maps(), 1);
   EXPECT_EQ(tracker.loop_stats().merges, 1);
   EXPECT_EQ(tracker.loop_stats().loops_accepted, 0);
-  EXPECT_EQ(tracker.loop_stats().global_ba_runs, 1);
+  EXPECT_EQ(tracker.loop_stats().global_ba_runs, global_ba ? 1 : 0);
+  // The welding BA runs where no global BA follows inline (threaded: it runs in the background).
+  EXPECT_EQ(tracker.loop_stats().welding_ba_runs, !global_ba || !sequential ? 1 : 0);
   // The final trajectory: the second stretch sits where it truly was, in map 1's frame (1.6 cm
   // at most measured; the frozen start was 4.5 m off). Before the tracker followed the merge
   // (prediction and frame record from the merged keyframe), tracking was lost right after it.
@@ -447,6 +450,12 @@ TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
 // correction, and Flush waits for it (Trajectory flushes).
 TEST(TrackerTest, ThreadedModeMergesAndRunsTheGlobalBaInTheBackground) {
   ExpectASecondMapMergedIntoTheFirst(/*sequential=*/false);
+}
+
+// Without a global BA the welding BA over the seam (the merged keyframe's and the candidate's
+// covisible keyframes) is what joins the two maps' landmarks after the essential graph.
+TEST(TrackerTest, AWeldingBaJoinsTheSeamOfAMergeWithoutAGlobalBa) {
+  ExpectASecondMapMergedIntoTheFirst(/*sequential=*/true, /*global_ba=*/false);
 }
 
 // The scene's first 5 m of walls repeated every 5 m with the same descriptors: one arch after
