@@ -6,51 +6,23 @@
 #include <gtest/gtest.h>
 
 #include "slslam/geometry/rotation.h"
+#include "../test_support.h"
 
 namespace slslam {
 namespace {
 
-StereoRig TestRig() {
-  StereoRig rig;
-  rig.camera.fx = 458.0;
-  rig.camera.fy = 457.0;
-  rig.camera.cx = 367.0;
-  rig.camera.cy = 248.0;
-  rig.camera.width = 752;
-  rig.camera.height = 480;
-  rig.baseline_m = 0.11;
-  return rig;
-}
+using test::EurocLikeRig;
 
 struct TestPose {
   Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2));
   Eigen::Vector3d t = Eigen::Vector3d(0.3, -0.1, 0.5);
 };
 
-// Central differences of f over a `cols`-dimensional increment.
-template <int Rows>
-Eigen::Matrix<double, Rows, Eigen::Dynamic> NumericJacobian(
-    int cols, const std::function<Eigen::Matrix<double, Rows, 1>(const Eigen::VectorXd&)>& f) {
-  const double h = 1e-6;
-  Eigen::Matrix<double, Rows, Eigen::Dynamic> j(Rows, cols);
-  for (int k = 0; k < cols; ++k) {
-    Eigen::VectorXd d = Eigen::VectorXd::Zero(cols);
-    d(k) = h;
-    j.col(k) = (f(d) - f(-d)) / (2 * h);
-  }
-  return j;
-}
-
-// Relative comparison: residual Jacobians here are in pixels per unit and reach 1e3.
-template <typename A, typename B>
-void ExpectClose(const A& analytic, const B& numeric, double rel = 1e-6) {
-  const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
-  EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), rel * scale)
-      << "analytic\n" << analytic << "\nnumeric\n" << numeric;
-}
+using test::ExpectClose;
+using test::NumericJacobian;
 
 TEST(PointResidual, JacobiansMatchNumeric) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   const TestPose pose;
   const Eigen::Vector3d point(0.4, -0.2, 5.0);
   const Eigen::Vector2d observed(300.0, 200.0);
@@ -77,7 +49,7 @@ TEST(PointResidual, JacobiansMatchNumeric) {
 }
 
 TEST(StereoPointResidual, JacobiansMatchNumericAndRightCoordinateIsDisparity) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   const TestPose pose;
   const Eigen::Vector3d point(0.4, -0.2, 5.0);
   const Eigen::Vector3d x_c = pose.R * point + pose.t;
@@ -109,7 +81,7 @@ class LineResidualTest : public ::testing::TestWithParam<double> {};
 
 TEST_P(LineResidualTest, JacobiansMatchNumeric) {
   const double angle_weight = GetParam();
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   const TestPose pose;
   const PluckerLine line =
       PluckerLine::FromPoints(Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5));
@@ -153,7 +125,7 @@ TEST_P(LineResidualTest, JacobiansMatchNumeric) {
 INSTANTIATE_TEST_SUITE_P(AngleWeights, LineResidualTest, ::testing::Values(0.0, 10.0));
 
 TEST(LineResidual, DistancesAndBoundedAngleTerm) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   const Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   const Eigen::Vector3d t = Eigen::Vector3d::Zero();
   // A vertical line (a roof bolt): its projection is the column u = cx + fx * 0.5 / 4.

@@ -9,21 +9,12 @@
 
 #include "slslam/geometry/rotation.h"
 #include "slslam/optimization/manifolds.h"
+#include "../test_support.h"
 
 namespace slslam {
 namespace {
 
-StereoRig TestRig() {
-  StereoRig rig;
-  rig.camera.fx = 458.0;
-  rig.camera.fy = 457.0;
-  rig.camera.cx = 367.0;
-  rig.camera.cy = 248.0;
-  rig.camera.width = 752;
-  rig.camera.height = 480;
-  rig.baseline_m = 0.11;
-  return rig;
-}
+using test::EurocLikeRig;
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
@@ -80,21 +71,21 @@ std::vector<double> PoseParams() {
 }
 
 TEST(CostFunctions, PointCostJacobiansThroughManifold) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.5);
   PoseManifold pose_manifold;
   CheckCost(cost, {PoseParams(), {0.4, -0.2, 5.0}}, {&pose_manifold, nullptr});
 }
 
 TEST(CostFunctions, StereoPointCostJacobiansThroughManifold) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   StereoPointCost cost(rig, Eigen::Vector3d(300.0, 200.0, 290.0), 1.0);
   PoseManifold pose_manifold;
   CheckCost(cost, {PoseParams(), {0.4, -0.2, 5.0}}, {&pose_manifold, nullptr});
 }
 
 TEST(CostFunctions, LineCostJacobiansThroughManifold) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
                 1.0);
   std::vector<double> line(kLineSize);
@@ -130,7 +121,7 @@ TEST(Manifolds, MinusInvertsPlus) {
 }
 
 TEST(CostFunctions, BehindCameraIsNotEvaluated) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.0);
   std::vector<double> pose(kPoseSize);
   PoseToParameters(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), pose.data());

@@ -5,21 +5,12 @@
 #include <gtest/gtest.h>
 
 #include "slslam/geometry/rotation.h"
+#include "../test_support.h"
 
 namespace slslam {
 namespace {
 
-StereoRig TestRig() {
-  StereoRig rig;
-  rig.camera.fx = 458.0;
-  rig.camera.fy = 457.0;
-  rig.camera.cx = 367.0;
-  rig.camera.cy = 248.0;
-  rig.camera.width = 752;
-  rig.camera.height = 480;
-  rig.baseline_m = 0.11;
-  return rig;
-}
+using test::EurocLikeRig;
 
 struct Scene {
   Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.05, -0.4, 0.1));
@@ -33,7 +24,7 @@ struct Scene {
 // Landmarks 2-12 m in front of the true camera, observed with 0.5 px noise; a fraction of the
 // observations are gross outliers (20-60 px off).
 Scene MakeScene(int num_points, int num_lines, double outlier_fraction, unsigned seed) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = EurocLikeRig();
   Scene s;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uu(30.0, 720.0), vv(30.0, 450.0), depth(2.0, 12.0);
@@ -88,7 +79,7 @@ TEST(PoseOptimizer, PointsWithOutliersRecoverPoseAndFlagOutliers) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, s.points, {});
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, s.points, {});
   ASSERT_TRUE(r.success);
   EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
   EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
@@ -102,7 +93,7 @@ TEST(PoseOptimizer, LinesAloneRecoverPose) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, {}, s.lines);
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, {}, s.lines);
   ASSERT_TRUE(r.success);
   EXPECT_LT((r.t_cw - s.t).norm(), 0.02);
   EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.2);
@@ -118,7 +109,7 @@ TEST(PoseOptimizer, PointsAndLinesTogether) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
   ASSERT_TRUE(r.success);
   EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
   EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
@@ -127,12 +118,12 @@ TEST(PoseOptimizer, PointsAndLinesTogether) {
 
 TEST(PoseOptimizer, TooFewObservationsKeepsInitialPose) {
   const Scene s = MakeScene(2, 0, 0.0, 4);
-  const PoseOptimizerResult r = OptimizePose(TestRig(), s.R, s.t, s.points, {});
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), s.R, s.t, s.points, {});
   EXPECT_FALSE(r.success);
   EXPECT_TRUE(r.R_cw.isApprox(s.R));
   Eigen::Matrix3d nan_r = s.R;
   nan_r(0, 0) = NAN;
-  EXPECT_THROW(OptimizePose(TestRig(), nan_r, s.t, s.points, {}), std::invalid_argument);
+  EXPECT_THROW(OptimizePose(EurocLikeRig(), nan_r, s.t, s.points, {}), std::invalid_argument);
 }
 
 TEST(PoseOptimizer, Deterministic) {
@@ -140,8 +131,8 @@ TEST(PoseOptimizer, Deterministic) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult a = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
-  const PoseOptimizerResult b = OptimizePose(TestRig(), R0, t0, s.points, s.lines);
+  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
+  const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
   EXPECT_EQ(a.t_cw, b.t_cw);
   EXPECT_EQ(a.R_cw, b.R_cw);
 }
