@@ -31,6 +31,8 @@ feature takes its frame's colour.
 from __future__ import annotations
 
 import logging
+import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -48,6 +50,13 @@ STATE_COLOURS: dict[str, tuple[int, int, int]] = {
 }
 TRACKED = ("OK", "RELOCALISED", "NEW_MAP")
 COUNT_PLOTS = ("keypoints", "inlier_points", "inlier_lines")
+def _has_display() -> bool:
+    """Whether a spawned viewer can open a window: on Linux an X11 or Wayland display is set."""
+    if not sys.platform.startswith("linux"):
+        return True
+    return any(os.environ.get(k) for k in ("DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"))
+
+
 VIEWER_TIMEOUT_S = 5.0  # how long a spawned viewer may take to accept the first data
 
 
@@ -94,6 +103,14 @@ class RerunLogger:
         self._path: list[np.ndarray] = []
         self._keyframes: list[np.ndarray] = []
         file_sink = [] if path is None else [rr.FileSink(str(path))]
+        if spawn and not _has_display():
+            # The viewer would start its server, accept some data and die when it cannot open a
+            # window: whether a flush sees it alive is a race, so do not spawn it at all.
+            reason = "no display: DISPLAY and WAYLAND_DISPLAY are unset"
+            if path is None:
+                raise ValueError(f"the rerun viewer is not reachable ({reason})")
+            log.warning("the rerun viewer is not reachable (%s); recording to %s only", reason, path)
+            spawn = False
         if spawn:
             self.rec.spawn(connect=False)
             self.rec.set_sinks(*file_sink, rr.GrpcSink())
