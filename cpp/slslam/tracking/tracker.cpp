@@ -430,6 +430,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
   if (!bow.empty()) atlas_.database(active_).Add(kf_id, bow);
   last_keyframe_ = kf_id;
   last_keyframe_frame_ = frame->index;
+  last_keyframe_time_s_ = frame->timestamp;
   first_tracked_ = 0;
   mapper_->Insert(live, kf_id);
 }
@@ -725,17 +726,20 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   // after the keyframe stand in for the reference then (how many of its points can be tracked).
   if (first_tracked_ == 0 && frames_since >= 1) first_tracked_ = tracked;
   reference = std::max(reference, first_tracked_);
-  const bool c1 = frames_since >= options_.keyframe_max_frames ||
-                  frames_since >= options_.keyframe_min_frames || tracked < 0.25 * reference ||
-                  need_close;
+  // The minimum gap after the last keyframe, in frames and in time.
+  const bool past_gap =
+      frames_since >= options_.keyframe_min_frames &&
+      frame.timestamp - last_keyframe_time_s_ >= options_.keyframe_min_interval_s;
+  const bool c1 = frames_since >= options_.keyframe_max_frames || past_gap ||
+                  tracked < 0.25 * reference || need_close;
   const bool c2 = (tracked < options_.keyframe_track_ratio * reference || need_close) &&
                   tracking.weighted_inliers > options_.min_inliers;
   // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
   const bool weak = tracking.weighted_inliers < options_.weak_keyframe_inliers &&
                     frames_since >= options_.weak_keyframe_frames;
-  // keyframe_min_frames is a hard gap while tracking is strong (sequential local mapping is
-  // always idle, so ORB-SLAM3's "mapping busy" brake never acts here).
-  const bool gap = frames_since >= std::max(1, options_.keyframe_min_frames);
+  // The minimum gap is a hard one while tracking is strong (sequential local mapping is always
+  // idle, so ORB-SLAM3's "mapping busy" brake never acts here).
+  const bool gap = frames_since >= 1 && past_gap;
   return frames_since >= 1 &&
          ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
 }
@@ -799,6 +803,7 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
     active_ = m;
     last_keyframe_ = keyframe_id;
     last_keyframe_frame_ = frame.index;
+    last_keyframe_time_s_ = frame.timestamp;
     first_tracked_ = 0;
     ++stats_.relocalisations;
     result->relocalisation_ms = Ms(start);
@@ -898,14 +903,25 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   }
   auto track_local_map = [&](float scale) {
     LocalMapSnapshot local;
-    {
+    for (int attempt = 0;; ++attempt) {
       // The lock covers the copy only; matching and the pose run beside local mapping. The
       // anchor records the world the snapshot was taken in (FollowAnchor moves the estimate
       // with a correction written meanwhile).
-      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      const int predicted_in = active_;
+      std::unique_lock<std::mutex> lock = LockActiveMap();
       Map& map = atlas_.map(active_);
+      if (attempt < 2 && (active_ != predicted_in || map.correction_epoch() != seen_epoch_)) {
+        // A merge or correction landed since the prediction (threaded mode): predict again in
+        // the new world rather than search the local map from the old one.
+        lock.unlock();
+        active_ = predicted_in;  // FollowCorrections sees the change and follows it
+        FollowCorrections();
+        Predict(&R_pred, &t_pred);
+        continue;
+      }
       local = SnapshotLocalMap(*frame, map, last_keyframe_, R_pred, t_pred);
       SetAnchor(map, last_keyframe_);
+      break;
     }
     tracking = TrackSnapshot(*frame, local, R_pred, t_pred, scale, &valid);
   };

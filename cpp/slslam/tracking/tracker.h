@@ -88,7 +88,11 @@ struct TrackerOptions {
   float line_max_angle_rad = 0.2f;     ///< [rad]
   float line_max_lbd = 80.0f;          ///< [bits]
   int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
-  int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
+  int keyframe_min_frames = 0;         ///< no keyframe sooner than this after the last [frames]
+  /// ... nor sooner than this after it [s], while tracking is strong: a gap in time, not frames,
+  /// so it means the same at any camera rate: 0.075 s is 2 frames at 20 Hz and 1 at 10 Hz, which
+  /// were the better gaps at those rates (benchmarks/README.md) [s], >= 0
+  double keyframe_min_interval_s = 0.075;
   double keyframe_track_ratio = 0.75;  ///< tracked / reference-keyframe points (those seen by
                                        ///< >= 3 keyframes) below this: keyframe [-]
   int keyframe_min_inliers = 100;      ///< fewer tracked close points (and > 70 untracked
@@ -292,6 +296,7 @@ class Tracker {
   Eigen::Vector3d velocity_t_ = Eigen::Vector3d::Zero();
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
+  double last_keyframe_time_s_ = 0.0;  ///< timestamp of the frame of the last keyframe [s]
   int first_tracked_ = 0;  ///< inliers of the first frame after the last keyframe
   // After a loop correction or merge moved the active map: the active map index and the last
   // pose follow (the pose through its reference keyframe).

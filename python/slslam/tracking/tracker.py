@@ -209,6 +209,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "line_max_lbd",
         "keyframe_max_frames",
         "keyframe_min_frames",
+        "keyframe_min_interval_s",
         "keyframe_track_ratio",
         "keyframe_min_inliers",
         "close_depth_baselines",
