@@ -194,9 +194,9 @@ class TrackingConfig:
     line_max_lbd: float = _option(80.0, "[1, 256]")
     keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
     # no keyframe sooner than this after the last while tracking is strong [frames]
-    keyframe_min_frames: int = _option(0, "[0, 1000]")
-    # ... nor sooner than this [s] (a gap in time: 0.075 s is 2 frames at 20 Hz, 1 at 10 Hz)
-    keyframe_min_interval_s: float = _option(0.075, "[0, 1000]")
+    keyframe_min_frames: int = _option(2, "[0, 1000]")
+    # ... nor sooner than this [s] (a gap in time, the same at any camera rate; 0: none)
+    keyframe_min_interval_s: float = _option(0.0, "[0, 1000]")
     # tracked / reference keyframe points below: keyframe
     keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
     keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe

@@ -88,11 +88,11 @@ struct TrackerOptions {
   float line_max_angle_rad = 0.2f;     ///< [rad]
   float line_max_lbd = 80.0f;          ///< [bits]
   int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
-  int keyframe_min_frames = 0;         ///< no keyframe sooner than this after the last [frames]
-  /// ... nor sooner than this after it [s], while tracking is strong: a gap in time, not frames,
-  /// so it means the same at any camera rate: 0.075 s is 2 frames at 20 Hz and 1 at 10 Hz, which
-  /// were the better gaps at those rates (benchmarks/README.md) [s], >= 0
-  double keyframe_min_interval_s = 0.075;
+  int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
+  /// ... nor sooner than this after it, while tracking is strong: a gap in time, the same at any
+  /// camera rate. Off by default: 0.075 s (2 frames at 20 Hz, 1 at 10 Hz) with no frame gap was
+  /// better on the dark 10 Hz loop and much worse on the bright one (benchmarks/README.md) [s]
+  double keyframe_min_interval_s = 0.0;
   double keyframe_track_ratio = 0.75;  ///< tracked / reference-keyframe points (those seen by
                                        ///< >= 3 keyframes) below this: keyframe [-]
   int keyframe_min_inliers = 100;      ///< fewer tracked close points (and > 70 untracked
