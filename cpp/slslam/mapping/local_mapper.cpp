@@ -108,33 +108,8 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
                            ? first_keyframe
                            : *std::min_element(local.begin(), local.end());
     for (int id : local) add_pose(id, id == anchor);
-    std::set<int> local_points, local_lines;
-    for (int id : local) {
-      auto kf = map->keyframe(id);
-      for (int pid : kf->point_ids) {
-        if (pid >= 0) local_points.insert(pid);
-      }
-      for (int lid : kf->line_ids) {
-        if (lid >= 0) local_lines.insert(lid);
-      }
-    }
-    int fixed_added = 0;
-    auto ensure_pose = [&](int kf_id) -> int {
-      auto it = pose_index.find(kf_id);
-      if (it != pose_index.end()) return it->second;
-      if (fixed_added >= options_.max_fixed_keyframes) return -1;
-      ++fixed_added;
-      add_pose(kf_id, true);
-      return pose_index[kf_id];
-    };
-    for (int pid : local_points) {
-      auto p = map->point(pid);
-      if (p && !p->bad) ba.AddPoint(*map, *p, options_.point_sigma_px, ensure_pose);
-    }
-    for (int lid : local_lines) {
-      auto l = map->line(lid);
-      if (l && !l->bad) ba.AddLine(*map, *l, options_.line_sigma_px, ensure_pose);
-    }
+    ba.AddWindowLandmarks(*map, local, &pose_index, options_.max_fixed_keyframes,
+                          options_.point_sigma_px, options_.line_sigma_px);
   }
 
   // The solve runs without the map lock: tracking goes on meanwhile.

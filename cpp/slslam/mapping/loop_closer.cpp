@@ -626,33 +626,9 @@ void LoopCloser::WeldingBundleAdjustment(Map* map, int keyframe_id, int candidat
   }
   // Other observers of the window's landmarks anchor it too, fixed (at most as many as the
   // window has).
-  int fixed_added = 0;
-  const int max_fixed = static_cast<int>(window.size());
-  auto pose_of = [&](int kf_id) -> int {
-    auto it = pose_index.find(kf_id);
-    if (it != pose_index.end()) return it->second;
-    if (fixed_added >= max_fixed || !map->keyframe(kf_id)) return -1;
-    ++fixed_added;
-    return pose_index[kf_id] = ba.AddPose(*map->keyframe(kf_id), /*fixed=*/true);
-  };
-  std::set<int> points, lines;
-  for (int id : window) {
-    auto kf = map->keyframe(id);
-    for (int pid : kf->point_ids) {
-      if (pid >= 0) points.insert(pid);
-    }
-    for (int lid : kf->line_ids) {
-      if (lid >= 0) lines.insert(lid);
-    }
-  }
-  for (int pid : points) {
-    auto p = map->point(pid);
-    if (p && !p->bad) ba.AddPoint(*map, *p, options_.point_sigma_px, pose_of);
-  }
-  for (int lid : lines) {
-    auto l = map->line(lid);
-    if (l && !l->bad) ba.AddLine(*map, *l, options_.line_sigma_px, pose_of);
-  }
+  ba.AddWindowLandmarks(*map, std::vector<int>(window.begin(), window.end()), &pose_index,
+                        static_cast<int>(window.size()), options_.point_sigma_px,
+                        options_.line_sigma_px);
   // Solved under the maps' locks, as the merge itself (a window of about 20 keyframes: tens of
   // milliseconds, benchmarks/README.md).
   const BundleAdjustmentReport report =

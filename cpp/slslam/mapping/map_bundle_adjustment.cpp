@@ -1,5 +1,6 @@
 #include "slslam/mapping/map_bundle_adjustment.h"
 
+#include <set>
 #include <unordered_set>
 
 namespace slslam {
@@ -13,6 +14,40 @@ struct WorldCorrection {
 };
 
 }  // namespace
+
+void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<int>& window,
+                                             std::unordered_map<int, int>* pose_index,
+                                             int max_fixed, double point_sigma_px,
+                                             double line_sigma_px) {
+  std::set<int> points, lines;
+  for (int id : window) {
+    auto kf = map.keyframe(id);
+    for (int pid : kf->point_ids) {
+      if (pid >= 0) points.insert(pid);
+    }
+    for (int lid : kf->line_ids) {
+      if (lid >= 0) lines.insert(lid);
+    }
+  }
+  int fixed_added = 0;
+  auto pose_of = [&](int kf_id) -> int {
+    auto it = pose_index->find(kf_id);
+    if (it != pose_index->end()) return it->second;
+    if (fixed_added >= max_fixed) return -1;
+    auto kf = map.keyframe(kf_id);
+    if (!kf) return -1;
+    ++fixed_added;
+    return (*pose_index)[kf_id] = AddPose(*kf, /*fixed=*/true);
+  };
+  for (int pid : points) {
+    auto p = map.point(pid);
+    if (p && !p->bad) AddPoint(map, *p, point_sigma_px, pose_of);
+  }
+  for (int lid : lines) {
+    auto l = map.line(lid);
+    if (l && !l->bad) AddLine(map, *l, line_sigma_px, pose_of);
+  }
+}
 
 int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
   const int index = static_cast<int>(problem_.poses.size());

@@ -25,6 +25,13 @@ class MapBundleAdjustment {
   void AddPoint(const Map& map, const MapPoint& p, double sigma_px, PoseOf&& pose_of);
   template <class PoseOf>
   void AddLine(const Map& map, const MapLine& l, double sigma_px, PoseOf&& pose_of);
+  // A window's landmarks: every point and line the keyframes of `window` observe (each once, in
+  // id order, bad ones skipped) with their observations. `pose_index` (keyframe id -> pose index)
+  // holds the window's poses; another observer joins as a fixed pose while fewer than
+  // `max_fixed` have, else its observation is left out. Caller holds the map's lock.
+  void AddWindowLandmarks(const Map& map, const std::vector<int>& window,
+                          std::unordered_map<int, int>* pose_index, int max_fixed,
+                          double point_sigma_px, double line_sigma_px);
 
   BaProblem& problem() { return problem_; }
   const BaProblem& problem() const { return problem_; }
