@@ -174,7 +174,8 @@ def main() -> None:
     (args.out / "loop_closing.json").write_text(json.dumps(results, indent=2))
     lines = [
         "| run | frames | posed | maps | ATE final [m] | ATE online [m] | loops det/acc/false "
-        "| merges | loop ms | global BA ms (runs) | of which map locked ms | welding BA ms (runs) |",
+        "| merges | loop ms | global BA ms (runs) | of which map locked ms "
+        "| welding BA ms (runs) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for label, r in results["runs"].items():

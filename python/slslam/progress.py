@@ -38,4 +38,5 @@ def progress_bar(
         {"mininterval": 0.1} if interactive else {"mininterval": LOG_INTERVAL_S, "ascii": True}
     )
     options.update(kwargs)
-    return tqdm(iterable, desc=desc, unit=unit, disable=not enabled or _quiet, file=sys.stderr, **options)
+    disable = not enabled or _quiet
+    return tqdm(iterable, desc=desc, unit=unit, disable=disable, file=sys.stderr, **options)

@@ -567,9 +567,9 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
         if ((seg_mid - mid).norm() > 0.5f * (proj.Length() + seg.Length()) + line_search) {
           continue;
         }
-        const float d =
-            DescriptorDistance(local.line_descriptors, static_cast<int>(r), frame.line_descriptors, j);
-        if (d <= options_.line_max_lbd) pairs.emplace_back(d, static_cast<int>(r), j);
+        const int row = static_cast<int>(r);
+        const float d = DescriptorDistance(local.line_descriptors, row, frame.line_descriptors, j);
+        if (d <= options_.line_max_lbd) pairs.emplace_back(d, row, j);
       }
     }
     // Rows are in id order, so (distance, row, segment) sorts as (distance, id, segment).

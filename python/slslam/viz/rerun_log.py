@@ -109,7 +109,9 @@ class RerunLogger:
             reason = "no display: DISPLAY and WAYLAND_DISPLAY are unset"
             if path is None:
                 raise ValueError(f"the rerun viewer is not reachable ({reason})")
-            log.warning("the rerun viewer is not reachable (%s); recording to %s only", reason, path)
+            log.warning(
+                "the rerun viewer is not reachable (%s); recording to %s only", reason, path
+            )
             spawn = False
         if spawn:
             self.rec.spawn(connect=False)
