@@ -183,7 +183,7 @@ def ate_rmse(estimate: Path, gt: PoseTrajectory3D | None) -> float | None:
 
 def run_slslam(folder: Path, config: Config, out: Path, frames: int | None, gt) -> dict:
     summary = run_sequence(folder, out, config, max_frames=frames, progress=True)
-    totals_s = sum(r.timings_ms["total"] for r in summary.results) / 1e3
+    totals_s = sum(r.timings_ms.total for r in summary.results) / 1e3
     n = len(summary.results)
     return {
         "frames": n,
@@ -369,11 +369,11 @@ def main() -> int:
         "ATE: evo APE translation RMSE [m], SE3 Umeyama alignment, left-camera ground truth, "
         "frames with an estimated pose. tracked: share of frames with an estimated pose. "
         "frames/s: frames / summed per-frame tracking time (ORB-SLAM3: wall time of the binary).",
-        *(f"{p['label']}: {' '.join(p['citation'].split())}" for p in published.values()),
         *(
-            f"{p['label']}: no numbers yet. {' '.join(p['note'].split())}"
+            f"{p['label']}: {' '.join(p['citation'].split())}"
+            + (f" {' '.join(p['note'].split())}" if p.get("note") else "")
+            + ("" if p["values"] else " (no numbers yet)")
             for p in published.values()
-            if not p["values"] and p.get("note")
         ),
     ]
     if args.frames:

@@ -118,7 +118,7 @@ def sequential_pass(sequence: EurocSequence, frames: list, config: Config) -> di
             result = tracker.track(left, right, t)
             latency.append((time.perf_counter() - start) * 1e3)
             for s in STAGES:
-                stages[s].append(result.timings_ms[s])
+                stages[s].append(getattr(result.timings_ms, s))
         frontend = tracker.frontend_name
         providers = getattr(tracker.frontend, "providers", None)
     return {
@@ -150,7 +150,7 @@ def pipelined_pass(sequence: EurocSequence, frames: list, config: Config, gt) ->
         cpu = time.process_time() - cpu0
         results = tracker.results
         map_data = tracker.map()
-    stages = {s: float(np.median([r.timings_ms[s] for r in results])) for s in STAGES}
+    stages = {s: float(np.median([getattr(r.timings_ms, s) for r in results])) for s in STAGES}
     estimate = tracked_trajectory(results)
     ate = None
     if estimate is not None:

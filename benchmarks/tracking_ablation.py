@@ -87,7 +87,7 @@ def stage_medians(summary: RunSummary, extra_ms: list[float] | None) -> dict:
         return medians
     extra = np.add(extra_ms[0::2], extra_ms[1::2])
     for stage in ("inference", "total"):
-        values = [r.timings_ms[stage] + e for r, e in zip(results, extra, strict=True)]
+        values = [getattr(r.timings_ms, stage) + e for r, e in zip(results, extra, strict=True)]
         medians[stage] = float(statistics.median(values))
     return medians
 

@@ -34,49 +34,44 @@ Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, cons
   return k;
 }
 
+// One frame through the session: the tracker's result, the front end's stage times and the
+// number of left-image line segments.
+struct FrameOutput {
+  TrackResult result;
+  StereoFrontendTiming timing;
+  int lines = 0;
+};
+
+// cam_from_world as a 4x4 matrix (x_cam = T * x_world), last row 0 0 0 1.
+Eigen::Matrix4d CamFromWorldMatrix(const TrackResult& r) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = r.R_cw;
+  T.topRightCorner<3, 1>() = r.t_cw;
+  return T;
+}
+
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
 class TrackerSession {
  public:
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
       : tracker_(options), frontend_({options.rig, options.stereo, lines, options.use_lines}) {}
 
-  py::dict Track(int index, double timestamp, const py::array& left_image,
-                 const py::array& right_image, const PixelArray& left_uv,
-                 const py::array& left_descriptors, const PixelArray& right_uv,
-                 const py::array& right_descriptors) {
+  FrameOutput Track(int index, double timestamp, const py::array& left_image,
+                    const py::array& right_image, const PixelArray& left_uv,
+                    const py::array& left_descriptors, const PixelArray& right_uv,
+                    const py::array& right_descriptors) {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
     Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
-    TrackResult r;
-    StereoFrontendTiming timing;
-    int num_lines = 0;
+    FrameOutput out;
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &timing);
-      num_lines = frame->NumLines();
-      r = tracker_.Track(frame);
+      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out.timing);
+      out.lines = frame->NumLines();
+      out.result = tracker_.Track(frame);
     }
-    py::dict out;
-    out["state"] = TrackingStateName(r.state);
-    out["R_cw"] = r.R_cw;
-    out["t_cw"] = r.t_cw;
-    out["map_index"] = r.map_index;
-    out["matched_points"] = r.matched_points;
-    out["inlier_points"] = r.inlier_points;
-    out["matched_lines"] = r.matched_lines;
-    out["inlier_lines"] = r.inlier_lines;
-    out["lines"] = num_lines;
-    out["keyframe"] = r.keyframe;
-    out["masked_keypoints"] = r.masked_keypoints;
-    out["weighted_inliers"] = r.weighted_inliers;
-    out["relocalisation_ms"] = r.relocalisation_ms;
-    out["line_extraction_ms"] = timing.line_extraction_ms;
-    out["stereo_matching_ms"] = timing.stereo_matching_ms;
-    out["matching_ms"] = r.matching_ms;
-    out["optimisation_ms"] = r.optimisation_ms;
-    out["mapping_ms"] = r.mapping_ms;
     return out;
   }
 
@@ -337,6 +332,44 @@ void BindTracking(py::module_& m) {
       .def_readwrite("dynamic", &TrackerOptions::dynamic)
       .def("check", &TrackerOptions::Check);
 
+  py::class_<FrameOutput>(m, "FrameOutput",
+                          "One frame's result from TrackerCore.track (slslam.Tracker wraps it "
+                          "into a TrackResult).")
+      .def_property_readonly("state",
+                             [](const FrameOutput& o) {
+                               return std::string(TrackingStateName(o.result.state));
+                             })
+      .def_property_readonly(
+          "cam_from_world", [](const FrameOutput& o) { return CamFromWorldMatrix(o.result); },
+          "4x4 pose: x_cam = T x_world.")
+      .def_property_readonly("map_index", [](const FrameOutput& o) { return o.result.map_index; })
+      .def_property_readonly("matched_points",
+                             [](const FrameOutput& o) { return o.result.matched_points; })
+      .def_property_readonly("inlier_points",
+                             [](const FrameOutput& o) { return o.result.inlier_points; })
+      .def_property_readonly("matched_lines",
+                             [](const FrameOutput& o) { return o.result.matched_lines; })
+      .def_property_readonly("inlier_lines",
+                             [](const FrameOutput& o) { return o.result.inlier_lines; })
+      .def_readonly("lines", &FrameOutput::lines, "left-image line segments")
+      .def_property_readonly("keyframe", [](const FrameOutput& o) { return o.result.keyframe; })
+      .def_property_readonly("masked_keypoints",
+                             [](const FrameOutput& o) { return o.result.masked_keypoints; })
+      .def_property_readonly("weighted_inliers",
+                             [](const FrameOutput& o) { return o.result.weighted_inliers; })
+      .def_property_readonly("relocalisation_ms",
+                             [](const FrameOutput& o) { return o.result.relocalisation_ms; })
+      .def_property_readonly("line_extraction_ms",
+                             [](const FrameOutput& o) { return o.timing.line_extraction_ms; })
+      .def_property_readonly("stereo_matching_ms",
+                             [](const FrameOutput& o) { return o.timing.stereo_matching_ms; })
+      .def_property_readonly("matching_ms",
+                             [](const FrameOutput& o) { return o.result.matching_ms; })
+      .def_property_readonly("optimisation_ms",
+                             [](const FrameOutput& o) { return o.result.optimisation_ms; })
+      .def_property_readonly("mapping_ms",
+                             [](const FrameOutput& o) { return o.result.mapping_ms; });
+
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
       .def(py::init([](const TrackerOptions& options, const LineExtractorOptions& lines) {
@@ -346,7 +379,7 @@ void BindTracking(py::module_& m) {
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           "Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).")
+           "Tracks one rectified stereo frame; returns its FrameOutput.")
       .def("map", &TrackerSession::Map, "Waits for local mapping, returns points and lines.")
       .def("save_map", &TrackerSession::SaveMap, py::arg("path"), py::arg("version"),
            "Writes every live map (versioned binary, checksummed); waits for mapping.")

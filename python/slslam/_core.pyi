@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -1243,6 +1243,65 @@ class TrackerOptions:
     @weak_keyframe_inliers.setter
     def weak_keyframe_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class FrameOutput:
+    """
+    One frame's result from TrackerCore.track (slslam.Tracker wraps it into a TrackResult).
+    """
+    @property
+    def cam_from_world(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        """
+        4x4 pose: x_cam = T x_world.
+        """
+    @property
+    def inlier_lines(self) -> int:
+        ...
+    @property
+    def inlier_points(self) -> int:
+        ...
+    @property
+    def keyframe(self) -> bool:
+        ...
+    @property
+    def line_extraction_ms(self) -> float:
+        ...
+    @property
+    def lines(self) -> int:
+        """
+        left-image line segments
+        """
+    @property
+    def map_index(self) -> int:
+        ...
+    @property
+    def mapping_ms(self) -> float:
+        ...
+    @property
+    def masked_keypoints(self) -> int:
+        ...
+    @property
+    def matched_lines(self) -> int:
+        ...
+    @property
+    def matched_points(self) -> int:
+        ...
+    @property
+    def matching_ms(self) -> float:
+        ...
+    @property
+    def optimisation_ms(self) -> float:
+        ...
+    @property
+    def relocalisation_ms(self) -> float:
+        ...
+    @property
+    def state(self) -> str:
+        ...
+    @property
+    def stereo_matching_ms(self) -> float:
+        ...
+    @property
+    def weighted_inliers(self) -> float:
+        ...
 class TrackerCore:
     """
     Stereo point-line tracker with local mapping (use slslam.Tracker).
@@ -1263,9 +1322,9 @@ class TrackerCore:
         """
         Writes every live map (versioned binary, checksummed); waits for mapping.
         """
-    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray) -> dict:
+    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray) -> FrameOutput:
         """
-        Tracks one rectified stereo frame; returns a dict (state, R_cw, t_cw, counts, times).
+        Tracks one rectified stereo frame; returns its FrameOutput.
         """
     def trajectory(self) -> dict:
         """

@@ -185,7 +185,7 @@ def test_hard_cases_end_in_one_map_with_every_lit_frame_posed(case, tmp_path):
     Simulator(SimOptions(preset="junction", lidar=False, **case)).write(data, progress=False)
     summary = run_sequence(data, tmp_path / "run", config("orb", lines=True), progress=False)
     m = summary.metrics
-    lit = [r for r in summary.results if r.counts["keypoints"] > 50]
+    lit = [r for r in summary.results if r.counts.keypoints > 50]
     assert sum(r.tracked for r in lit) >= len(lit) - 1
     assert m["maps"] == 1
     # Path about 3-5 m; a pose chain broken at the hard moment is tens of centimetres off.

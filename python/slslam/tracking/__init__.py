@@ -5,9 +5,11 @@ from slslam.tracking.run import RunSummary, open_dataset, run_sequence, write_pl
 from slslam.tracking.tracker import (
     STATES,
     TRACKED_STATES,
+    FrameCounts,
     LoopEvent,
     MapData,
     MapStats,
+    StageTimings,
     Tracker,
     TrackResult,
 )
@@ -15,10 +17,12 @@ from slslam.tracking.tracker import (
 __all__ = [
     "STATES",
     "TRACKED_STATES",
+    "FrameCounts",
     "LoopEvent",
     "MapData",
     "MapStats",
     "RunSummary",
+    "StageTimings",
     "TrackResult",
     "Tracker",
     "open_dataset",

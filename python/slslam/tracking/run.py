@@ -484,14 +484,14 @@ def run_sequence(
                             result.index,
                             f"{result.timestamp:.9f}",
                             result.state,
-                            *(result.counts[c] for c in COUNTS),
-                            *(f"{result.timings_ms[s]:.3f}" for s in STAGES),
+                            *(getattr(result.counts, c) for c in COUNTS),
+                            *(f"{getattr(result.timings_ms, s):.3f}" for s in STAGES),
                         ]
                     )
                     frames_file.flush()
                     viewer = _show(viewer, _show_frame, tracker, result)
                     bar.set_postfix(
-                        state=result.state, pts=result.counts["inlier_points"], refresh=False
+                        state=result.state, pts=result.counts.inlier_points, refresh=False
                     )
                     signals.raise_if_requested()  # SIGINT / SIGTERM: stop between frames
             except (Exception, KeyboardInterrupt) as exc:  # keep what was tracked
@@ -550,7 +550,7 @@ def run_sequence(
         },
         **_loss_metrics(results),
         "median_ms": {
-            s: statistics.median(r.timings_ms[s] for r in results) if results else None
+            s: statistics.median(getattr(r.timings_ms, s) for r in results) if results else None
             for s in STAGES
         },
     }

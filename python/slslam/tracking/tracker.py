@@ -31,6 +31,7 @@ from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -51,6 +52,70 @@ STATES = ("NOT_INITIALIZED", "OK", "LOST", "NEW_MAP", "RECENTLY_LOST", "RELOCALI
 TRACKED_STATES = ("OK", "NEW_MAP", "RELOCALISED")
 
 
+class _FieldsAsMapping:
+    """Read access by key (``counts["inlier_points"]``), the dict interface these results had
+    before they were typed; deprecated for one release in favour of attributes."""
+
+    def as_dict(self) -> dict[str, Any]:
+        """The fields by name, in declaration order."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+
+    def _warn(self) -> None:
+        warnings.warn(
+            f"{type(self).__name__}[key] is deprecated: use attributes or as_dict()",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+
+    def __getitem__(self, key: str) -> Any:
+        self._warn()
+        if key not in self.as_dict():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def get(self, key: str, default: Any = None) -> Any:
+        self._warn()
+        return self.as_dict().get(key, default)
+
+    def items(self) -> Iterator[tuple[str, Any]]:
+        self._warn()
+        return iter(self.as_dict().items())
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.as_dict()
+
+
+@dataclass(frozen=True)
+class StageTimings(_FieldsAsMapping):
+    """Wall time of one frame's stages [ms]. ``total`` is the frame's own work (front end plus
+    core); in the pipeline (``track_stream``) stages of neighbouring frames overlap."""
+
+    inference: float = 0.0  #: point front end (network or ORB) on both images
+    line_extraction: float = 0.0  #: line detection and descriptors on both images
+    stereo_matching: float = 0.0  #: left-right point and line matching
+    matching: float = 0.0  #: local-map projection and guided matching
+    optimisation: float = 0.0  #: motion-only bundle adjustment
+    mapping: float = 0.0  #: keyframe insertion (+ local mapping in sequential mode)
+    relocalisation: float = 0.0  #: BoW query, PnP and local-map tracking while lost
+    total: float = 0.0  #: the frame's own work
+
+
+@dataclass(frozen=True)
+class FrameCounts(_FieldsAsMapping):
+    """What one frame found and kept."""
+
+    keypoints: int = 0  #: left-image keypoints after the grid limit
+    lines: int = 0  #: left-image line segments
+    matched_points: int = 0  #: guided point matches before optimisation
+    inlier_points: int = 0  #: point inliers of the motion-only BA
+    matched_lines: int = 0  #: guided line matches before optimisation
+    inlier_lines: int = 0  #: line inliers of the motion-only BA
+    keyframe: int = 0  #: 1 when a keyframe was made from this frame, else 0
+    map: int = -1  #: index of the atlas map the pose belongs to (-1: none)
+    weighted_inliers: float = 0.0  #: point inliers + line weight x line inliers
+    masked_keypoints: int = 0  #: keypoints in cells the dynamic-cell filter masked
+
+
 @dataclass
 class TrackResult:
     """The outcome of one frame.
@@ -59,17 +124,16 @@ class TrackResult:
         state: one of ``STATES``.
         T_world_cam: 4x4 pose of the left camera in the world (map) frame (``T_wc`` is a
             deprecated alias, kept for one release).
-        timings_ms: per stage: inference, grid, line_extraction, stereo_matching, matching,
-            optimisation, mapping, total.
-        counts: matched / inlier points and lines, keypoints, lines, keyframe (0/1).
+        timings_ms: per-stage wall times (:class:`StageTimings`).
+        counts: keypoints, lines, matches, inliers, keyframe, map (:class:`FrameCounts`).
     """
 
     index: int
     timestamp: float
     state: str
     T_world_cam: np.ndarray
-    timings_ms: dict[str, float] = field(default_factory=dict)
-    counts: dict[str, int] = field(default_factory=dict)
+    timings_ms: StageTimings = field(default_factory=StageTimings)
+    counts: FrameCounts = field(default_factory=FrameCounts)
 
     @property
     def tracked(self) -> bool:
@@ -556,36 +620,33 @@ class Tracker:
             np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kr.descriptors),
         )
-        T_cw = np.eye(4)
-        T_cw[:3, :3] = out["R_cw"]
-        T_cw[:3, 3] = out["t_cw"]
-        T_wc = np.linalg.inv(T_cw)
+        T_wc = np.linalg.inv(out.cam_from_world)
         if not np.all(np.isfinite(T_wc)):  # never hand out a NaN pose
             raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
-        timings = {
-            "inference": inference_ms,
-            "line_extraction": out["line_extraction_ms"],
-            "stereo_matching": out["stereo_matching_ms"],
-            "matching": out["matching_ms"],
-            "optimisation": out["optimisation_ms"],
-            "mapping": out["mapping_ms"],
-            "relocalisation": out["relocalisation_ms"],
-        }
-        # The frame's own work: front end plus core (in the pipeline the two overlap other frames).
-        timings["total"] = inference_ms + (time.perf_counter() - start) * 1e3
-        counts = {
-            "keypoints": len(kl),
-            "lines": out["lines"],
-            "matched_points": out["matched_points"],
-            "inlier_points": out["inlier_points"],
-            "matched_lines": out["matched_lines"],
-            "inlier_lines": out["inlier_lines"],
-            "keyframe": int(out["keyframe"]),
-            "map": out["map_index"],
-            "weighted_inliers": round(float(out["weighted_inliers"]), 3),
-            "masked_keypoints": out["masked_keypoints"],
-        }
-        result = TrackResult(index, timestamp, out["state"], T_wc, timings, counts)
+        timings = StageTimings(
+            inference=inference_ms,
+            line_extraction=out.line_extraction_ms,
+            stereo_matching=out.stereo_matching_ms,
+            matching=out.matching_ms,
+            optimisation=out.optimisation_ms,
+            mapping=out.mapping_ms,
+            relocalisation=out.relocalisation_ms,
+            # The frame's own work: front end plus core (in the pipeline the two overlap others).
+            total=inference_ms + (time.perf_counter() - start) * 1e3,
+        )
+        counts = FrameCounts(
+            keypoints=len(kl),
+            lines=out.lines,
+            matched_points=out.matched_points,
+            inlier_points=out.inlier_points,
+            matched_lines=out.matched_lines,
+            inlier_lines=out.inlier_lines,
+            keyframe=int(out.keyframe),
+            map=out.map_index,
+            weighted_inliers=round(float(out.weighted_inliers), 3),
+            masked_keypoints=out.masked_keypoints,
+        )
+        result = TrackResult(index, timestamp, out.state, T_wc, timings, counts)
         self.last_image, self.last_keypoints_uv = left, kl.uv
         self._results.append(result)
         return result

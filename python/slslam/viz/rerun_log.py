@@ -166,7 +166,7 @@ class RerunLogger:
         if result.state in TRACKED:
             self._path.append(T[:3, 3].copy())
             self.rec.log("world/trajectory", rr.LineStrips3D([np.array(self._path)]))
-            if result.counts.get("keyframe"):
+            if result.counts.keyframe:
                 self._keyframes.append(T[:3, 3].copy())
                 self.rec.log(
                     "world/keyframes",
@@ -184,11 +184,10 @@ class RerunLogger:
                 "world/camera/image/keypoints",
                 rr.Points2D(np.asarray(keypoints_uv).reshape(-1, 2), colors=colour, radii=1.5),
             )
-        for stage, ms in result.timings_ms.items():
+        for stage, ms in result.timings_ms.as_dict().items():
             self.rec.log(f"timings/{stage}", rr.Scalars(float(ms)))
         for name in COUNT_PLOTS:
-            if name in result.counts:
-                self.rec.log(f"counts/{name}", rr.Scalars(float(result.counts[name])))
+            self.rec.log(f"counts/{name}", rr.Scalars(float(getattr(result.counts, name))))
 
     def _log_lines(self, image: np.ndarray, colour) -> None:
         from slslam import _core
