@@ -19,5 +19,11 @@ if [[ "${SLSLAM_SKIP_TSAN:-0}" != "1" ]]; then
   bash scripts/tsan.sh
 fi
 
+# Clang's thread-safety analysis of the core's locking (syntax only, about a minute);
+# SLSLAM_SKIP_THREAD_SAFETY=1 skips it.
+if [[ "${SLSLAM_SKIP_THREAD_SAFETY:-0}" != "1" ]]; then
+  bash scripts/thread_safety.sh
+fi
+
 echo "[slslam] Python tests"
 "$PYTHON" -m pytest tests/python "$@"

@@ -6,13 +6,13 @@
 
 #include <map>
 #include <memory>
-#include <mutex>
 #include <set>
 #include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "slslam/core/thread_annotations.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/place/vocabulary.h"
 #include "slslam/features/stereo_frame.h"
@@ -81,65 +81,70 @@ class Map {
   explicit Map(std::shared_ptr<MapIds> ids = nullptr)
       : ids_(ids ? std::move(ids) : std::make_shared<MapIds>()) {}
 
-  std::mutex& mutex() const { return mutex_; }
+  // The lock of the whole map; the analysis (thread_annotations.h) knows it as mutex_.
+  Mutex& mutex() const SLSLAM_RETURN_CAPABILITY(mutex_) { return mutex_; }
 
-  // All below expect the caller to hold mutex().
+  // All below require the caller to hold mutex() (checked by clang's -Wthread-safety).
   std::shared_ptr<KeyFrame> AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
-                                        std::shared_ptr<const StereoFrame> frame);
+                                        std::shared_ptr<const StereoFrame> frame) SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapPoint> AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
-                                     int keyframe_id);
+                                     int keyframe_id) SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapLine> AddLine(const PluckerLine& line, const Eigen::Vector3d& start,
                                    const Eigen::Vector3d& end, const cv::Mat& descriptor,
-                                   int keyframe_id);
-  void AddPointObservation(int point_id, int keyframe_id, int keypoint);
-  void AddLineObservation(int line_id, int keyframe_id, int segment);
+                                   int keyframe_id) SLSLAM_REQUIRES(mutex_);
+  void AddPointObservation(int point_id, int keyframe_id, int keypoint) SLSLAM_REQUIRES(mutex_);
+  void AddLineObservation(int line_id, int keyframe_id, int segment) SLSLAM_REQUIRES(mutex_);
   // Recomputes the covisibility weights of a keyframe (and its neighbours' back links) and, for a
   // keyframe without parent, links it to its strongest neighbour in the spanning tree.
-  void UpdateConnections(int keyframe_id);
-  void ErasePoint(int point_id);
-  void EraseLine(int line_id);
+  void UpdateConnections(int keyframe_id) SLSLAM_REQUIRES(mutex_);
+  void ErasePoint(int point_id) SLSLAM_REQUIRES(mutex_);
+  void EraseLine(int line_id) SLSLAM_REQUIRES(mutex_);
   // Marks a keyframe bad, removes its observations and reparents its children to its parent.
-  void EraseKeyFrame(int keyframe_id);
+  void EraseKeyFrame(int keyframe_id) SLSLAM_REQUIRES(mutex_);
 
-  std::shared_ptr<KeyFrame> keyframe(int id) const;
-  std::shared_ptr<MapPoint> point(int id) const;
-  std::shared_ptr<MapLine> line(int id) const;
-  const std::map<int, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
-  const std::map<int, std::shared_ptr<MapPoint>>& points() const { return points_; }
-  const std::map<int, std::shared_ptr<MapLine>>& lines() const { return lines_; }
+  std::shared_ptr<KeyFrame> keyframe(int id) const SLSLAM_REQUIRES(mutex_);
+  std::shared_ptr<MapPoint> point(int id) const SLSLAM_REQUIRES(mutex_);
+  std::shared_ptr<MapLine> line(int id) const SLSLAM_REQUIRES(mutex_);
+  const std::map<int, std::shared_ptr<KeyFrame>>& keyframes() const SLSLAM_REQUIRES(mutex_) {
+    return keyframes_;
+  }
+  const std::map<int, std::shared_ptr<MapPoint>>& points() const SLSLAM_REQUIRES(mutex_) {
+    return points_;
+  }
+  const std::map<int, std::shared_ptr<MapLine>>& lines() const SLSLAM_REQUIRES(mutex_) { return lines_; }
   // Keyframes sharing the most map points with `id`, strongest first (at most n).
-  std::vector<int> BestCovisible(int id, int n) const;
+  std::vector<int> BestCovisible(int id, int n) const SLSLAM_REQUIRES(mutex_);
 
   // Pose of a keyframe, live or culled (through the chain of retired parents); false when the
   // id is unknown to this map.
-  bool KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const;
-  const std::map<int, RetiredKeyFrame>& retired() const { return retired_; }
+  bool KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const SLSLAM_REQUIRES(mutex_);
+  const std::map<int, RetiredKeyFrame>& retired() const SLSLAM_REQUIRES(mutex_) { return retired_; }
 
   // Restoring a saved map, or moving entries in from another map of the atlas: entries keep their
   // ids (which must be unused here); the shared counters move past them.
-  void RestoreKeyFrame(std::shared_ptr<KeyFrame> keyframe);
-  void RestorePoint(std::shared_ptr<MapPoint> point);
-  void RestoreLine(std::shared_ptr<MapLine> line);
-  void RestoreRetired(int id, const RetiredKeyFrame& retired);
+  void RestoreKeyFrame(std::shared_ptr<KeyFrame> keyframe) SLSLAM_REQUIRES(mutex_);
+  void RestorePoint(std::shared_ptr<MapPoint> point) SLSLAM_REQUIRES(mutex_);
+  void RestoreLine(std::shared_ptr<MapLine> line) SLSLAM_REQUIRES(mutex_);
+  void RestoreRetired(int id, const RetiredKeyFrame& retired) SLSLAM_REQUIRES(mutex_);
   const MapIds& ids() const { return *ids_; }
   const std::shared_ptr<MapIds>& shared_ids() const { return ids_; }
   // Moves every keyframe, point, line and retired record of `other` into this map (ids are unique
   // across an atlas); `other` is left empty. Poses are not changed: transform `other` first.
-  void Absorb(Map* other);
+  void Absorb(Map* other) SLSLAM_REQUIRES(mutex_, other->mutex_);
 
   // Bumped whenever keyframe poses change outside local mapping's window (loop correction,
   // merge): a tracker holding a pose relative to the old map re-reads its reference keyframe.
-  int correction_epoch() const { return correction_epoch_; }
-  void BumpCorrectionEpoch() { ++correction_epoch_; }
+  int correction_epoch() const SLSLAM_REQUIRES(mutex_) { return correction_epoch_; }
+  void BumpCorrectionEpoch() SLSLAM_REQUIRES(mutex_) { ++correction_epoch_; }
 
  private:
-  mutable std::mutex mutex_;
+  mutable Mutex mutex_;
   std::shared_ptr<MapIds> ids_;
-  std::map<int, std::shared_ptr<KeyFrame>> keyframes_;
-  std::map<int, std::shared_ptr<MapPoint>> points_;
-  std::map<int, std::shared_ptr<MapLine>> lines_;
-  std::map<int, RetiredKeyFrame> retired_;
-  int correction_epoch_ = 0;
+  std::map<int, std::shared_ptr<KeyFrame>> keyframes_ SLSLAM_GUARDED_BY(mutex_);
+  std::map<int, std::shared_ptr<MapPoint>> points_ SLSLAM_GUARDED_BY(mutex_);
+  std::map<int, std::shared_ptr<MapLine>> lines_ SLSLAM_GUARDED_BY(mutex_);
+  std::map<int, RetiredKeyFrame> retired_ SLSLAM_GUARDED_BY(mutex_);
+  int correction_epoch_ SLSLAM_GUARDED_BY(mutex_) = 0;
 };
 
 }  // namespace slslam

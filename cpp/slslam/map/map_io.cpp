@@ -45,7 +45,7 @@ struct Front {
 
 // A copy of a map's entries in which references to entries no longer in the map (a point id left
 // in a keyframe after the point was erased, an observation of an erased keyframe) are none.
-MapContent NormalisedContent(const Map& map) {
+MapContent NormalisedContent(const Map& map) SLSLAM_REQUIRES(map.mutex()) {
   MapContent c;
   c.retired = map.retired();
   for (const auto& [id, p] : map.points()) c.points[id] = std::make_shared<MapPoint>(*p);
@@ -272,6 +272,7 @@ void SaveMaps(const std::string& path, const std::vector<const Map*>& maps,
     ids.next_keyframe = std::max(ids.next_keyframe, own.next_keyframe);
     ids.next_point = std::max(ids.next_point, own.next_point);
     ids.next_line = std::max(ids.next_line, own.next_line);
+    maps[m]->mutex().AssertHeld();  // the contract: the caller holds every map's lock
     contents.push_back(NormalisedContent(*maps[m]));
   }
   for (size_t m = 0; m < contents.size(); ++m) {
@@ -334,7 +335,7 @@ LoadedMaps LoadMaps(const std::string& path, std::shared_ptr<MapIds> ids) {
   loaded.header = front.header;
   for (MapContent& c : contents) {
     auto map = std::make_unique<Map>(ids);
-    std::lock_guard<std::mutex> lock(map->mutex());
+    MutexLock lock(map->mutex());
     for (auto& [id, kf] : c.keyframes) map->RestoreKeyFrame(std::move(kf));
     for (const auto& [id, r] : c.retired) map->RestoreRetired(id, r);
     for (auto& [id, p] : c.points) map->RestorePoint(std::move(p));

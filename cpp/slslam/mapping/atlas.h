@@ -8,7 +8,6 @@
 #pragma once
 
 #include <memory>
-#include <mutex>
 #include <vector>
 
 #include "slslam/map/map.h"
@@ -39,11 +38,11 @@ class Atlas {
     std::unique_ptr<KeyframeDatabase> database;
     int merged_into = -1;
   };
-  const Entry& entry(int index) const;
+  const Entry& entry(int index) const SLSLAM_EXCLUDES(mutex_);  // takes the lock
 
-  mutable std::mutex mutex_;
+  mutable Mutex mutex_;
   std::shared_ptr<MapIds> ids_;
-  std::vector<std::unique_ptr<Entry>> entries_;
+  std::vector<std::unique_ptr<Entry>> entries_ SLSLAM_GUARDED_BY(mutex_);
 };
 
 }  // namespace slslam

@@ -86,7 +86,7 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
   MapBundleAdjustment ba;
   TriangulationStats triangulated;
   {
-    std::lock_guard<std::mutex> lock(map->mutex());
+    MutexLock lock(map->mutex());
     auto current = map->keyframe(keyframe_id);
     if (!current) return;
     if (options_.triangulate) {
@@ -100,6 +100,7 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
     }
     std::unordered_map<int, int> pose_index;
     auto add_pose = [&](int kf_id, bool fixed) {
+      map->mutex().AssertHeld();  // the lock above (a lambda is not followed by the analysis)
       pose_index[kf_id] = ba.AddPose(*map->keyframe(kf_id), fixed);
     };
     // The gauge: the map's first keyframe when it is in the window, else the window's oldest.
@@ -115,7 +116,7 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
   // The solve runs without the map lock: tracking goes on meanwhile.
   const BundleAdjustmentReport report = SolveBundleAdjustment(rig_, &ba.problem(), options_.ba);
 
-  std::lock_guard<std::mutex> lock(map->mutex());
+  MutexLock lock(map->mutex());
   // A global BA that finished meanwhile moved the map (threaded mode): this window's solution
   // is in the old world and is dropped (the next keyframe's window starts from the new one).
   if (report.solved && map->correction_epoch() == ba.correction_epoch()) ba.Apply(map, report);

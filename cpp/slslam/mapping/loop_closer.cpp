@@ -190,7 +190,7 @@ double LoopCloser::PathLength(const Map& map, int from_id, int to_id) {
 bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map,
                         int candidate, Verified* out) {
   Map& target = atlas->map(target_map);
-  std::lock_guard<std::mutex> lock(target.mutex());
+  MutexLock lock(target.mutex());
   auto c = target.keyframe(candidate);
   if (!c || c->bad) return false;
   const StereoFrame& frame = *kf.frame;
@@ -247,7 +247,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   std::vector<BowVector> neighbour_bows;
   int map_keyframes = 0;
   {
-    std::lock_guard<std::mutex> lock(source_map.mutex());
+    MutexLock lock(source_map.mutex());
     kf = source_map.keyframe(keyframe_id);
     if (!kf || kf->bad || kf->bow.empty() || !kf->frame) return false;
     for (const auto& [id, weight] : kf->covisibility) {
@@ -274,7 +274,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
     const auto found =
         atlas->database(m).Query(kf->bow, options_.candidates, min_score, 0.8, [&](int id) {
           if (same && (exclude.count(id) || id >= keyframe_id)) return false;
-          std::lock_guard<std::mutex> lock(target.mutex());
+          MutexLock lock(target.mutex());
           auto c = target.keyframe(id);
           if (!c || c->bad) return false;
           if (!same) return true;
@@ -352,7 +352,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
     event.merge = target != source;
     event.frame_index = kf->frame->index;
     {
-      std::lock_guard<std::mutex> lock(target_map.mutex());
+      MutexLock lock(target_map.mutex());
       if (auto c = target_map.keyframe(verified.candidate); c && c->frame) {
         event.candidate_frame_index = c->frame->index;
       }
@@ -365,7 +365,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
       events_.push_back(event);
     }
     if (target == source) {
-      std::lock_guard<std::mutex> lock(source_map.mutex());
+      MutexLock lock(source_map.mutex());
       if (source_map.keyframe(keyframe_id)) {
         Correct(&source_map, keyframe_id, verified);
         std::lock_guard<std::mutex> stats_lock(stats_mutex_);
@@ -375,7 +375,9 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         corrected_before_[source] = source_map.ids().next_keyframe;
       }
     } else {
-      std::scoped_lock lock(source_map.mutex(), target_map.mutex());
+      std::scoped_lock lock(source_map.mutex(), target_map.mutex());  // in a fixed order
+      source_map.mutex().AssertHeld();  // (the analysis does not follow std::scoped_lock)
+      target_map.mutex().AssertHeld();
       if (source_map.keyframe(keyframe_id)) {
         TransformMap(&source_map, verified.R_ts, verified.t_ts);
         std::vector<std::pair<int, BowVector>> moved;
@@ -647,7 +649,7 @@ void LoopCloser::GlobalBundleAdjustment(Atlas* atlas, int map_index) {
   Map& map = atlas->map(map_index);
   auto ba = std::make_shared<MapBundleAdjustment>();
   {
-    std::lock_guard<std::mutex> lock(map.mutex());
+    MutexLock lock(map.mutex());
     if (map.keyframes().empty()) return;
     std::unordered_map<int, int> pose_index;
     const int root = map.keyframes().begin()->first;
@@ -678,7 +680,7 @@ void LoopCloser::GlobalBundleAdjustment(Atlas* atlas, int map_index) {
     bool cancelled = global_ba_abort_;
     if (report.solved && !cancelled) {
       Map& map = atlas->map(map_index);
-      std::lock_guard<std::mutex> lock(map.mutex());
+      MutexLock lock(map.mutex());
       const auto apply_start = Clock::now();
       // Merged into another map meanwhile: that merge cancelled this run (checked again under
       // the lock all the same).

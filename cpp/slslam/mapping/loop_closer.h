@@ -112,7 +112,8 @@ using LocalMapVerifier =
 // (one-to-one, ratio test): (keypoint, map point id) pairs. Caller holds the map's mutex.
 std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
                                               const FeatureVector& features, const KeyFrame& kf,
-                                              const Map& map, float max_distance, float ratio);
+                                              const Map& map, float max_distance, float ratio)
+    SLSLAM_REQUIRES(map.mutex());
 
 // The camera pose T_cw from (keypoint, map point id) matches: EPnP RANSAC on the keypoints' left
 // pixels. False when RANSAC fails, keeps fewer than `min_inliers`, or the pose is not finite.
@@ -120,7 +121,7 @@ std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
 bool PoseFromMatches(const StereoFrame& frame, const Map& map,
                      const std::vector<std::pair<int, int>>& matches, const PinholeCamera& camera,
                      int iterations, double error_px, int min_inliers, Eigen::Matrix3d* R_cw,
-                     Eigen::Vector3d* t_cw);
+                     Eigen::Vector3d* t_cw) SLSLAM_REQUIRES(map.mutex());
 
 // One accepted loop or merge: the keyframe that closed it and the older keyframe it matched, by
 // the frames they were made from (so a benchmark can check both against ground truth).
@@ -176,18 +177,19 @@ class LoopCloser {
   bool Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map, int candidate,
               Verified* out);
   // Path length along the keyframes (by id) between two keyframes of a map [m]. Caller locks.
-  static double PathLength(const Map& map, int from_id, int to_id);
+  static double PathLength(const Map& map, int from_id, int to_id) SLSLAM_REQUIRES(map.mutex());
   // Transforms every keyframe, point and line of `map` by T_target_source (caller locks).
-  static void TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts);
+  static void TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts)
+      SLSLAM_REQUIRES(map->mutex());
   // Fusion, essential graph and global BA in `map` after K got its verified pose. Caller locks.
-  void Correct(Map* map, int keyframe_id, const Verified& verified);
-  void Fuse(Map* map, int keyframe_id, const LocalMapMatch& match);
+  void Correct(Map* map, int keyframe_id, const Verified& verified) SLSLAM_REQUIRES(map->mutex());
+  void Fuse(Map* map, int keyframe_id, const LocalMapMatch& match) SLSLAM_REQUIRES(map->mutex());
   // Global BA over every keyframe, point and line of the atlas's map `map_index` (see 6. above).
   // After a merge, under the map's lock: local BA over the two sides of the seam (see
   // LoopClosingOptions::welding_keyframes), inline; `merged_side` holds the keyframes of the map
   // just merged (free), the others are fixed.
   void WeldingBundleAdjustment(Map* map, int keyframe_id, int candidate_id,
-                               const std::set<int>& merged_side);
+                               const std::set<int>& merged_side) SLSLAM_REQUIRES(map->mutex());
   void GlobalBundleAdjustment(Atlas* atlas, int map_index);
   void CancelGlobalBa();
 

@@ -34,6 +34,7 @@ void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<i
     auto it = pose_index->find(kf_id);
     if (it != pose_index->end()) return it->second;
     if (fixed_added >= max_fixed) return -1;
+    map.mutex().AssertHeld();  // held by this function's caller (a lambda is not followed)
     auto kf = map.keyframe(kf_id);
     if (!kf) return -1;
     ++fixed_added;

@@ -22,16 +22,19 @@ class MapBundleAdjustment {
   // Adds a point and its observations by the keyframes `pose_of(keyframe id)` gives a pose index
   // for (-1: the observation is left out). Caller holds the map's lock.
   template <class PoseOf>
-  void AddPoint(const Map& map, const MapPoint& p, double sigma_px, PoseOf&& pose_of);
+  void AddPoint(const Map& map, const MapPoint& p, double sigma_px, PoseOf&& pose_of)
+      SLSLAM_REQUIRES(map.mutex());
   template <class PoseOf>
-  void AddLine(const Map& map, const MapLine& l, double sigma_px, PoseOf&& pose_of);
+  void AddLine(const Map& map, const MapLine& l, double sigma_px, PoseOf&& pose_of)
+      SLSLAM_REQUIRES(map.mutex());
   // A window's landmarks: every point and line the keyframes of `window` observe (each once, in
   // id order, bad ones skipped) with their observations. `pose_index` (keyframe id -> pose index)
   // holds the window's poses; another observer joins as a fixed pose while fewer than
   // `max_fixed` have, else its observation is left out. Caller holds the map's lock.
   void AddWindowLandmarks(const Map& map, const std::vector<int>& window,
                           std::unordered_map<int, int>* pose_index, int max_fixed,
-                          double point_sigma_px, double line_sigma_px);
+                          double point_sigma_px, double line_sigma_px)
+      SLSLAM_REQUIRES(map.mutex());
 
   BaProblem& problem() { return problem_; }
   const BaProblem& problem() const { return problem_; }
@@ -47,7 +50,8 @@ class MapBundleAdjustment {
   // keyframe: its first spanning-tree ancestor in the problem; for a landmark: its oldest observer
   // with a correction), as ORB-SLAM does after a global BA. Returns the number of keyframes so
   // carried.
-  int Apply(Map* map, const BundleAdjustmentReport& report, bool carry_new = false) const;
+  int Apply(Map* map, const BundleAdjustmentReport& report, bool carry_new = false) const
+      SLSLAM_REQUIRES(map->mutex());
 
  private:
   BaProblem problem_;

@@ -130,7 +130,7 @@ std::vector<std::pair<int, int>> MatchFreeSegments(const View& a, const View& b,
 }
 
 int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& rig,
-                      const TriangulationOptions& options) {
+                      const TriangulationOptions& options) SLSLAM_REQUIRES(map->mutex()) {
   const PinholeCamera& camera = rig.camera;
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
   const double cos_max = std::cos(options.min_parallax_deg * kDegToRad);
@@ -164,7 +164,7 @@ int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& r
 }
 
 int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& rig,
-                     const TriangulationOptions& options) {
+                     const TriangulationOptions& options) SLSLAM_REQUIRES(map->mutex()) {
   const PinholeCamera& camera = rig.camera;
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
   const double bound = options.chi2 * options.sigma_px * options.sigma_px;

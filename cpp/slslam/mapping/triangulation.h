@@ -53,6 +53,7 @@ bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
 // Pairs keyframe `keyframe_id` with its best covisible keyframes and adds the new landmarks to
 // the map. The caller holds map.mutex().
 TriangulationStats CreateNewLandmarks(Map* map, int keyframe_id, const StereoRig& rig,
-                                      const TriangulationOptions& options = {});
+                                      const TriangulationOptions& options = {})
+    SLSLAM_REQUIRES(map->mutex());
 
 }  // namespace slslam

@@ -9,14 +9,14 @@
 namespace slslam {
 
 void KeyframeDatabase::Add(int keyframe_id, const BowVector& bow) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   RemoveLocked(keyframe_id);
   for (const auto& entry : bow) keyframes_of_word_[entry.first].push_back(keyframe_id);
   bow_of_keyframe_.emplace(keyframe_id, bow);
 }
 
 void KeyframeDatabase::Remove(int keyframe_id) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   RemoveLocked(keyframe_id);
 }
 
@@ -34,18 +34,18 @@ void KeyframeDatabase::RemoveLocked(int keyframe_id) {
 }
 
 void KeyframeDatabase::Clear() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   bow_of_keyframe_.clear();
   keyframes_of_word_.clear();
 }
 
 int KeyframeDatabase::size() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   return static_cast<int>(bow_of_keyframe_.size());
 }
 
 bool KeyframeDatabase::Contains(int keyframe_id) const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   return bow_of_keyframe_.count(keyframe_id) > 0;
 }
 
@@ -61,7 +61,7 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::Query(
   // 1. Shared words per keyframe from the inverted index.
   std::vector<Candidate> candidates;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(mutex_);
     std::unordered_map<int, int> shared;
     for (const auto& entry : bow) {
       const auto list = keyframes_of_word_.find(entry.first);
@@ -88,7 +88,7 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::Query(
       candidates.end());
   // 4. Scores; keyframes removed since step 1 drop out.
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(mutex_);
     auto scored = candidates.begin();
     for (const Candidate& c : candidates) {
       const auto found = bow_of_keyframe_.find(c.keyframe_id);

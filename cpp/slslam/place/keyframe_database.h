@@ -7,10 +7,10 @@
 #pragma once
 
 #include <functional>
-#include <mutex>
 #include <unordered_map>
 #include <vector>
 
+#include "slslam/core/thread_annotations.h"
 #include "slslam/place/vocabulary.h"
 
 namespace slslam {
@@ -43,11 +43,12 @@ class KeyframeDatabase {
                                const std::function<bool(int)>& accept = {}) const;
 
  private:
-  void RemoveLocked(int keyframe_id);
+  void RemoveLocked(int keyframe_id) SLSLAM_REQUIRES(mutex_);
 
-  mutable std::mutex mutex_;
-  std::unordered_map<int, BowVector> bow_of_keyframe_;
-  std::unordered_map<WordId, std::vector<int>> keyframes_of_word_;  // inverted index
+  mutable Mutex mutex_;
+  std::unordered_map<int, BowVector> bow_of_keyframe_ SLSLAM_GUARDED_BY(mutex_);
+  // inverted index
+  std::unordered_map<WordId, std::vector<int>> keyframes_of_word_ SLSLAM_GUARDED_BY(mutex_);
 };
 
 }  // namespace slslam

@@ -86,6 +86,7 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
     // Verification tracks the candidate's local map (points and lines) as tracking does.
     auto verifier = [this](const StereoFrame& frame, Map& map, int reference_kf,
                            const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw) {
+      map.mutex().AssertHeld();  // LocalMapVerifier's contract: the loop closer holds the lock
       LocalTracking t = TrackLocalMap(frame, map, reference_kf, R_cw, t_cw, 1.0f);
       LocalMapMatch match;
       match.success = t.pose.success;
@@ -131,11 +132,12 @@ void Tracker::SaveMap(const std::string& path, const std::string& version) {
   // The file name, not the path: the same vocabulary sits elsewhere on another machine.
   header.vocabulary = std::filesystem::path(options_.vocabulary_path).filename().string();
   std::vector<const Map*> maps;
-  std::vector<std::unique_lock<std::mutex>> locks;
+  std::vector<std::unique_lock<Mutex>> locks;
   for (int m = 0; m < atlas_.size(); ++m) {
     if (atlas_.merged(m)) continue;
     const Map& map = atlas_.map(m);
     locks.emplace_back(map.mutex());
+    map.mutex().AssertHeld();  // held by locks.back() until the maps are written
     if (map.keyframes().empty()) {
       locks.pop_back();
       continue;
@@ -175,7 +177,7 @@ void Tracker::LoadMap(const std::string& path) {
   for (auto& map : loaded.maps) {
     const int index = atlas_.AdoptMap(std::move(map));
     Map& m = atlas_.map(index);
-    std::lock_guard<std::mutex> lock(m.mutex());
+    MutexLock lock(m.mutex());
     for (auto& [id, kf] : m.keyframes()) {
       if (kf->bow.empty() && kf->frame && kf->frame->NumKeypoints() > 0) {
         vocabulary_->Transform(kf->frame->keypoints.descriptors, &kf->bow, &kf->bow_features,
@@ -207,7 +209,7 @@ void Tracker::FollowCorrections() {
   if (active_ < 0) return;
   const int resolved = atlas_.Resolve(active_);
   Map& map = atlas_.map(resolved);
-  std::lock_guard<std::mutex> lock(map.mutex());
+  MutexLock lock(map.mutex());
   if (resolved == active_ && map.correction_epoch() == seen_epoch_) return;
   active_ = resolved;
   seen_epoch_ = map.correction_epoch();
@@ -221,12 +223,12 @@ void Tracker::FollowCorrections() {
   last_t_ = r.R_fr * t_rw + r.t_fr;
 }
 
-std::unique_lock<std::mutex> Tracker::LockActiveMap() {
+std::unique_lock<Mutex> Tracker::LockActiveMap() {
   // A merge marks the source map merged under the locks of both maps, so once the lock of a map
   // that is not merged is held, it stays the live one until the lock is released.
   for (;;) {
     const int live = atlas_.Resolve(active_);
-    std::unique_lock<std::mutex> lock(atlas_.map(live).mutex());
+    std::unique_lock<Mutex> lock(atlas_.map(live).mutex());
     if (!atlas_.merged(live)) {
       active_ = live;
       return lock;
@@ -250,8 +252,9 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
     records_.push_back(r);
     return;
   }
-  const std::unique_lock<std::mutex> lock = LockActiveMap();
+  const std::unique_lock<Mutex> lock = LockActiveMap();
   Map& map = atlas_.map(active_);
+  map.mutex().AssertHeld();  // locked by LockActiveMap
   r.map_index = active_;
   if (FollowAnchor(map, {{&last_R_, &last_t_}})) {
     r.R_cw = last_R_;
@@ -309,7 +312,7 @@ std::vector<FramePose> Tracker::Trajectory() const {
     f.R_cw = r.R_cw;
     f.t_cw = r.t_cw;
     Map& map = atlas_.map(f.map_index);
-    std::lock_guard<std::mutex> lock(map.mutex());
+    MutexLock lock(map.mutex());
     Eigen::Matrix3d R_rw;
     Eigen::Vector3d t_rw;
     if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
@@ -388,8 +391,9 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
   {
     // The map the frame was tracked in may have been merged into another since (threaded mode):
     // the keyframe goes into the live one, its pose follows the merge (FollowAnchor).
-    const std::unique_lock<std::mutex> lock = LockActiveMap();
+    const std::unique_lock<Mutex> lock = LockActiveMap();
     Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
     live = &map;
     // (the frame's pose is the last pose: both move with a correction written meanwhile)
     if (FollowAnchor(map, {{&R_cw, &t_cw}, {&last_R_, &last_t_}})) {
@@ -750,9 +754,10 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
   const RelocalisationOptions& ro = options_.relocalisation;
   const cv::Mat& desc = frame.keypoints.descriptors;
   Map& map = atlas_.map(map_index);
-  std::lock_guard<std::mutex> lock(map.mutex());
+  MutexLock lock(map.mutex());
   const auto candidates =
       atlas_.database(map_index).Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
+        map.mutex().AssertHeld();  // the lock above (a lambda is not followed)
         auto kf = map.keyframe(id);
         return kf && !kf->bad;
       });
@@ -842,8 +847,9 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   }
   LocalTracking best;
   for (const auto& [R, t] : hypotheses) {
-    const std::unique_lock<std::mutex> lock = LockActiveMap();
+    const std::unique_lock<Mutex> lock = LockActiveMap();
     Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
     LocalTracking attempt =
         TrackLocalMap(frame, map, last_keyframe_, R, t, options_.lost_search_scale);
     if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
@@ -908,8 +914,9 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       // anchor records the world the snapshot was taken in (FollowAnchor moves the estimate
       // with a correction written meanwhile).
       const int predicted_in = active_;
-      std::unique_lock<std::mutex> lock = LockActiveMap();
+      std::unique_lock<Mutex> lock = LockActiveMap();
       Map& map = atlas_.map(active_);
+      map.mutex().AssertHeld();  // locked by LockActiveMap
       if (attempt < 2 && (active_ != predicted_in || map.correction_epoch() != seen_epoch_)) {
         // A merge or correction landed since the prediction (threaded mode): predict again in
         // the new world rather than search the local map from the old one.
@@ -958,8 +965,9 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     bool velocity_known = mode_ == Mode::kTracking;
     {
       // (the live map: merged into another meanwhile in threaded mode, see LockActiveMap)
-      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      const std::unique_lock<Mutex> lock = LockActiveMap();
       Map& map = atlas_.map(active_);
+      map.mutex().AssertHeld();  // locked by LockActiveMap
       // The last pose moves too when it was in the world the estimate was made in; otherwise
       // (a merge meanwhile) the motion between the two is unknown.
       const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
@@ -997,8 +1005,9 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     if (options_.localise_only) {
       // No keyframes are made: the reference keyframe (centre of the local map) moves to the
       // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
-      const std::unique_lock<std::mutex> lock = LockActiveMap();
+      const std::unique_lock<Mutex> lock = LockActiveMap();
       const Map& map = atlas_.map(active_);
+      map.mutex().AssertHeld();  // locked by LockActiveMap
       std::map<int, int> seen;
       for (int pid : point_match) {
         auto p = pid >= 0 ? map.point(pid) : nullptr;
@@ -1083,7 +1092,7 @@ MapExport Tracker::ExportMap() const {
   MapExport out;
   for (int m = 0; m < atlas_.size(); ++m) {
     const Map& map = atlas_.map(m);
-    std::lock_guard<std::mutex> lock(map.mutex());
+    MutexLock lock(map.mutex());
     for (const auto& [id, p] : map.points()) {
       (void)id;
       if (p->bad || p->observations.empty()) continue;

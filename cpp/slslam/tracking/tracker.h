@@ -234,7 +234,8 @@ class Tracker {
   // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling).
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                                     const Eigen::Matrix3d& R_pred,
-                                    const Eigen::Vector3d& t_pred) const;
+                                    const Eigen::Vector3d& t_pred) const
+      SLSLAM_REQUIRES(map.mutex());
   // No lock: guided matching of the snapshot in the frame and the motion-only BA.
   LocalTracking TrackSnapshot(const StereoFrame& frame, const LocalMapSnapshot& local,
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
@@ -244,10 +245,11 @@ class Tracker {
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                               const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
                               float radius_scale,
-                              const std::vector<bool>* valid_keypoints = nullptr) const;
+                              const std::vector<bool>* valid_keypoints = nullptr) const
+      SLSLAM_REQUIRES(map.mutex());
   // Locks the live map of the active one (where a merge has moved it, threaded mode), makes it
   // the active map and returns its lock.
-  std::unique_lock<std::mutex> LockActiveMap();
+  std::unique_lock<Mutex> LockActiveMap();
   // Guided matching bounds for descriptors of this type, window scaled by radius_scale.
   GuidedMatchOptions GuidedOptions(int descriptor_type, float radius_scale) const;
   // Updates the dynamic-cell filter from the previous tracked frame's stereo keypoints matched
@@ -257,7 +259,8 @@ class Tracker {
   // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
   // map.mutex().
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
-                      std::vector<int>* point_match, std::vector<int>* line_match);
+                      std::vector<int>* point_match, std::vector<int>* line_match)
+      SLSLAM_REQUIRES(map.mutex());
   // Tries the maps in `order`; on success switches to that map and fills the pose and tracking.
   bool Relocalise(const StereoFrame& frame, const std::vector<int>& order, TrackResult* result,
                   LocalTracking* tracking);
@@ -310,8 +313,9 @@ class Tracker {
   // and returns true when it did. Never fires in sequential mode (nothing runs in between).
   // Caller holds the map's lock for both.
   using PoseRef = std::pair<Eigen::Matrix3d*, Eigen::Vector3d*>;
-  void SetAnchor(const Map& map, int keyframe);
-  bool FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses);
+  void SetAnchor(const Map& map, int keyframe) SLSLAM_REQUIRES(map.mutex());
+  bool FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses)
+      SLSLAM_REQUIRES(map.mutex());
   struct Anchor {
     int keyframe = -1;  ///< -1: none for this frame
     const Map* map = nullptr;

@@ -90,7 +90,7 @@ Eigen::Matrix3d Rotation(double yaw, double pitch) {
 // gaps, a culled-keyframe record).
 void FillMap(Map* map, unsigned seed, int keyframes) {
   std::mt19937 rng(seed);
-  std::lock_guard<std::mutex> lock(map->mutex());
+  MutexLock lock(map->mutex());
   const int n = 12;
   const int m = 5;
   std::vector<int> kf_ids;
@@ -324,7 +324,7 @@ TEST_F(MapIo, RoundTripGivesIdenticalMaps) {
   ExpectSameMap(*second_, *loaded.maps[1]);
   // Both loaded maps count on one id source, past every id in the file.
   EXPECT_EQ(&loaded.maps[0]->ids(), &loaded.maps[1]->ids());
-  std::lock_guard<std::mutex> lock(loaded.maps[1]->mutex());
+  MutexLock lock(loaded.maps[1]->mutex());
   const auto kf = loaded.maps[1]->AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(),
                                               std::make_shared<StereoFrame>());
   EXPECT_EQ(kf->id, ids_->next_keyframe);
@@ -367,7 +367,7 @@ TEST_F(MapIo, ReferencesToErasedEntriesAreWrittenAsNone) {
   Map map;
   FillMap(&map, 3, 4);
   {
-    std::lock_guard<std::mutex> lock(map.mutex());
+    MutexLock lock(map.mutex());
     const auto kf = map.keyframes().begin()->second;
     const int erased_point = map.points().begin()->first + 2;  // erased by FillMap
     ASSERT_EQ(map.point(erased_point), nullptr);

@@ -616,7 +616,7 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
   const Scene scene;
   const StereoRig rig = Rig();
   Map map;
-  std::lock_guard<std::mutex> lock(map.mutex());
+  MutexLock lock(map.mutex());
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   // Frames rendered without the right image: nothing has stereo depth.
