@@ -25,6 +25,8 @@ from typing import Any, Literal
 
 import yaml
 
+from slslam import _core
+from slslam._cpp_defaults import as_written, core_attribute
 from slslam.errors import InputError
 from slslam.features.orb import OrbOptions
 from slslam.features.superpoint import ENV_MODEL, SuperPointOptions
@@ -78,6 +80,118 @@ def _option(default: float, interval: str) -> Any:
     return field(default=default, metadata={"range": Range.parse(interval)})
 
 
+def _tracking(name: str, interval: str = "") -> Any:
+    return _mirrored(_TRACKER, TRACKING_TO_CORE, name, interval)
+
+
+def _loop_closing(name: str, interval: str = "") -> Any:
+    return _mirrored(_TRACKER, LOOP_CLOSING_TO_CORE, name, interval)
+
+
+def _dynamic_cells(name: str, interval: str = "") -> Any:
+    return _mirrored(_TRACKER, DYNAMIC_CELLS_TO_CORE, name, interval)
+
+
+def _lines(name: str, interval: str = "") -> Any:
+    return _mirrored(_LINES, LINES_TO_CORE, name, interval)
+
+
+def _grid(name: str, interval: str = "") -> Any:
+    return _mirrored(_GRID, GRID_TO_CORE, name, interval)
+
+
+# -- defaults: written once, in the C++ option structs -------------------------------------------
+#: Where each config key goes in the C++ options (``_core.TrackerOptions``): the config section's
+#: field -> attribute paths (one key may set several). The Python defaults of these keys are read
+#: from the C++ defaults (the first path), so a default is written in one place; the tracker
+#: applies the table (``slslam.tracking.tracker._core_options``) and tests/python/test_config.py
+#: checks every path. The line front end's keys go to ``_core.LineExtractorOptions``
+#: (LINES_TO_CORE); keys absent from all tables (point_frontend, pipeline, relocalisation,
+#: vocabulary_path, the network front ends' options) are read in Python and have their defaults
+#: here.
+TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
+    name: (name,)
+    for name in (
+        "use_lines",
+        "sequential",
+        "min_init_points",
+        "min_inliers",
+        "search_radius_px",
+        "match_ratio",
+        "max_distance_binary",
+        "max_distance_float",
+        "line_search_px",
+        "line_max_angle_rad",
+        "line_max_lbd",
+        "keyframe_max_frames",
+        "keyframe_min_frames",
+        "keyframe_min_interval_s",
+        "keyframe_track_ratio",
+        "keyframe_min_inliers",
+        "close_depth_baselines",
+        "point_sigma_px",
+        "line_sigma_px",
+        "line_inlier_weight",
+        "recently_lost_frames",
+        "lost_velocity_decay",
+        "lost_search_scale",
+        "weak_keyframe_inliers",
+        "weak_keyframe_frames",
+    )
+} | {
+    "max_depth_baselines": ("stereo.max_depth_baselines",),
+    "local_keyframes": ("mapping.local_keyframes",),
+    "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
+    "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
+}
+LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
+    name: (f"loop_closing.{name}",)
+    for name in (
+        "enabled",
+        "merge_maps",
+        "global_ba",
+        "min_inliers",
+        "consistency",
+        "max_correction_ratio",
+        "max_correction_floor_m",
+        "welding_keyframes",
+    )
+}
+LINES_TO_CORE: dict[str, tuple[str, ...]] = {
+    "line_detection_scale": ("detection_scale",),
+    "line_detector": ("detector",),
+    "max_lines": ("max_lines",),
+}
+DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
+    name: (f"dynamic.{name}",)
+    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches")
+}
+GRID_TO_CORE: dict[str, tuple[str, ...]] = {
+    "cell_size_px": ("cell_size_px",),
+    "max_per_cell": ("max_per_cell",),
+}
+
+
+def _cpp_default(options: Any, table: dict[str, tuple[str, ...]], name: str) -> Any:
+    return as_written(core_attribute(options, table[name][0]))
+
+
+_TRACKER = _core.TrackerOptions()
+_LINES = _core.LineExtractorOptions()
+_GRID = _core.GridLimitOptions()
+
+
+def _mirrored(
+    options: Any, table: dict[str, tuple[str, ...]], name: str, interval: str = ""
+) -> Any:
+    """A dataclass field whose default is the C++ default (``table[name]`` of ``options``) and
+    whose allowed range is ``interval`` (none: any value of the type)."""
+    default = _cpp_default(options, table, name)
+    if not interval:
+        return field(default=default)
+    return field(default=default, metadata={"range": Range.parse(interval)})
+
+
 #: Ranges of the options whose dataclasses live with their front end (slslam.features).
 FOREIGN_RANGES: dict[type, dict[str, Range]] = {
     OrbOptions: {
@@ -112,8 +226,8 @@ FLOAT_FALLBACK = Range(-math.inf, math.inf, True, True)
 class GridConfig:
     """Per-cell keypoint limit (SPEC A2); mirrors C++ ``GridLimitOptions``."""
 
-    cell_size_px: int = _option(32, "[4, 4096]")  # P: cell side [px]
-    max_per_cell: int = _option(8, "[1, 10000]")  # keypoints kept per cell
+    cell_size_px: int = _grid("cell_size_px", "[4, 4096]")  # P: cell side [px]
+    max_per_cell: int = _grid("max_per_cell", "[1, 10000]")  # keypoints kept per cell
 
 
 @dataclass(frozen=True)
@@ -121,15 +235,15 @@ class DynamicCellConfig:
     """Invalid-cell filter for moving objects (SPEC A2), applied in tracking; mirrors C++
     ``DynamicCellOptions`` (``TrackerOptions.dynamic``; ``enabled`` is ``dynamic_cells``)."""
 
-    enabled: bool = True
-    cell_size_px: int = _option(32, "[4, 4096]")  # cell side [px]
-    sigma_px: float = _option(3.0, "[0.1, 1000]")  # Gaussian width of G(d) [px]
+    enabled: bool = _dynamic_cells("enabled")
+    cell_size_px: int = _dynamic_cells("cell_size_px", "[4, 4096]")  # cell side [px]
+    sigma_px: float = _dynamic_cells("sigma_px", "[0.1, 1000]")  # Gaussian width of G(d) [px]
     # weight of the current frame in the temporal smoothing
-    alpha: float = _option(0.7, "[0.01, 1]")
+    alpha: float = _dynamic_cells("alpha", "[0.01, 1]")
     # l: a cell below this weight is invalid (with its 8 neighbours)
-    threshold: float = _option(0.5, "[0, 1]")
+    threshold: float = _dynamic_cells("threshold", "[0, 1]")
     # matches a cell needs in a frame to count as evidence (fewer: the cell counts as static)
-    min_matches: int = _option(2, "[1, 1000000]")
+    min_matches: int = _dynamic_cells("min_matches", "[1, 1000000]")
 
 
 @dataclass(frozen=True)
@@ -152,88 +266,97 @@ class FeaturesConfig:
 class LoopClosingConfig:
     """Loop closing and map merging; mirrors C++ ``LoopClosingOptions`` (needs the vocabulary)."""
 
-    enabled: bool = True  # close loops within a map (essential graph, then global BA)
-    merge_maps: bool = True  # merge a map into an older one when place recognition links them
-    global_ba: bool = True  # global bundle adjustment over points and lines after a loop / merge
+    # close loops within a map (essential graph, then global BA)
+    enabled: bool = _loop_closing("enabled")
+    # merge a map into an older one when place recognition links them
+    merge_maps: bool = _loop_closing("merge_maps")
+    # global bundle adjustment over points and lines after a loop / merge
+    global_ba: bool = _loop_closing("global_ba")
     # weighted inliers (points + lines) of the candidate's local map a loop needs
-    min_inliers: float = _option(80.0, "[1, 100000]")
+    min_inliers: float = _loop_closing("min_inliers", "[1, 100000]")
     # consecutive keyframes whose verified loop transforms must agree
-    consistency: int = _option(3, "[1, 100]")
+    consistency: int = _loop_closing("consistency", "[1, 100]")
     # same map: largest correction as a share of the path driven since the loop keyframe (a
     # repeated arch seen as the old one gives a confident, implausibly large jump)
-    max_correction_ratio: float = _option(0.05, "[0, 1]")
-    max_correction_floor_m: float = _option(0.5, "[0, 1000]")  # correction always allowed [m]
+    max_correction_ratio: float = _loop_closing("max_correction_ratio", "[0, 1]")
+    # correction always allowed [m]
+    max_correction_floor_m: float = _loop_closing("max_correction_floor_m", "[0, 1000]")
     # welding BA after a merge: the merged keyframe and the candidate, each with this many best
     # covisible keyframes, optimised before the global BA (0: none)
-    welding_keyframes: int = _option(10, "[0, 1000]")
+    welding_keyframes: int = _loop_closing("welding_keyframes", "[0, 1000]")
 
 
 @dataclass(frozen=True)
 class TrackingConfig:
     """Tracking and local mapping (SPEC A5-A6); mirrors C++ ``TrackerOptions``."""
 
-    use_lines: bool = True  # line features in tracking and mapping
-    sequential: bool = True  # local mapping inline: exactly reproducible; false: own thread
+    use_lines: bool = _tracking("use_lines")  # line features in tracking and mapping
+    # local mapping inline: exactly reproducible; false: own thread
+    sequential: bool = _tracking("sequential")
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
-    min_init_points: int = _option(50, "[3, 100000]")  # stereo points a frame needs to start a map
+    # stereo points a frame needs to start a map
+    min_init_points: int = _tracking("min_init_points", "[3, 100000]")
     # fewer inliers after motion-only BA: the frame is LOST
-    min_inliers: int = _option(15, "[3, 100000]")
+    min_inliers: int = _tracking("min_inliers", "[3, 100000]")
     # guided matching window [px] (doubled on a retry)
-    search_radius_px: float = _option(15.0, "[1, 10000]")
+    search_radius_px: float = _tracking("search_radius_px", "[1, 10000]")
     # best / second best inside the guided-matching window
-    match_ratio: float = _option(0.9, "[0.01, 1]")
+    match_ratio: float = _tracking("match_ratio", "[0.01, 1]")
     # guided matching bound for ORB [Hamming bits]
-    max_distance_binary: float = _option(80.0, "[1, 256]")
+    max_distance_binary: float = _tracking("max_distance_binary", "[1, 256]")
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
-    max_distance_float: float = _option(0.8, "[0.01, 2]")
+    max_distance_float: float = _tracking("max_distance_float", "[0.01, 2]")
     # map line to frame segment: midpoint distance to the predicted line [px], angle [rad], LBD
     # distance [bits]
-    line_search_px: float = _option(20.0, "[0.1, 10000]")
-    line_max_angle_rad: float = _option(0.2, "[0.001, 3.14]")
-    line_max_lbd: float = _option(80.0, "[1, 256]")
-    keyframe_max_frames: int = _option(20, "[1, 1e6]")  # a keyframe at least this often [frames]
+    line_search_px: float = _tracking("line_search_px", "[0.1, 10000]")
+    line_max_angle_rad: float = _tracking("line_max_angle_rad", "[0.001, 3.14]")
+    line_max_lbd: float = _tracking("line_max_lbd", "[1, 256]")
+    # a keyframe at least this often [frames]
+    keyframe_max_frames: int = _tracking("keyframe_max_frames", "[1, 1e6]")
     # no keyframe sooner than this after the last while tracking is strong [frames]
-    keyframe_min_frames: int = _option(2, "[0, 1000]")
+    keyframe_min_frames: int = _tracking("keyframe_min_frames", "[0, 1000]")
     # ... nor sooner than this [s] (a gap in time, the same at any camera rate; 0: none)
-    keyframe_min_interval_s: float = _option(0.0, "[0, 1000]")
+    keyframe_min_interval_s: float = _tracking("keyframe_min_interval_s", "[0, 1000]")
     # tracked / reference keyframe points below: keyframe
-    keyframe_track_ratio: float = _option(0.75, "[0.01, 1]")
-    keyframe_min_inliers: int = _option(100, "[0, 100000]")  # fewer tracked points: keyframe
+    keyframe_track_ratio: float = _tracking("keyframe_track_ratio", "[0.01, 1]")
+    # fewer tracked points: keyframe
+    keyframe_min_inliers: int = _tracking("keyframe_min_inliers", "[0, 100000]")
     # "close" stereo points for the rule above: depth below this many baselines
-    close_depth_baselines: float = _option(40.0, "[0.1, 1e6]")
+    close_depth_baselines: float = _tracking("close_depth_baselines", "[0.1, 1e6]")
     # covisible keyframes in the local map and local BA
-    local_keyframes: int = _option(10, "[1, 1000]")
+    local_keyframes: int = _tracking("local_keyframes", "[1, 1000]")
     # weight of line terms against point terms in both BAs
-    line_weight: float = _option(1.0, "[0, 1e6]")
+    line_weight: float = _tracking("line_weight", "[0, 1e6]")
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
-    line_angle_weight: float = _option(10.0, "[0, 1e6]")
+    line_angle_weight: float = _tracking("line_angle_weight", "[0, 1e6]")
     # stereo depths beyond this many baselines are unused
-    max_depth_baselines: float = _option(60.0, "[1, 1e6]")
-    point_sigma_px: float = _option(1.0, "[0.01, 1000]")  # keypoint measurement sigma [px]
+    max_depth_baselines: float = _tracking("max_depth_baselines", "[1, 1e6]")
+    # keypoint measurement sigma [px]
+    point_sigma_px: float = _tracking("point_sigma_px", "[0.01, 1000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
-    line_sigma_px: float = _option(3.0, "[0.01, 1000]")
+    line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")
     # LSD runs on the image scaled by this (segments mapped back; LBD at full resolution)
-    line_detection_scale: float = _option(0.5, "[0.1, 1]")
+    line_detection_scale: float = _lines("line_detection_scale", "[0.1, 1]")
     # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
-    line_detector: Literal["lsd", "fld"] = "lsd"
+    line_detector: Literal["lsd", "fld"] = _lines("line_detector")
     # keep at most this many segments per image after preprocessing, the longest (0: all); LBD
     # costs about 60 us a segment
-    max_lines: int = _option(150, "[0, 100000]")
+    max_lines: int = _lines("max_lines", "[0, 100000]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
-    line_inlier_weight: float = _option(1.0, "[0, 100]")
+    line_inlier_weight: float = _tracking("line_inlier_weight", "[0, 100]")
     # frames of RECENTLY_LOST (wider window, decaying velocity, relocalisation into the active
     # map) before LOST, where the pose is frozen [frames]
-    recently_lost_frames: int = _option(10, "[0, 100000]")
+    recently_lost_frames: int = _tracking("recently_lost_frames", "[0, 100000]")
     # per-frame factor on the predicted motion while recently lost
-    lost_velocity_decay: float = _option(0.6, "[0, 1]")
+    lost_velocity_decay: float = _tracking("lost_velocity_decay", "[0, 1]")
     # guided-matching window factor while recently lost
-    lost_search_scale: float = _option(2.0, "[1, 100]")
+    lost_search_scale: float = _tracking("lost_search_scale", "[1, 100]")
     # weighted inliers below this: a keyframe every weak_keyframe_frames (thin tracking)
-    weak_keyframe_inliers: int = _option(60, "[0, 100000]")
-    weak_keyframe_frames: int = _option(3, "[1, 100000]")  # [frames]
+    weak_keyframe_inliers: int = _tracking("weak_keyframe_inliers", "[0, 100000]")
+    weak_keyframe_frames: int = _tracking("weak_keyframe_frames", "[1, 100000]")  # [frames]
     relocalisation: bool = True  # bag-of-words relocalisation when lost (needs a vocabulary)
     # BoW vocabulary file; null: the one shipped for ORB (learned descriptors need their own,
     # made with `slslam vocab train`)

@@ -130,12 +130,12 @@ def test_every_mirrored_default_equals_the_cpp_default():
     """One source of defaults: each config key that goes to the C++ tracker options
     (``TRACKING_TO_CORE`` and its siblings, the table ``_core_options`` applies) has the C++
     default, field by field; every tracker-section key is either mirrored or read in Python."""
-    from slslam.tracking.tracker import (
+    from slslam._cpp_defaults import core_attribute
+    from slslam.config import (
         DYNAMIC_CELLS_TO_CORE,
         LINES_TO_CORE,
         LOOP_CLOSING_TO_CORE,
         TRACKING_TO_CORE,
-        core_attribute,
     )
 
     core = _core.TrackerOptions()
@@ -165,3 +165,56 @@ def test_every_mirrored_default_equals_the_cpp_default():
     python_only = {"pipeline", "relocalisation", "vocabulary_path", "loop_closing"}
     fields = {f.name for f in dataclasses.fields(config.tracking)}
     assert fields - set(TRACKING_TO_CORE) - set(LINES_TO_CORE) == python_only
+
+
+def test_mirrored_defaults_are_written_only_in_cpp():
+    """Each config key that goes to the C++ options takes its default from the C++ struct: its
+    dataclass field is declared with the reader (``_tracking("key", range)`` etc.), never with a
+    literal, so a default changed in C++ changes the config, the YAML dump and the CLI."""
+    import ast
+    import inspect
+
+    import slslam.config as cfg
+    from slslam.features import orb
+
+    readers = {
+        "TrackingConfig": ({"_tracking": cfg.TRACKING_TO_CORE, "_lines": cfg.LINES_TO_CORE}),
+        "LoopClosingConfig": {"_loop_closing": cfg.LOOP_CLOSING_TO_CORE},
+        "DynamicCellConfig": {"_dynamic_cells": cfg.DYNAMIC_CELLS_TO_CORE},
+        "GridConfig": {"_grid": cfg.GRID_TO_CORE},
+    }
+    tree = ast.parse(inspect.getsource(cfg))
+    seen = 0
+    for node in tree.body:
+        if not isinstance(node, ast.ClassDef) or node.name not in readers:
+            continue
+        for item in node.body:
+            if not isinstance(item, ast.AnnAssign):
+                continue
+            name = item.target.id
+            table = {k: r for r, t in readers[node.name].items() for k in t}
+            if name not in table:
+                continue
+            call = item.value
+            assert isinstance(call, ast.Call) and call.func.id == table[name], (node.name, name)
+            assert isinstance(call.args[0], ast.Constant) and call.args[0].value == name
+            seen += 1
+    mirrored = sum(len(t) for r in readers.values() for t in r.values())
+    assert seen == mirrored >= 45
+    # The ORB front end's options too.
+    core_orb = _core.OrbOptions()
+    defaults = orb.OrbOptions()
+    assert (defaults.max_keypoints, defaults.num_levels, defaults.fast_threshold) == (
+        core_orb.max_features, core_orb.num_levels, core_orb.fast_threshold
+    )
+    assert defaults.scale_factor == 1.2  # the C++ 1.2f, as written
+
+
+def test_cpp_float_defaults_read_as_written():
+    from slslam._cpp_defaults import as_written
+
+    assert as_written(float(np.float32(0.9))) == 0.9  # a C++ float field
+    assert as_written(float(np.float32(0.005))) == 0.005
+    assert as_written(0.1) == 0.1  # a double stays as it is
+    assert as_written(1.0 / 3.0) == 1.0 / 3.0
+    assert as_written(7) == 7 and as_written("lsd") == "lsd" and as_written(True) is True

@@ -7,17 +7,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from slslam import _core
+from slslam._cpp_defaults import as_written
 from slslam.features.keypoints import Keypoints, check_gray_image
+
+
+_CORE_ORB = _core.OrbOptions()
 
 
 @dataclass(frozen=True)
 class OrbOptions:
     """ORB settings (OpenCV's ORB; ORB-SLAM-like defaults)."""
 
-    max_keypoints: int = 1000
-    scale_factor: float = 1.2  # pyramid scale between levels [-]
-    num_levels: int = 8
-    fast_threshold: int = 20  # [gray levels]
+    # Defaults: the C++ OrbOptions' (the one place they are written).
+    max_keypoints: int = _CORE_ORB.max_features
+    scale_factor: float = as_written(_CORE_ORB.scale_factor)  # pyramid scale between levels [-]
+    num_levels: int = _CORE_ORB.num_levels
+    fast_threshold: int = _CORE_ORB.fast_threshold  # [gray levels]
 
 
 class Orb:

@@ -36,7 +36,15 @@ from typing import Any
 import numpy as np
 
 from slslam import _core
-from slslam.config import Config, make_point_frontend
+from slslam._cpp_defaults import core_attribute
+from slslam.config import (
+    DYNAMIC_CELLS_TO_CORE,
+    LINES_TO_CORE,
+    LOOP_CLOSING_TO_CORE,
+    TRACKING_TO_CORE,
+    Config,
+    make_point_frontend,
+)
 from slslam.datasets.euroc import RectifiedStereoCamera
 from slslam.datasets.images import GrayImageReader
 from slslam.errors import InputError, SlslamError
@@ -249,79 +257,6 @@ class FinalTrajectory:
     timestamp: np.ndarray
     map_index: np.ndarray
     T_world_cam: np.ndarray
-
-
-#: Where each config key goes in the C++ options (``_core.TrackerOptions``): the config section's
-#: field -> attribute paths (one key may set several). ``_core_options`` applies it and
-#: tests/python/test_config.py checks, field by field, that every Python default equals the C++
-#: default it mirrors. The line front end's keys go to ``_core.LineExtractorOptions``
-#: (LINES_TO_CORE); keys absent from both (pipeline, relocalisation, vocabulary_path) are read in
-#: Python.
-TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
-    name: (name,)
-    for name in (
-        "use_lines",
-        "sequential",
-        "min_init_points",
-        "min_inliers",
-        "search_radius_px",
-        "match_ratio",
-        "max_distance_binary",
-        "max_distance_float",
-        "line_search_px",
-        "line_max_angle_rad",
-        "line_max_lbd",
-        "keyframe_max_frames",
-        "keyframe_min_frames",
-        "keyframe_min_interval_s",
-        "keyframe_track_ratio",
-        "keyframe_min_inliers",
-        "close_depth_baselines",
-        "point_sigma_px",
-        "line_sigma_px",
-        "line_inlier_weight",
-        "recently_lost_frames",
-        "lost_velocity_decay",
-        "lost_search_scale",
-        "weak_keyframe_inliers",
-        "weak_keyframe_frames",
-    )
-} | {
-    "max_depth_baselines": ("stereo.max_depth_baselines",),
-    "local_keyframes": ("mapping.local_keyframes",),
-    "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
-    "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
-}
-LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
-    name: (f"loop_closing.{name}",)
-    for name in (
-        "enabled",
-        "merge_maps",
-        "global_ba",
-        "min_inliers",
-        "consistency",
-        "max_correction_ratio",
-        "max_correction_floor_m",
-        "welding_keyframes",
-    )
-}
-LINES_TO_CORE: dict[str, tuple[str, ...]] = {
-    "line_detection_scale": ("detection_scale",),
-    "line_detector": ("detector",),
-    "max_lines": ("max_lines",),
-}
-DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
-    name: (f"dynamic.{name}",)
-    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches")
-}
-
-
-def core_attribute(options, path: str):
-    """The value at a dotted attribute path of the C++ options (``"mapping.ba.line_weight"``)."""
-    *parents, last = path.split(".")
-    for part in parents:
-        options = getattr(options, part)
-    return getattr(options, last)
 
 
 def _set_core(options, path: str, value) -> None:
