@@ -60,8 +60,8 @@ class TrackerSession {
     }
     py::dict out;
     out["state"] = TrackingStateName(r.state);
-    out["R_cw"] = r.R_cw;
-    out["t_cw"] = r.t_cw;
+    out["R_cw"] = r.cam_from_world.rotation;
+    out["t_cw"] = r.cam_from_world.translation;
     out["map_index"] = r.map_index;
     out["matched_points"] = r.matched_points;
     out["inlier_points"] = r.inlier_points;
@@ -178,8 +178,8 @@ class TrackerSession {
       mi(i) = f.map_index;
       ts(i) = f.timestamp;
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(i, r, c) = f.R_cw(r, c);
-        t(i, r) = f.t_cw(r);
+        for (int c = 0; c < 3; ++c) R(i, r, c) = f.cam_from_world.rotation(r, c);
+        t(i, r) = f.cam_from_world.translation(r);
       }
     }
     py::dict out;

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/place/vocabulary.h"
 #include "slslam/features/stereo_frame.h"
@@ -45,8 +46,7 @@ struct MapLine {
 
 struct KeyFrame {
   int id = -1;
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< world -> camera (x_c = R x_w + t)
   std::shared_ptr<const StereoFrame> frame;
   std::vector<int> point_ids;  ///< per keypoint: map point id or -1
   std::vector<int> line_ids;   ///< per segment: map line id or -1
@@ -56,7 +56,7 @@ struct KeyFrame {
   FeatureVector bow_features;       ///< vocabulary node -> keypoint indices (direct index)
   bool bad = false;
 
-  Eigen::Vector3d Center() const { return -R_cw.transpose() * t_cw; }
+  Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]
 };
 
 // Id counters shared by the maps of one atlas, so that keyframe, point and line ids are unique
@@ -71,8 +71,7 @@ struct MapIds {
 // (ORB-SLAM's Tcp), so that frames tracked against it still get a pose from the final map.
 struct RetiredKeyFrame {
   int parent = -1;
-  Eigen::Matrix3d R_kf_parent = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_kf_parent = Eigen::Vector3d::Zero();
+  Rigid3d kf_from_parent;  ///< parent camera -> this keyframe's camera
 };
 
 class Map {
@@ -84,7 +83,7 @@ class Map {
   std::mutex& mutex() const { return mutex_; }
 
   // All below expect the caller to hold mutex().
-  std::shared_ptr<KeyFrame> AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
+  std::shared_ptr<KeyFrame> AddKeyFrame(const Rigid3d& cam_from_world,
                                         std::shared_ptr<const StereoFrame> frame);
   std::shared_ptr<MapPoint> AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
                                      int keyframe_id);
@@ -112,7 +111,7 @@ class Map {
 
   // Pose of a keyframe, live or culled (through the chain of retired parents); false when the
   // id is unknown to this map.
-  bool KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const;
+  bool KeyFramePose(int id, Rigid3d* cam_from_world) const;
   const std::map<int, RetiredKeyFrame>& retired() const { return retired_; }
 
   // Restoring a saved map, or moving entries in from another map of the atlas: entries keep their
