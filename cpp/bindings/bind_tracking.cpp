@@ -45,8 +45,8 @@ struct FrameOutput {
 // cam_from_world as a 4x4 matrix (x_cam = T * x_world), last row 0 0 0 1.
 Eigen::Matrix4d CamFromWorldMatrix(const TrackResult& r) {
   Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = r.R_cw;
-  T.topRightCorner<3, 1>() = r.t_cw;
+  T.topLeftCorner<3, 3>() = r.cam_from_world.rotation;
+  T.topRightCorner<3, 1>() = r.cam_from_world.translation;
   return T;
 }
 
@@ -173,8 +173,8 @@ class TrackerSession {
       mi(i) = f.map_index;
       ts(i) = f.timestamp;
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(i, r, c) = f.R_cw(r, c);
-        t(i, r) = f.t_cw(r);
+        for (int c = 0; c < 3; ++c) R(i, r, c) = f.cam_from_world.rotation(r, c);
+        t(i, r) = f.cam_from_world.translation(r);
       }
     }
     py::dict out;

@@ -71,16 +71,15 @@ Eigen::Matrix3d LineProjectionMatrix(const PinholeCamera& camera) {
   return k;
 }
 
-Eigen::Vector4d BackProjectedPlane(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                                   const Eigen::Vector3d& t_cw, const Eigen::Vector2d& start_px,
-                                   const Eigen::Vector2d& end_px) {
+Eigen::Vector4d BackProjectedPlane(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                                   const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px) {
   // In the camera frame the plane goes through the origin with normal ray(start) x ray(end).
   const Eigen::Vector3d normal_c = camera.Unproject(start_px).cross(camera.Unproject(end_px));
   Require(normal_c.norm() > 1e-12, "degenerate image segment: its endpoints coincide");
   // n_c . x_c = 0 with x_c = R x_w + t  =>  (R^T n_c) . x_w + n_c . t = 0.
   Eigen::Vector4d plane;
-  plane.head<3>() = R_cw.transpose() * normal_c;
-  plane(3) = normal_c.dot(t_cw);
+  plane.head<3>() = cam_from_world.rotation.transpose() * normal_c;
+  plane(3) = normal_c.dot(cam_from_world.translation);
   return plane;
 }
 

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "slslam/core/pinhole_camera.h"
+#include "slslam/core/rigid3.h"
 
 namespace slslam {
 
@@ -42,11 +43,10 @@ struct PluckerLine {
 Eigen::Matrix3d LineProjectionMatrix(const PinholeCamera& camera);
 
 // The plane through the camera centre (origin of the camera frame) and an image segment, expressed
-// in the world frame given the camera pose T_cw (x_c = R_cw x_w + t_cw). Used for two-view
+// in the world frame given the camera pose cam_from_world (x_c = R x_w + t). Used for two-view
 // triangulation: the line of two such planes from two views is the 3-D line.
-Eigen::Vector4d BackProjectedPlane(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                                   const Eigen::Vector3d& t_cw, const Eigen::Vector2d& start_px,
-                                   const Eigen::Vector2d& end_px);
+Eigen::Vector4d BackProjectedPlane(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                                   const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px);
 
 // Orthonormal representation: U in SO(3) (columns n/|n|, v/|v|, n x v / |n x v|) and
 // W = [cos phi, -sin phi; sin phi, cos phi] with (cos phi, sin phi) = (|n|, |v|) / |(n, v)|.

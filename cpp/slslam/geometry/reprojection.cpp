@@ -29,29 +29,29 @@ Eigen::Matrix<double, 3, 6> PointPoseJacobian(const Eigen::Vector3d& x_c) {
 
 }  // namespace
 
-bool PointResidual(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                   const Eigen::Vector3d& t_cw, const Eigen::Vector3d& point_w,
+bool PointResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                   const Eigen::Vector3d& point_w,
                    const Eigen::Vector2d& observed_px, Eigen::Vector2d* residual,
                    Eigen::Matrix<double, 2, 6>* d_pose, Eigen::Matrix<double, 2, 3>* d_point,
                    double min_depth) {
-  const Eigen::Vector3d x_c = R_cw * point_w + t_cw;
+  const Eigen::Vector3d x_c = cam_from_world * point_w;
   if (!(x_c.z() > min_depth)) return false;
   *residual = camera.Project(x_c) - observed_px;
   if (d_pose || d_point) {
     const Eigen::Matrix<double, 2, 3> j_proj = ProjectionJacobian(camera, x_c);
     if (d_pose) *d_pose = j_proj * PointPoseJacobian(x_c);
-    if (d_point) *d_point = j_proj * R_cw;
+    if (d_point) *d_point = j_proj * cam_from_world.rotation;
   }
   return true;
 }
 
-bool StereoPointResidual(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
-                         const Eigen::Vector3d& t_cw, const Eigen::Vector3d& point_w,
+bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
+                         const Eigen::Vector3d& point_w,
                          const Eigen::Vector3d& observed, Eigen::Vector3d* residual,
                          Eigen::Matrix<double, 3, 6>* d_pose, Eigen::Matrix<double, 3, 3>* d_point,
                          double min_depth) {
   const PinholeCamera& cam = rig.camera;
-  const Eigen::Vector3d x_c = R_cw * point_w + t_cw;
+  const Eigen::Vector3d x_c = cam_from_world * point_w;
   if (!(x_c.z() > min_depth)) return false;
   const Eigen::Vector2d uv = cam.Project(x_c);
   const double inv_z = 1.0 / x_c.z();
@@ -63,17 +63,18 @@ bool StereoPointResidual(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
     j_proj.row(2) = j_proj.row(0);
     j_proj(2, 2) += cam.fx * rig.baseline_m * inv_z * inv_z;
     if (d_pose) *d_pose = j_proj * PointPoseJacobian(x_c);
-    if (d_point) *d_point = j_proj * R_cw;
+    if (d_point) *d_point = j_proj * cam_from_world.rotation;
   }
   return true;
 }
 
-bool LineResidual(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                  const Eigen::Vector3d& t_cw, const PluckerLine& line_w,
+bool LineResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                  const PluckerLine& line_w,
                   const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px,
                   double angle_weight, Eigen::Vector3d* residual,
                   Eigen::Matrix<double, 3, 6>* d_pose, Eigen::Matrix<double, 3, 6>* d_plucker) {
-  const PluckerLine line_c = line_w.Transformed(R_cw, t_cw);
+  const PluckerLine line_c =
+      line_w.Transformed(cam_from_world.rotation, cam_from_world.translation);
   const Eigen::Matrix3d k_line = LineProjectionMatrix(camera);
   const Eigen::Vector3d l = k_line * line_c.n;
   const double norm_sq = l.x() * l.x() + l.y() * l.y();
@@ -110,17 +111,17 @@ bool LineResidual(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
   }
   if (d_plucker) {
     // n_c = R n_w + [t]x R v_w.
-    d_plucker->leftCols<3>() = d_nc * R_cw;
-    d_plucker->rightCols<3>() = d_nc * Skew(t_cw) * R_cw;
+    const Eigen::Matrix3d& R = cam_from_world.rotation;
+    d_plucker->leftCols<3>() = d_nc * R;
+    d_plucker->rightCols<3>() = d_nc * Skew(cam_from_world.translation) * R;
   }
   return true;
 }
 
-void PerturbPose(const Eigen::Matrix<double, 6, 1>& delta, Eigen::Matrix3d* R_cw,
-                 Eigen::Vector3d* t_cw) {
+void PerturbPose(const Eigen::Matrix<double, 6, 1>& delta, Rigid3d* cam_from_world) {
   const Eigen::Matrix3d dR = ExpSO3(delta.tail<3>());
-  *R_cw = dR * *R_cw;
-  *t_cw = dR * *t_cw + delta.head<3>();
+  cam_from_world->rotation = dR * cam_from_world->rotation;
+  cam_from_world->translation = dR * cam_from_world->translation + delta.head<3>();
 }
 
 }  // namespace slslam

@@ -1,6 +1,7 @@
 // Reprojection residuals of points and lines with analytic Jacobians (SPEC A5, eq. 13-17).
 //
-// Pose convention: T_cw maps world to camera, x_c = R x_w + t. Pose increments are 6-vectors
+// Pose convention: cam_from_world (T_cw) maps world to camera, x_c = R x_w + t with R, t its
+// rotation and translation. Pose increments are 6-vectors
 // delta = (rho, omega) applied on the left: R <- Exp(omega) R, t <- Exp(omega) t + rho, so that
 // x_c <- Exp(omega) x_c + rho and d x_c / d delta = [I, -[x_c]x] at delta = 0.
 #pragma once
@@ -8,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "slslam/core/pinhole_camera.h"
+#include "slslam/core/rigid3.h"
 #include "slslam/core/stereo_rig.h"
 #include "slslam/geometry/plucker_line.h"
 
@@ -15,16 +17,16 @@ namespace slslam {
 
 // Residual (u, v) - observed of a point seen by one camera. Returns false (residual and Jacobians
 // untouched) when the point is not in front of the camera (z < min_depth).
-bool PointResidual(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                   const Eigen::Vector3d& t_cw, const Eigen::Vector3d& point_w,
+bool PointResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                   const Eigen::Vector3d& point_w,
                    const Eigen::Vector2d& observed_px, Eigen::Vector2d* residual,
                    Eigen::Matrix<double, 2, 6>* d_pose = nullptr,
                    Eigen::Matrix<double, 2, 3>* d_point = nullptr, double min_depth = 1e-6);
 
 // Residual (u_left, v, u_right) - observed of a point seen by a stereo pair (as ORB-SLAM3's stereo
 // edge): the right coordinate constrains depth.
-bool StereoPointResidual(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
-                         const Eigen::Vector3d& t_cw, const Eigen::Vector3d& point_w,
+bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
+                         const Eigen::Vector3d& point_w,
                          const Eigen::Vector3d& observed, Eigen::Vector3d* residual,
                          Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
                          Eigen::Matrix<double, 3, 3>* d_point = nullptr, double min_depth = 1e-6);
@@ -37,15 +39,14 @@ bool StereoPointResidual(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
 // information: it re-weights the direction error and is kept for fidelity to the paper's cost;
 // angle_weight = 0 drops it. Returns false when the projected line is degenerate (the line passes
 // through the camera centre).
-bool LineResidual(const PinholeCamera& camera, const Eigen::Matrix3d& R_cw,
-                  const Eigen::Vector3d& t_cw, const PluckerLine& line_w,
+bool LineResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                  const PluckerLine& line_w,
                   const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px,
                   double angle_weight, Eigen::Vector3d* residual,
                   Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
                   Eigen::Matrix<double, 3, 6>* d_plucker = nullptr);
 
-// Pose T_cw perturbed by delta = (rho, omega) as described at the top of this file.
-void PerturbPose(const Eigen::Matrix<double, 6, 1>& delta, Eigen::Matrix3d* R_cw,
-                 Eigen::Vector3d* t_cw);
+// Pose cam_from_world perturbed by delta = (rho, omega) as described at the top of this file.
+void PerturbPose(const Eigen::Matrix<double, 6, 1>& delta, Rigid3d* cam_from_world);
 
 }  // namespace slslam

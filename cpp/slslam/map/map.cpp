@@ -6,13 +6,12 @@
 
 namespace slslam {
 
-std::shared_ptr<KeyFrame> Map::AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
+std::shared_ptr<KeyFrame> Map::AddKeyFrame(const Rigid3d& cam_from_world,
                                            std::shared_ptr<const StereoFrame> frame) {
   Require(frame != nullptr, "a keyframe needs its frame");
   auto kf = std::make_shared<KeyFrame>();
   kf->id = ids_->next_keyframe++;
-  kf->R_cw = R_cw;
-  kf->t_cw = t_cw;
+  kf->cam_from_world = cam_from_world;
   kf->point_ids.assign(frame->NumKeypoints(), -1);
   kf->line_ids.assign(frame->NumLines(), -1);
   kf->frame = std::move(frame);
@@ -123,8 +122,14 @@ void Map::EraseKeyFrame(int keyframe_id) {
   RetiredKeyFrame retired;
   retired.parent = kf->parent;
   if (auto parent = keyframe(kf->parent)) {
-    retired.R_kf_parent = kf->R_cw * parent->R_cw.transpose();
-    retired.t_kf_parent = kf->t_cw - retired.R_kf_parent * parent->t_cw;
+    // R_kf R_parent^T, t_kf - R_kf_parent t_parent (not kf * parent.Inverse(), which rounds
+    // differently).
+    Rigid3d& kf_from_parent = retired.kf_from_parent;
+    const Rigid3d& kf_from_world = kf->cam_from_world;
+    const Rigid3d& parent_from_world = parent->cam_from_world;
+    kf_from_parent.rotation = kf_from_world.rotation * parent_from_world.rotation.transpose();
+    kf_from_parent.translation =
+        kf_from_world.translation - kf_from_parent.rotation * parent_from_world.translation;
   }
   retired_[keyframe_id] = retired;
   for (int pid : kf->point_ids) {
@@ -174,20 +179,17 @@ std::vector<int> Map::BestCovisible(int id, int n) const {
   return out;
 }
 
-bool Map::KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const {
+bool Map::KeyFramePose(int id, Rigid3d* cam_from_world) const {
   // T_id_w = T_id_p1 * T_p1_p2 * ... * T_pn_w along retired parents until a live keyframe.
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_kf;  // the culled keyframe `id` from the keyframe reached so far
   for (size_t hops = 0; hops <= retired_.size(); ++hops) {
     if (auto kf = keyframe(id)) {
-      *R_cw = R * kf->R_cw;
-      *t_cw = R * kf->t_cw + t;
+      *cam_from_world = cam_from_kf * kf->cam_from_world;
       return true;
     }
     auto it = retired_.find(id);
     if (it == retired_.end()) return false;
-    t = R * it->second.t_kf_parent + t;
-    R = R * it->second.R_kf_parent;
+    cam_from_kf = cam_from_kf * it->second.kf_from_parent;
     id = it->second.parent;
   }
   return false;  // a cycle: cannot happen with parents older than children

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "slslam/core/thread_annotations.h"
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/place/vocabulary.h"
 #include "slslam/features/stereo_frame.h"
@@ -45,8 +46,7 @@ struct MapLine {
 
 struct KeyFrame {
   int id = -1;
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< world -> camera (x_c = R x_w + t)
   std::shared_ptr<const StereoFrame> frame;
   std::vector<int> point_ids;  ///< per keypoint: map point id or -1
   std::vector<int> line_ids;   ///< per segment: map line id or -1
@@ -56,7 +56,7 @@ struct KeyFrame {
   FeatureVector bow_features;       ///< vocabulary node -> keypoint indices (direct index)
   bool bad = false;
 
-  Eigen::Vector3d Center() const { return -R_cw.transpose() * t_cw; }
+  Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]
 };
 
 // Id counters shared by the maps of one atlas, so that keyframe, point and line ids are unique
@@ -71,8 +71,7 @@ struct MapIds {
 // (ORB-SLAM's Tcp), so that frames tracked against it still get a pose from the final map.
 struct RetiredKeyFrame {
   int parent = -1;
-  Eigen::Matrix3d R_kf_parent = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_kf_parent = Eigen::Vector3d::Zero();
+  Rigid3d kf_from_parent;  ///< parent camera -> this keyframe's camera
 };
 
 class Map {
@@ -85,8 +84,9 @@ class Map {
   Mutex& mutex() const SLSLAM_RETURN_CAPABILITY(mutex_) { return mutex_; }
 
   // All below require the caller to hold mutex() (checked by clang's -Wthread-safety).
-  std::shared_ptr<KeyFrame> AddKeyFrame(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
-                                        std::shared_ptr<const StereoFrame> frame) SLSLAM_REQUIRES(mutex_);
+  std::shared_ptr<KeyFrame> AddKeyFrame(const Rigid3d& cam_from_world,
+                                        std::shared_ptr<const StereoFrame> frame)
+      SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapPoint> AddPoint(const Eigen::Vector3d& position, const cv::Mat& descriptor,
                                      int keyframe_id) SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapLine> AddLine(const PluckerLine& line, const Eigen::Vector3d& start,
@@ -111,14 +111,18 @@ class Map {
   const std::map<int, std::shared_ptr<MapPoint>>& points() const SLSLAM_REQUIRES(mutex_) {
     return points_;
   }
-  const std::map<int, std::shared_ptr<MapLine>>& lines() const SLSLAM_REQUIRES(mutex_) { return lines_; }
+  const std::map<int, std::shared_ptr<MapLine>>& lines() const SLSLAM_REQUIRES(mutex_) {
+    return lines_;
+  }
   // Keyframes sharing the most map points with `id`, strongest first (at most n).
   std::vector<int> BestCovisible(int id, int n) const SLSLAM_REQUIRES(mutex_);
 
   // Pose of a keyframe, live or culled (through the chain of retired parents); false when the
   // id is unknown to this map.
-  bool KeyFramePose(int id, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const SLSLAM_REQUIRES(mutex_);
-  const std::map<int, RetiredKeyFrame>& retired() const SLSLAM_REQUIRES(mutex_) { return retired_; }
+  bool KeyFramePose(int id, Rigid3d* cam_from_world) const SLSLAM_REQUIRES(mutex_);
+  const std::map<int, RetiredKeyFrame>& retired() const SLSLAM_REQUIRES(mutex_) {
+    return retired_;
+  }
 
   // Restoring a saved map, or moving entries in from another map of the atlas: entries keep their
   // ids (which must be unused here); the shared counters move past them.

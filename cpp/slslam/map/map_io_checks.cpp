@@ -104,7 +104,7 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
 void CheckKeyFrame(const KeyFrame& kf, const MapContent& c, const MapFileHeader& header,
                    const Where& where) {
   const int id = kf.id;
-  if (!IsRotation(kf.R_cw) || !Finite(kf.t_cw)) {
+  if (!IsRotation(kf.cam_from_world.rotation) || !Finite(kf.cam_from_world.translation)) {
     where.Fail("keyframe ", id, ": pose is not finite or its rotation is not orthonormal");
   }
   if (kf.frame == nullptr) where.Fail("keyframe ", id, ": no frame");
@@ -151,7 +151,7 @@ void CheckRetired(int id, const RetiredKeyFrame& r, const MapContent& c, const W
       (r.parent == id || (!c.keyframes.count(r.parent) && !c.retired.count(r.parent)))) {
     where.Fail("culled keyframe ", id, ": parent ", r.parent, " is not a keyframe of the map");
   }
-  if (!IsRotation(r.R_kf_parent) || !Finite(r.t_kf_parent)) {
+  if (!IsRotation(r.kf_from_parent.rotation) || !Finite(r.kf_from_parent.translation)) {
     where.Fail("culled keyframe ", id, ": relative pose is not finite or not a rotation");
   }
 }

@@ -204,8 +204,8 @@ std::shared_ptr<StereoFrame> ReadFrame(ByteReader* in) {
 
 void WriteKeyFrame(const KeyFrame& kf, ByteWriter* out) {
   out->I32(kf.id);
-  WriteMatrix3(kf.R_cw, out);
-  WriteVector3(kf.t_cw, out);
+  WriteMatrix3(kf.cam_from_world.rotation, out);
+  WriteVector3(kf.cam_from_world.translation, out);
   out->I32(kf.parent);
   out->U8(kf.bad ? 1 : 0);
   WriteObservations(kf.covisibility, out);
@@ -228,8 +228,8 @@ void WriteKeyFrame(const KeyFrame& kf, ByteWriter* out) {
 std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in) {
   auto kf = std::make_shared<KeyFrame>();
   kf->id = in->I32("keyframe id");
-  kf->R_cw = ReadMatrix3(in, "keyframe rotation");
-  kf->t_cw = ReadVector3(in, "keyframe translation");
+  kf->cam_from_world.rotation = ReadMatrix3(in, "keyframe rotation");
+  kf->cam_from_world.translation = ReadVector3(in, "keyframe translation");
   kf->parent = in->I32("keyframe parent");
   kf->bad = in->U8("keyframe flag") != 0;
   kf->covisibility = ReadIntPairs(in, "covisibility");
@@ -257,16 +257,16 @@ std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in) {
 void WriteRetired(int id, const RetiredKeyFrame& retired, ByteWriter* out) {
   out->I32(id);
   out->I32(retired.parent);
-  WriteMatrix3(retired.R_kf_parent, out);
-  WriteVector3(retired.t_kf_parent, out);
+  WriteMatrix3(retired.kf_from_parent.rotation, out);
+  WriteVector3(retired.kf_from_parent.translation, out);
 }
 
 std::pair<int, RetiredKeyFrame> ReadRetired(ByteReader* in) {
   const int id = in->I32("culled keyframe id");
   RetiredKeyFrame retired;
   retired.parent = in->I32("culled keyframe parent");
-  retired.R_kf_parent = ReadMatrix3(in, "culled keyframe rotation");
-  retired.t_kf_parent = ReadVector3(in, "culled keyframe translation");
+  retired.kf_from_parent.rotation = ReadMatrix3(in, "culled keyframe rotation");
+  retired.kf_from_parent.translation = ReadVector3(in, "culled keyframe translation");
   return {id, retired};
 }
 

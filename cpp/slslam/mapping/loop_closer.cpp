@@ -29,11 +29,6 @@ double Ms(Clock::time_point since) {
 
 double RotationAngle(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle(); }
 
-struct Pose {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-};
-
 }  // namespace
 
 void LoopClosingOptions::Check() const {
@@ -108,8 +103,7 @@ std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
 
 bool PoseFromMatches(const StereoFrame& frame, const Map& map,
                      const std::vector<std::pair<int, int>>& matches, const PinholeCamera& camera,
-                     int iterations, double error_px, int min_inliers, Eigen::Matrix3d* R_cw,
-                     Eigen::Vector3d* t_cw) {
+                     int iterations, double error_px, int min_inliers, Rigid3d* cam_from_world) {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   for (const auto& [keypoint, pid] : matches) {
@@ -128,10 +122,10 @@ bool PoseFromMatches(const StereoFrame& frame, const Map& map,
   cv::Mat R_cv;
   cv::Rodrigues(rvec, R_cv);
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) (*R_cw)(r, c) = R_cv.at<double>(r, c);
-    (*t_cw)(r) = tvec.at<double>(r);
+    for (int c = 0; c < 3; ++c) cam_from_world->rotation(r, c) = R_cv.at<double>(r, c);
+    cam_from_world->translation(r) = tvec.at<double>(r);
   }
-  return R_cw->allFinite() && t_cw->allFinite();
+  return cam_from_world->rotation.allFinite() && cam_from_world->translation.allFinite();
 }
 
 LoopCloser::LoopCloser(const StereoRig& rig, const LoopClosingOptions& options,
@@ -199,13 +193,12 @@ bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int ta
   const auto matches =
       MatchByWords(desc, kf.bow_features, *c, target, max_distance, options_.match_ratio);
   if (static_cast<int>(matches.size()) < options_.min_matches) return false;
-  Eigen::Matrix3d R_cw;
-  Eigen::Vector3d t_cw;
+  Rigid3d cam_from_world;
   if (!PoseFromMatches(frame, target, matches, rig_.camera, options_.ransac_iterations,
-                       options_.ransac_error_px, options_.min_pnp_inliers, &R_cw, &t_cw)) {
+                       options_.ransac_error_px, options_.min_pnp_inliers, &cam_from_world)) {
     return false;
   }
-  LocalMapMatch match = verifier_(frame, target, candidate, R_cw, t_cw);
+  LocalMapMatch match = verifier_(frame, target, candidate, cam_from_world);
   if (!match.success || match.weighted_inliers < options_.min_inliers) return false;
   {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
@@ -214,15 +207,18 @@ bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int ta
   out->target_map = target_map;
   out->candidate = candidate;
   // T_target_source = T_target_K * T_K_source (the keyframe's pose in its own map: kf).
-  out->R_ts = match.R_cw.transpose() * kf.R_cw;
-  out->t_ts = match.R_cw.transpose() * (kf.t_cw - match.t_cw);
+  const Rigid3d& target_cam = match.cam_from_world;  // K in the target map
+  out->R_ts = target_cam.rotation.transpose() * kf.cam_from_world.rotation;
+  out->t_ts =
+      target_cam.rotation.transpose() * (kf.cam_from_world.translation - target_cam.translation);
   out->match = std::move(match);
   if (target_map != source_map) return true;
   // Same map: the correction must be explainable by drift since the candidate.
   const Eigen::Vector3d center_old = kf.Center();
-  const Eigen::Vector3d center_new = -out->match.R_cw.transpose() * out->match.t_cw;
+  const Eigen::Vector3d center_new = out->match.cam_from_world.Center();
   const double moved = (center_new - center_old).norm();
-  const double turned = RotationAngle(out->match.R_cw * kf.R_cw.transpose());
+  const double turned =
+      RotationAngle(out->match.cam_from_world.rotation * kf.cam_from_world.rotation.transpose());
   const double allowed = options_.max_correction_floor_m +
                          options_.max_correction_ratio * PathLength(target, candidate, kf.id);
   return moved <= allowed && turned <= options_.max_correction_rad;
@@ -358,7 +354,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
       }
     }
     event.correction_m =
-        (kf->Center() - (-verified.match.R_cw.transpose() * verified.match.t_cw)).norm();
+        (kf->Center() - verified.match.cam_from_world.Center()).norm();
     if (event.merge) event.correction_m = 0.0;  // different worlds: no distance to compare
     {
       std::lock_guard<std::mutex> stats_lock(stats_mutex_);
@@ -421,8 +417,7 @@ void LoopCloser::TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen
   const Eigen::Vector3d t_st = -R_st * t_ts;
   for (auto& [id, kf] : map->keyframes()) {
     (void)id;
-    kf->t_cw = kf->R_cw * t_st + kf->t_cw;
-    kf->R_cw = kf->R_cw * R_st;
+    kf->cam_from_world = kf->cam_from_world * Rigid3d(R_st, t_st);
   }
   for (auto& [id, p] : map->points()) {
     (void)id;
@@ -441,10 +436,10 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
   auto current = map->keyframe(keyframe_id);
   // Poses before the correction, and the initial values of the essential graph: the keyframe and
   // its covisible neighbours move rigidly to the verified pose.
-  std::unordered_map<int, Pose> original;
-  for (const auto& [id, kf] : map->keyframes()) original[id] = {kf->R_cw, kf->t_cw};
-  const Pose K_old = original[keyframe_id];
-  const Pose K_new{verified.match.R_cw, verified.match.t_cw};
+  std::unordered_map<int, Rigid3d> original;  // cam_from_world of each keyframe
+  for (const auto& [id, kf] : map->keyframes()) original[id] = kf->cam_from_world;
+  const Rigid3d K_old = original[keyframe_id];
+  const Rigid3d K_new = verified.match.cam_from_world;
   std::set<int> group = {keyframe_id};
   for (const auto& [id, w] : current->covisibility) {
     (void)w;
@@ -456,14 +451,14 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
   const int root = map->keyframes().begin()->first;
   for (const auto& [id, kf] : map->keyframes()) {
     BaPose pose;
-    const Pose& o = original[id];
+    const Rigid3d& o = original[id];
     if (group.count(id)) {
-      const Eigen::Matrix3d R_iK = o.R * K_old.R.transpose();
-      pose.R_cw = R_iK * K_new.R;
-      pose.t_cw = R_iK * (K_new.t - K_old.t) + o.t;
+      const Eigen::Matrix3d R_iK = o.rotation * K_old.rotation.transpose();
+      pose.cam_from_world.rotation = R_iK * K_new.rotation;
+      pose.cam_from_world.translation =
+          R_iK * (K_new.translation - K_old.translation) + o.translation;
     } else {
-      pose.R_cw = o.R;
-      pose.t_cw = o.t;
+      pose.cam_from_world = o;
     }
     pose.fixed = id == root || id == verified.candidate;
     index[id] = static_cast<int>(poses.size());
@@ -473,11 +468,11 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
   // Essential graph: spanning tree and strong covisibility from the poses before the correction,
   // loop edges (earlier ones and the keyframe's group to the candidate) from the corrected ones.
   std::vector<PoseGraphEdge> edges;
-  auto add_edge = [&](int a, int b, const Pose& pa, const Pose& pb) {
+  auto add_edge = [&](int a, int b, const Rigid3d& pa, const Rigid3d& pb) {
     PoseGraphEdge e;
     e.a = index[a];
     e.b = index[b];
-    RelativePose(pa.R, pa.t, pb.R, pb.t, &e.R_ab, &e.t_ab);
+    RelativePose(pa.rotation, pa.translation, pb.rotation, pb.translation, &e.R_ab, &e.t_ab);
     edges.push_back(e);
   };
   for (const auto& [id, kf] : map->keyframes()) {
@@ -500,27 +495,26 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     edge.t_ab = e.t_ab;
     edges.push_back(edge);
   }
-  const Pose C{poses[index[verified.candidate]].R_cw, poses[index[verified.candidate]].t_cw};
+  const Rigid3d C = poses[index[verified.candidate]].cam_from_world;
   for (int g : group) {
-    const BaPose& p = poses[index[g]];
-    add_edge(verified.candidate, g, C, Pose{p.R_cw, p.t_cw});
+    const Rigid3d& p = poses[index[g]].cam_from_world;
+    add_edge(verified.candidate, g, C, p);
     LoopEdge loop;
     loop.a = verified.candidate;
     loop.b = g;
-    RelativePose(C.R, C.t, p.R_cw, p.t_cw, &loop.R_ab, &loop.t_ab);
+    RelativePose(C.rotation, C.translation, p.rotation, p.translation, &loop.R_ab, &loop.t_ab);
     loop_edges_[verified.target_map].push_back(loop);
   }
   const PoseGraphReport report = OptimizePoseGraph(&poses, edges, options_.pose_graph);
   if (!report.solved) {  // keep the rigid correction of the group at least
     for (size_t i = 0; i < ids.size(); ++i) {
-      if (!group.count(ids[i])) poses[i] = {original[ids[i]].R, original[ids[i]].t, false};
+      if (!group.count(ids[i])) poses[i] = {original[ids[i]], false};
     }
   }
   // Poses, then every landmark follows its reference keyframe (its oldest live observer).
   for (size_t i = 0; i < ids.size(); ++i) {
     auto kf = map->keyframe(ids[i]);
-    kf->R_cw = poses[i].R_cw;
-    kf->t_cw = poses[i].t_cw;
+    kf->cam_from_world = poses[i].cam_from_world;
   }
   auto reference = [&](const std::map<int, int>& observations) -> int {
     for (const auto& [kf_id, idx] : observations) {
@@ -533,21 +527,22 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     (void)id;
     const int ref = reference(p->observations);
     if (ref < 0) continue;
-    const Pose& o = original[ref];
-    const BaPose& n = poses[index[ref]];
-    p->position = n.R_cw.transpose() * (o.R * p->position + o.t - n.t_cw);
+    const Rigid3d& o = original[ref];
+    const Rigid3d& n = poses[index[ref]].cam_from_world;
+    p->position =
+        n.rotation.transpose() * (o.rotation * p->position + o.translation - n.translation);
   }
   for (auto& [id, l] : map->lines()) {
     (void)id;
     const int ref = reference(l->observations);
     if (ref < 0) continue;
-    const Pose& o = original[ref];
-    const BaPose& n = poses[index[ref]];
-    const Eigen::Matrix3d R_wn = n.R_cw.transpose();
-    const Eigen::Vector3d t_wn = -R_wn * n.t_cw;
-    l->line = l->line.Transformed(o.R, o.t).Transformed(R_wn, t_wn);
-    l->start = R_wn * (o.R * l->start + o.t) + t_wn;
-    l->end = R_wn * (o.R * l->end + o.t) + t_wn;
+    const Rigid3d& o = original[ref];
+    const Rigid3d& n = poses[index[ref]].cam_from_world;
+    const Eigen::Matrix3d R_wn = n.rotation.transpose();
+    const Eigen::Vector3d t_wn = -R_wn * n.translation;
+    l->line = l->line.Transformed(o.rotation, o.translation).Transformed(R_wn, t_wn);
+    l->start = R_wn * (o.rotation * l->start + o.translation) + t_wn;
+    l->end = R_wn * (o.rotation * l->end + o.translation) + t_wn;
   }
   Fuse(map, keyframe_id, verified.match);
   for (int g : group) map->UpdateConnections(g);

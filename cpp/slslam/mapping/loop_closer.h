@@ -37,6 +37,7 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/mapping/atlas.h"
 #include "slslam/optimization/bundle_adjustment.h"
 #include "slslam/optimization/pose_graph.h"
@@ -98,15 +99,14 @@ struct LoopClosingStats {
 // pose: the optimised pose and the inlier matches. The caller holds the map's mutex.
 struct LocalMapMatch {
   bool success = false;
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< the optimised pose, world (of the map) -> camera
   double weighted_inliers = 0.0;
   std::vector<int> point_ids, keypoints;  ///< inlier pairs (map point, keypoint of the frame)
   std::vector<int> line_ids, segments;    ///< inlier pairs (map line, segment of the frame)
 };
 using LocalMapVerifier =
     std::function<LocalMapMatch(const StereoFrame& frame, Map& map, int reference_keyframe,
-                                const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw)>;
+                                const Rigid3d& cam_from_world)>;
 
 // One keyframe's keypoints matched to a keyframe's map points within shared vocabulary nodes
 // (one-to-one, ratio test): (keypoint, map point id) pairs. Caller holds the map's mutex.
@@ -115,13 +115,13 @@ std::vector<std::pair<int, int>> MatchByWords(const cv::Mat& descriptors,
                                               const Map& map, float max_distance, float ratio)
     SLSLAM_REQUIRES(map.mutex());
 
-// The camera pose T_cw from (keypoint, map point id) matches: EPnP RANSAC on the keypoints' left
-// pixels. False when RANSAC fails, keeps fewer than `min_inliers`, or the pose is not finite.
-// Caller holds the map's mutex.
+// The camera pose cam_from_world from (keypoint, map point id) matches: EPnP RANSAC on the
+// keypoints' left pixels. False when RANSAC fails, keeps fewer than `min_inliers`, or the pose is
+// not finite. Caller holds the map's mutex.
 bool PoseFromMatches(const StereoFrame& frame, const Map& map,
                      const std::vector<std::pair<int, int>>& matches, const PinholeCamera& camera,
-                     int iterations, double error_px, int min_inliers, Eigen::Matrix3d* R_cw,
-                     Eigen::Vector3d* t_cw) SLSLAM_REQUIRES(map.mutex());
+                     int iterations, double error_px, int min_inliers, Rigid3d* cam_from_world)
+    SLSLAM_REQUIRES(map.mutex());
 
 // One accepted loop or merge: the keyframe that closed it and the older keyframe it matched, by
 // the frames they were made from (so a benchmark can check both against ground truth).

@@ -52,7 +52,7 @@ void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<i
 
 int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
   const int index = static_cast<int>(problem_.poses.size());
-  problem_.poses.push_back({kf.R_cw, kf.t_cw, fixed});
+  problem_.poses.push_back({kf.cam_from_world, fixed});
   pose_kf_.push_back(kf.id);
   return index;
 }
@@ -69,15 +69,14 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
       if (carry_new) moved[kf->id] = WorldCorrection{};
       continue;
     }
-    const BaPose& after = problem_.poses[i];
+    const Rigid3d& after = problem_.poses[i].cam_from_world;
     if (carry_new) {
       WorldCorrection w;
-      w.R = after.R_cw.transpose() * kf->R_cw;
-      w.t = after.R_cw.transpose() * (kf->t_cw - after.t_cw);
+      w.R = after.rotation.transpose() * kf->cam_from_world.rotation;
+      w.t = after.rotation.transpose() * (kf->cam_from_world.translation - after.translation);
       moved[kf->id] = w;
     }
-    kf->R_cw = after.R_cw;
-    kf->t_cw = after.t_cw;
+    kf->cam_from_world = after;
   }
   for (size_t i = 0; i < point_id_.size(); ++i) {
     if (auto p = map->point(point_id_[i])) p->position = problem_.points[i];
@@ -134,8 +133,9 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
     if (!w) continue;
     const WorldCorrection correction = *w;
     // y = R_cw x + t_cw for x = R^T (x' - t): R_cw' = R_cw R^T, t_cw' = t_cw - R_cw' t.
-    kf->R_cw = kf->R_cw * correction.R.transpose();
-    kf->t_cw = kf->t_cw - kf->R_cw * correction.t;
+    Rigid3d& pose = kf->cam_from_world;
+    pose.rotation = pose.rotation * correction.R.transpose();
+    pose.translation = pose.translation - pose.rotation * correction.t;
     moved[kf->id] = correction;
     ++carried;
   }

@@ -37,12 +37,13 @@ Eigen::Matrix3d Fundamental21(const PinholeCamera& camera, const Eigen::Matrix3d
 struct View {
   const KeyFrame* keyframe;
   const StereoFrame* frame;
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  Eigen::Vector3d center;
+  Rigid3d cam_from_world;
+  Eigen::Vector3d center;  ///< in the world [m]
 };
 
-View MakeView(const KeyFrame& kf) { return {&kf, kf.frame.get(), kf.R_cw, kf.t_cw, kf.Center()}; }
+View MakeView(const KeyFrame& kf) {
+  return {&kf, kf.frame.get(), kf.cam_from_world, kf.Center()};
+}
 
 // Index pairs (i in view 1, j in view 2) of free keypoints matched along the epipolar lines.
 std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const View& b,
@@ -56,7 +57,9 @@ std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const Vi
   }
   const bool binary = ka.descriptors.type() == CV_8U;
   const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
-  const Eigen::Matrix3d F = Fundamental21(camera, a.R, a.t, b.R, b.t);
+  const Eigen::Matrix3d F =
+      Fundamental21(camera, a.cam_from_world.rotation, a.cam_from_world.translation,
+                    b.cam_from_world.rotation, b.cam_from_world.translation);
   OneToOne one_to_one(kb.size());
   std::vector<int> match(ka.size(), -1);
   for (int i = 0; i < ka.size(); ++i) {
@@ -140,18 +143,20 @@ int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& r
     const Eigen::Vector2d uv_a = a.frame->keypoints.uv.row(i).cast<double>().transpose();
     const Eigen::Vector2d uv_b = b.frame->keypoints.uv.row(j).cast<double>().transpose();
     Eigen::Vector3d p;
-    if (!TriangulatePoint(a.R, a.t, camera.Unproject(uv_a), b.R, b.t, camera.Unproject(uv_b), &p)) {
+    if (!TriangulatePoint(a.cam_from_world.rotation, a.cam_from_world.translation,
+                          camera.Unproject(uv_a), b.cam_from_world.rotation,
+                          b.cam_from_world.translation, camera.Unproject(uv_b), &p)) {
       continue;
     }
     const Eigen::Vector3d ray_a = p - a.center;
     const Eigen::Vector3d ray_b = p - b.center;
     if (ray_a.dot(ray_b) / (ray_a.norm() * ray_b.norm()) > cos_max) continue;
-    const double za = (a.R * p + a.t).z();
-    const double zb = (b.R * p + b.t).z();
+    const double za = (a.cam_from_world.rotation * p + a.cam_from_world.translation).z();
+    const double zb = (b.cam_from_world.rotation * p + b.cam_from_world.translation).z();
     if (!(za > 0.0 && zb > 0.0 && za < max_depth && zb < max_depth)) continue;
     Eigen::Vector2d ea, eb;
-    if (!PointResidual(camera, a.R, a.t, p, uv_a, &ea) ||
-        !PointResidual(camera, b.R, b.t, p, uv_b, &eb)) {
+    if (!PointResidual(camera, a.cam_from_world, p, uv_a, &ea) ||
+        !PointResidual(camera, b.cam_from_world, p, uv_b, &eb)) {
       continue;
     }
     if (ea.squaredNorm() > bound || eb.squaredNorm() > bound) continue;
@@ -178,8 +183,8 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
     const Eigen::Vector2d b0 = sb.start.cast<double>(), b1 = sb.end.cast<double>();
     PluckerLine line;
     try {
-      const Eigen::Vector4d plane_a = BackProjectedPlane(camera, a.R, a.t, a0, a1);
-      const Eigen::Vector4d plane_b = BackProjectedPlane(camera, b.R, b.t, b0, b1);
+      const Eigen::Vector4d plane_a = BackProjectedPlane(camera, a.cam_from_world, a0, a1);
+      const Eigen::Vector4d plane_b = BackProjectedPlane(camera, b.cam_from_world, b0, b1);
       const double cos_planes =
           std::abs(plane_a.head<3>().normalized().dot(plane_b.head<3>().normalized()));
       if (!(cos_planes < cos_max)) continue;
@@ -188,8 +193,10 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
       continue;
     }
     // Endpoints: where the rays of view a's segment endpoints pass the line, in both cameras.
-    const PluckerLine in_a = line.Transformed(a.R, a.t);
-    const PluckerLine in_b = line.Transformed(b.R, b.t);
+    const PluckerLine in_a =
+        line.Transformed(a.cam_from_world.rotation, a.cam_from_world.translation);
+    const PluckerLine in_b =
+        line.Transformed(b.cam_from_world.rotation, b.cam_from_world.translation);
     const Eigen::Vector3d s_a = in_a.ClosestPointToRay(camera.Unproject(a0));
     const Eigen::Vector3d e_a = in_a.ClosestPointToRay(camera.Unproject(a1));
     const Eigen::Vector3d s_b = in_b.ClosestPointToRay(camera.Unproject(b0));
@@ -200,16 +207,16 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
     }
     if (!in_front) continue;
     Eigen::Vector3d ea, eb;
-    if (!LineResidual(camera, a.R, a.t, line, a0, a1, 0.0, &ea) ||
-        !LineResidual(camera, b.R, b.t, line, b0, b1, 0.0, &eb)) {
+    if (!LineResidual(camera, a.cam_from_world, line, a0, a1, 0.0, &ea) ||
+        !LineResidual(camera, b.cam_from_world, line, b0, b1, 0.0, &eb)) {
       continue;
     }
     if (ea.head<2>().squaredNorm() > line_bound || eb.head<2>().squaredNorm() > line_bound) {
       continue;
     }
-    const Eigen::Matrix3d R_wa = a.R.transpose();
-    const Eigen::Vector3d start = R_wa * (s_a - a.t);
-    const Eigen::Vector3d end = R_wa * (e_a - a.t);
+    const Eigen::Matrix3d R_wa = a.cam_from_world.rotation.transpose();
+    const Eigen::Vector3d start = R_wa * (s_a - a.cam_from_world.translation);
+    const Eigen::Vector3d end = R_wa * (e_a - a.cam_from_world.translation);
     if ((end - start).norm() < 1e-3) continue;
     auto map_line =
         map->AddLine(line, start, end, a.frame->line_descriptors.row(ia), a.keyframe->id);

@@ -35,31 +35,34 @@ struct Parameters {
 };
 
 double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObservation& o) {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ParametersToPose(p.poses[o.pose].data(), &R, &t);
+  Rigid3d cam_from_world;
+  ParametersToPose(p.poses[o.pose].data(), &cam_from_world);
   const double w = 1.0 / (o.sigma_px * o.sigma_px);
   if (o.stereo) {
     Eigen::Vector3d e;
-    if (!StereoPointResidual(rig, R, t, p.points[o.point], o.observed, &e)) return INFINITY;
+    if (!StereoPointResidual(rig, cam_from_world, p.points[o.point], o.observed, &e)) {
+      return INFINITY;
+    }
     return w * e.squaredNorm();
   }
   Eigen::Vector2d e;
-  if (!PointResidual(rig.camera, R, t, p.points[o.point], o.observed.head<2>(), &e)) {
+  if (!PointResidual(rig.camera, cam_from_world, p.points[o.point], o.observed.head<2>(), &e)) {
     return INFINITY;
   }
   return w * e.squaredNorm();
 }
 
 double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservation& o) {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ParametersToPose(p.poses[o.pose].data(), &R, &t);
+  Rigid3d cam_from_world;
+  ParametersToPose(p.poses[o.pose].data(), &cam_from_world);
   const PluckerLine line = ParametersToLine(p.lines[o.line].data()).ToPlucker();
   Eigen::Vector3d e;
-  if (!LineResidual(rig.camera, R, t, line, o.start_px, o.end_px, 0.0, &e)) return INFINITY;
+  if (!LineResidual(rig.camera, cam_from_world, line, o.start_px, o.end_px, 0.0, &e)) {
+    return INFINITY;
+  }
   const Eigen::Vector3d middle =
-      line.Transformed(R, t).ClosestPointToRay(rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
+      line.Transformed(cam_from_world.rotation, cam_from_world.translation)
+          .ClosestPointToRay(rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;
   return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);
 }
@@ -97,7 +100,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   Parameters params;
   params.poses.resize(ba.poses.size());
   for (size_t i = 0; i < ba.poses.size(); ++i) {
-    PoseToParameters(ba.poses[i].R_cw, ba.poses[i].t_cw, params.poses[i].data());
+    PoseToParameters(ba.poses[i].cam_from_world, params.poses[i].data());
   }
   params.points = ba.points;
   params.lines.resize(ba.lines.size());
@@ -194,7 +197,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   }
 
   for (size_t i = 0; i < ba.poses.size(); ++i) {
-    ParametersToPose(params.poses[i].data(), &ba.poses[i].R_cw, &ba.poses[i].t_cw);
+    ParametersToPose(params.poses[i].data(), &ba.poses[i].cam_from_world);
   }
   ba.points = params.points;
   for (size_t i = 0; i < ba.lines.size(); ++i) {

@@ -8,14 +8,14 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/geometry/reprojection.h"
 
 namespace slslam {
 
 struct BaPose {
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< world -> camera
   bool fixed = false;
 };
 

@@ -32,15 +32,14 @@ PointCost::PointCost(const PinholeCamera& camera, const Eigen::Vector2d& observe
 
 bool PointCost::Evaluate(double const* const* parameters, double* residuals,
                          double** jacobians) const {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ParametersToPose(parameters[0], &R, &t);
+  Rigid3d cam_from_world;
+  ParametersToPose(parameters[0], &cam_from_world);
   const Eigen::Map<const Eigen::Vector3d> point(parameters[1]);
   Eigen::Vector2d e;
   Eigen::Matrix<double, 2, 6> d_pose;
   Eigen::Matrix<double, 2, 3> d_point;
   const bool want = jacobians != nullptr;
-  if (!PointResidual(camera_, R, t, point, observed_, &e, want ? &d_pose : nullptr,
+  if (!PointResidual(camera_, cam_from_world, point, observed_, &e, want ? &d_pose : nullptr,
                      want ? &d_point : nullptr)) {
     return false;
   }
@@ -60,15 +59,14 @@ StereoPointCost::StereoPointCost(const StereoRig& rig, const Eigen::Vector3d& ob
 
 bool StereoPointCost::Evaluate(double const* const* parameters, double* residuals,
                                double** jacobians) const {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ParametersToPose(parameters[0], &R, &t);
+  Rigid3d cam_from_world;
+  ParametersToPose(parameters[0], &cam_from_world);
   const Eigen::Map<const Eigen::Vector3d> point(parameters[1]);
   Eigen::Vector3d e;
   Eigen::Matrix<double, 3, 6> d_pose;
   Eigen::Matrix<double, 3, 3> d_point;
   const bool want = jacobians != nullptr;
-  if (!StereoPointResidual(rig_, R, t, point, observed_, &e, want ? &d_pose : nullptr,
+  if (!StereoPointResidual(rig_, cam_from_world, point, observed_, &e, want ? &d_pose : nullptr,
                            want ? &d_point : nullptr)) {
     return false;
   }
@@ -92,15 +90,14 @@ LineCost::LineCost(const PinholeCamera& camera, const Eigen::Vector2d& start_px,
 
 bool LineCost::Evaluate(double const* const* parameters, double* residuals,
                         double** jacobians) const {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ParametersToPose(parameters[0], &R, &t);
+  Rigid3d cam_from_world;
+  ParametersToPose(parameters[0], &cam_from_world);
   const OrthonormalLine line = ParametersToLine(parameters[1]);
   Eigen::Vector3d e;
   Eigen::Matrix<double, 3, 6> d_pose;
   Eigen::Matrix<double, 3, 6> d_plucker;
   const bool want = jacobians != nullptr;
-  if (!LineResidual(camera_, R, t, line.ToPlucker(), start_, end_, angle_weight_, &e,
+  if (!LineResidual(camera_, cam_from_world, line.ToPlucker(), start_, end_, angle_weight_, &e,
                     want ? &d_pose : nullptr, want ? &d_plucker : nullptr)) {
     return false;
   }

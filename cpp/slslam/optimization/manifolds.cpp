@@ -23,15 +23,17 @@ void LoweredIdentity(int ambient, int tangent, double* jacobian) {
 
 }  // namespace
 
-void PoseToParameters(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, double* params) {
+void PoseToParameters(const Rigid3d& cam_from_world, double* params) {
   Eigen::Map<Eigen::Vector3d> t(params);
-  t = t_cw;
-  Eigen::Map<Eigen::Quaterniond>(params + 3) = Eigen::Quaterniond(R_cw).normalized();
+  t = cam_from_world.translation;
+  Eigen::Map<Eigen::Quaterniond>(params + 3) =
+      Eigen::Quaterniond(cam_from_world.rotation).normalized();
 }
 
-void ParametersToPose(const double* params, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) {
-  *t_cw = Eigen::Map<const Eigen::Vector3d>(params);
-  *R_cw = Eigen::Map<const Eigen::Quaterniond>(params + 3).normalized().toRotationMatrix();
+void ParametersToPose(const double* params, Rigid3d* cam_from_world) {
+  cam_from_world->translation = Eigen::Map<const Eigen::Vector3d>(params);
+  cam_from_world->rotation =
+      Eigen::Map<const Eigen::Quaterniond>(params + 3).normalized().toRotationMatrix();
 }
 
 void LineToParameters(const OrthonormalLine& line, double* params) {

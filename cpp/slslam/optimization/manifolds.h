@@ -12,19 +12,20 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 
 namespace slslam {
 
-// Pose parameter block layout: [tx, ty, tz, qx, qy, qz, qw] of T_cw (x_c = R x_w + t).
+// Pose parameter block layout: [tx, ty, tz, qx, qy, qz, qw] of cam_from_world (x_c = R x_w + t).
 constexpr int kPoseSize = 7;
 constexpr int kPoseTangentSize = 6;
 // Line parameter block layout: [qx, qy, qz, qw, phi] of the orthonormal representation.
 constexpr int kLineSize = 5;
 constexpr int kLineTangentSize = 4;
 
-void PoseToParameters(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, double* params);
-void ParametersToPose(const double* params, Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw);
+void PoseToParameters(const Rigid3d& cam_from_world, double* params);
+void ParametersToPose(const double* params, Rigid3d* cam_from_world);
 void LineToParameters(const OrthonormalLine& line, double* params);
 OrthonormalLine ParametersToLine(const double* params);
 

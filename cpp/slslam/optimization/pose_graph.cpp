@@ -69,8 +69,8 @@ PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
   std::vector<Eigen::Quaterniond> q(n);
   std::vector<Eigen::Vector3d> t(n);
   for (int i = 0; i < n; ++i) {
-    q[i] = Eigen::Quaterniond((*poses)[i].R_cw).normalized();
-    t[i] = (*poses)[i].t_cw;
+    q[i] = Eigen::Quaterniond((*poses)[i].cam_from_world.rotation).normalized();
+    t[i] = (*poses)[i].cam_from_world.translation;
   }
   ceres::Problem problem;
   std::vector<bool> used(n, false);
@@ -109,8 +109,8 @@ PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
   if (!report.solved) return report;
   for (int i = 0; i < n; ++i) {
     if ((*poses)[i].fixed || !used[i]) continue;
-    (*poses)[i].R_cw = q[i].normalized().toRotationMatrix();
-    (*poses)[i].t_cw = t[i];
+    (*poses)[i].cam_from_world.rotation = q[i].normalized().toRotationMatrix();
+    (*poses)[i].cam_from_world.translation = t[i];
   }
   return report;
 }

@@ -37,8 +37,9 @@ struct PoseGraphReport {
   bool solved = false;
 };
 
-// Optimises the non-fixed poses (T_cw each) in place. Edges must index valid poses; at least one
-// pose should be fixed (otherwise the graph floats and only relative poses are meaningful).
+// Optimises the non-fixed poses (cam_from_world each) in place. Edges must index valid poses; at
+// least one pose should be fixed (otherwise the graph floats and only relative poses are
+// meaningful).
 PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
                                   const std::vector<PoseGraphEdge>& edges,
                                   const PoseGraphOptions& options = {});

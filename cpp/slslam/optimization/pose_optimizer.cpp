@@ -17,27 +17,30 @@ namespace slslam {
 namespace {
 
 // Chi-square of one observation at the given pose; +inf when it cannot be evaluated.
-double PointChi2(const StereoRig& rig, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+double PointChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
                  const PointObservation& obs) {
   const double w = 1.0 / (obs.sigma_px * obs.sigma_px);
   if (obs.stereo) {
     Eigen::Vector3d e;
-    if (!StereoPointResidual(rig, R, t, obs.point_w, obs.observed, &e)) return INFINITY;
+    if (!StereoPointResidual(rig, cam_from_world, obs.point_w, obs.observed, &e)) return INFINITY;
     return w * e.squaredNorm();
   }
   Eigen::Vector2d e;
-  if (!PointResidual(rig.camera, R, t, obs.point_w, obs.observed.head<2>(), &e)) return INFINITY;
+  if (!PointResidual(rig.camera, cam_from_world, obs.point_w, obs.observed.head<2>(), &e)) {
+    return INFINITY;
+  }
   return w * e.squaredNorm();
 }
 
-double LineChi2(const StereoRig& rig, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+double LineChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
                 const LineObservation& obs) {
   Eigen::Vector3d e;
-  if (!LineResidual(rig.camera, R, t, obs.line_w, obs.start_px, obs.end_px, 0.0, &e)) {
+  if (!LineResidual(rig.camera, cam_from_world, obs.line_w, obs.start_px, obs.end_px, 0.0, &e)) {
     return INFINITY;
   }
   // The line must also be in front of the camera: its point nearest to the segment's middle ray.
-  const PluckerLine line_c = obs.line_w.Transformed(R, t);
+  const PluckerLine line_c =
+      obs.line_w.Transformed(cam_from_world.rotation, cam_from_world.translation);
   const Eigen::Vector3d middle = line_c.ClosestPointToRay(
       rig.camera.Unproject(0.5 * (obs.start_px + obs.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;
@@ -57,25 +60,24 @@ void PoseOptimizerOptions::Check() const {
   CheckInRange("pose.line_weight", line_weight, 0.0, 1e6);
 }
 
-PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
-                                 const Eigen::Vector3d& t_cw,
+PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_world,
                                  const std::vector<PointObservation>& points,
                                  const std::vector<LineObservation>& lines,
                                  const PoseOptimizerOptions& options) {
   rig.Check();
-  Require(R_cw.allFinite() && t_cw.allFinite(), "initial pose is not finite");
+  Require(cam_from_world.rotation.allFinite() && cam_from_world.translation.allFinite(),
+          "initial pose is not finite");
   options.Check();
 
   PoseOptimizerResult result;
-  result.R_cw = R_cw;
-  result.t_cw = t_cw;
+  result.cam_from_world = cam_from_world;
   result.point_inlier.assign(points.size(), false);
   result.line_inlier.assign(lines.size(), false);
   for (size_t i = 0; i < points.size(); ++i) {
-    result.point_inlier[i] = std::isfinite(PointChi2(rig, R_cw, t_cw, points[i]));
+    result.point_inlier[i] = std::isfinite(PointChi2(rig, cam_from_world, points[i]));
   }
   for (size_t i = 0; i < lines.size(); ++i) {
-    result.line_inlier[i] = std::isfinite(LineChi2(rig, R_cw, t_cw, lines[i]));
+    result.line_inlier[i] = std::isfinite(LineChi2(rig, cam_from_world, lines[i]));
   }
 
   // Landmarks are constants of this problem: copies in parameter blocks marked constant.
@@ -87,7 +89,7 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_
   }
 
   std::array<double, kPoseSize> pose;
-  PoseToParameters(R_cw, t_cw, pose.data());
+  PoseToParameters(cam_from_world, pose.data());
   const double line_scale = std::sqrt(std::max(options.line_weight, 0.0));
 
   for (int round = 0; round < options.rounds; ++round) {
@@ -141,20 +143,19 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
 
-    Eigen::Matrix3d R;
-    Eigen::Vector3d t;
-    ParametersToPose(pose.data(), &R, &t);
+    Rigid3d solved;
+    ParametersToPose(pose.data(), &solved);
     // Reclassify every observation, outliers included (an outlier may come back).
     for (size_t i = 0; i < points.size(); ++i) {
       const double bound = points[i].stereo ? options.chi2_stereo : options.chi2_mono;
-      result.point_inlier[i] = PointChi2(rig, R, t, points[i]) <= bound;
+      result.point_inlier[i] = PointChi2(rig, solved, points[i]) <= bound;
     }
     for (size_t i = 0; i < lines.size(); ++i) {
-      result.line_inlier[i] = LineChi2(rig, R, t, lines[i]) <= options.chi2_line;
+      result.line_inlier[i] = LineChi2(rig, solved, lines[i]) <= options.chi2_line;
     }
   }
 
-  ParametersToPose(pose.data(), &result.R_cw, &result.t_cw);
+  ParametersToPose(pose.data(), &result.cam_from_world);
   result.point_inliers = static_cast<int>(
       std::count(result.point_inlier.begin(), result.point_inlier.end(), true));
   result.line_inliers = static_cast<int>(

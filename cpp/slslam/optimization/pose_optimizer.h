@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/geometry/reprojection.h"
 
@@ -41,8 +42,7 @@ struct PoseOptimizerOptions {
 };
 
 struct PoseOptimizerResult {
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;          ///< world -> camera
   std::vector<bool> point_inlier;  ///< per input point observation
   std::vector<bool> line_inlier;   ///< per input line observation
   int point_inliers = 0;
@@ -50,10 +50,9 @@ struct PoseOptimizerResult {
   bool success = false;  ///< false: too few usable observations, the pose is the initial one
 };
 
-// Optimises T_cw from an initial guess. Observations of landmarks behind the camera at the start
-// count as outliers. Deterministic (single-threaded Ceres).
-PoseOptimizerResult OptimizePose(const StereoRig& rig, const Eigen::Matrix3d& R_cw,
-                                 const Eigen::Vector3d& t_cw,
+// Optimises cam_from_world from an initial guess. Observations of landmarks behind the camera at
+// the start count as outliers. Deterministic (single-threaded Ceres).
+PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_world,
                                  const std::vector<PointObservation>& points,
                                  const std::vector<LineObservation>& lines,
                                  const PoseOptimizerOptions& options = {});

@@ -85,13 +85,12 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
     if (!options_.use_lines) loop.global_ba_options.line_weight = 0.0;
     // Verification tracks the candidate's local map (points and lines) as tracking does.
     auto verifier = [this](const StereoFrame& frame, Map& map, int reference_kf,
-                           const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw) {
+                           const Rigid3d& cam_from_world) {
       map.mutex().AssertHeld();  // LocalMapVerifier's contract: the loop closer holds the lock
-      LocalTracking t = TrackLocalMap(frame, map, reference_kf, R_cw, t_cw, 1.0f);
+      LocalTracking t = TrackLocalMap(frame, map, reference_kf, cam_from_world, 1.0f);
       LocalMapMatch match;
       match.success = t.pose.success;
-      match.R_cw = t.pose.R_cw;
-      match.t_cw = t.pose.t_cw;
+      match.cam_from_world = t.pose.cam_from_world;
       match.weighted_inliers = t.weighted_inliers;
       for (size_t i = 0; i < t.point_ids.size(); ++i) {
         if (!t.pose.point_inlier[i]) continue;
@@ -216,11 +215,9 @@ void Tracker::FollowCorrections() {
   // The last pose relative to the reference keyframe, as recorded, on the keyframe's new pose.
   if (records_.empty() || !have_pose_) return;
   const FrameRecord& r = records_.back();
-  Eigen::Matrix3d R_rw;
-  Eigen::Vector3d t_rw;
-  if (r.reference_kf < 0 || !map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) return;
-  last_R_ = r.R_fr * R_rw;
-  last_t_ = r.R_fr * t_rw + r.t_fr;
+  Rigid3d ref_from_world;
+  if (r.reference_kf < 0 || !map.KeyFramePose(r.reference_kf, &ref_from_world)) return;
+  last_cam_from_world_ = r.frame_from_ref * ref_from_world;
 }
 
 std::unique_lock<Mutex> Tracker::LockActiveMap() {
@@ -242,8 +239,7 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   r.timestamp = frame.timestamp;
   r.map_index = active_;
   r.reference_kf = last_keyframe_;
-  r.R_cw = last_R_;
-  r.t_cw = last_t_;
+  r.cam_from_world = last_cam_from_world_;
   if (keyframe) {
     // The frame is its own reference keyframe. Its pose is not read back: in sequential mode
     // loop closing has already run on the keyframe and may have moved it, or merged its map
@@ -256,15 +252,14 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   Map& map = atlas_.map(active_);
   map.mutex().AssertHeld();  // locked by LockActiveMap
   r.map_index = active_;
-  if (FollowAnchor(map, {{&last_R_, &last_t_}})) {
-    r.R_cw = last_R_;
-    r.t_cw = last_t_;
-  }
-  Eigen::Matrix3d R_rw;
-  Eigen::Vector3d t_rw;
-  if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
-    r.R_fr = last_R_ * R_rw.transpose();
-    r.t_fr = last_t_ - r.R_fr * t_rw;
+  if (FollowAnchor(map, {&last_cam_from_world_})) r.cam_from_world = last_cam_from_world_;
+  Rigid3d ref_from_world;
+  if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &ref_from_world)) {
+    // R_fr = R_cw R_rw^T, t_fr = t_cw - R_fr t_rw (as written, not T_cw * T_rw^-1: the rounding
+    // differs).
+    r.frame_from_ref.rotation = last_cam_from_world_.rotation * ref_from_world.rotation.transpose();
+    r.frame_from_ref.translation =
+        last_cam_from_world_.translation - r.frame_from_ref.rotation * ref_from_world.translation;
   } else {
     r.reference_kf = -1;
   }
@@ -274,30 +269,30 @@ void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
 
 void Tracker::SetAnchor(const Map& map, int keyframe) {
   anchor_ = Anchor{};
-  if (keyframe < 0 || !map.KeyFramePose(keyframe, &anchor_.R_rw, &anchor_.t_rw)) return;
+  if (keyframe < 0 || !map.KeyFramePose(keyframe, &anchor_.ref_from_world)) return;
   anchor_.keyframe = keyframe;
   anchor_.map = &map;
   anchor_.epoch = map.correction_epoch();
 }
 
-bool Tracker::FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses) {
+bool Tracker::FollowAnchor(const Map& map, std::initializer_list<Rigid3d*> cams_from_world) {
   if (anchor_.keyframe < 0 || (&map == anchor_.map && map.correction_epoch() == anchor_.epoch)) {
     return false;
   }
-  Eigen::Matrix3d R_rw;
-  Eigen::Vector3d t_rw;
-  if (!map.KeyFramePose(anchor_.keyframe, &R_rw, &t_rw)) return false;
+  Rigid3d ref_from_world;
+  if (!map.KeyFramePose(anchor_.keyframe, &ref_from_world)) return false;
   // T_cw' = T_cw T_rw_old^-1 T_rw_new: the same pose relative to the reference keyframe.
-  const Eigen::Matrix3d R_d = anchor_.R_rw.transpose() * R_rw;
-  const Eigen::Vector3d t_d = anchor_.R_rw.transpose() * (t_rw - anchor_.t_rw);
-  for (const auto& [R, t] : poses) {
-    *t = *R * t_d + *t;
-    *R = *R * R_d;
+  const Rigid3d& old_ref_from_world = anchor_.ref_from_world;
+  const Rigid3d old_world_from_new_world(
+      old_ref_from_world.rotation.transpose() * ref_from_world.rotation,
+      old_ref_from_world.rotation.transpose() *
+          (ref_from_world.translation - old_ref_from_world.translation));
+  for (Rigid3d* cam_from_world : cams_from_world) {
+    *cam_from_world = *cam_from_world * old_world_from_new_world;
   }
   anchor_.map = &map;
   anchor_.epoch = map.correction_epoch();
-  anchor_.R_rw = R_rw;
-  anchor_.t_rw = t_rw;
+  anchor_.ref_from_world = ref_from_world;
   return true;
 }
 
@@ -309,15 +304,12 @@ std::vector<FramePose> Tracker::Trajectory() const {
     f.index = r.index;
     f.timestamp = r.timestamp;
     f.map_index = atlas_.Resolve(r.map_index);
-    f.R_cw = r.R_cw;
-    f.t_cw = r.t_cw;
+    f.cam_from_world = r.cam_from_world;
     Map& map = atlas_.map(f.map_index);
     MutexLock lock(map.mutex());
-    Eigen::Matrix3d R_rw;
-    Eigen::Vector3d t_rw;
-    if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &R_rw, &t_rw)) {
-      f.R_cw = r.R_fr * R_rw;
-      f.t_cw = r.R_fr * t_rw + r.t_fr;
+    Rigid3d ref_from_world;
+    if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &ref_from_world)) {
+      f.cam_from_world = r.frame_from_ref * ref_from_world;
     }
     out.push_back(f);
   }
@@ -334,31 +326,26 @@ void Tracker::Flush() {
   if (loop_closer_) loop_closer_->WaitForGlobalBa();
 }
 
-void Tracker::Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const {
-  *R_pred = last_R_;
-  *t_pred = last_t_;
-  if (have_pose_) {
-    *R_pred = velocity_R_ * last_R_;
-    *t_pred = velocity_R_ * last_t_ + velocity_t_;
-  }
+void Tracker::Predict(Rigid3d* pred_cam_from_world) const {
+  *pred_cam_from_world = last_cam_from_world_;
+  if (have_pose_) *pred_cam_from_world = velocity_ * last_cam_from_world_;
 }
 
-void Tracker::SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw,
-                      bool update_velocity) {
+void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
   if (update_velocity && have_pose_) {
-    velocity_R_ = R_cw * last_R_.transpose();
-    velocity_t_ = t_cw - velocity_R_ * last_t_;
+    // R_v = R_cw R_last^T, t_v = t_cw - R_v t_last (as written, not T_cw * T_last^-1).
+    velocity_.rotation = cam_from_world.rotation * last_cam_from_world_.rotation.transpose();
+    velocity_.translation =
+        cam_from_world.translation - velocity_.rotation * last_cam_from_world_.translation;
   } else if (!update_velocity) {
-    velocity_R_.setIdentity();
-    velocity_t_.setZero();
+    velocity_ = Rigid3d();
   }
-  last_R_ = R_cw;
-  last_t_ = t_cw;
+  last_cam_from_world_ = cam_from_world;
   have_pose_ = true;
 }
 
-bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
-                       const Eigen::Vector3d& t_cw) {
+bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame,
+                       const Rigid3d& cam_from_world) {
   int stereo_points = 0, stereo_lines = 0;
   for (double d : frame->depth) stereo_points += d > 0.0;
   if (options_.use_lines) {
@@ -371,13 +358,13 @@ bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame, const Ei
   }
   active_ = atlas_.AddMap();
   ++stats_.maps_started;
-  InsertKeyFrame(frame, R_cw, t_cw, std::vector<int>(frame->NumKeypoints(), -1),
+  InsertKeyFrame(frame, cam_from_world, std::vector<int>(frame->NumKeypoints(), -1),
                  std::vector<int>(frame->NumLines(), -1));
   return true;
 }
 
-void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Eigen::Matrix3d R_cw,
-                             Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
+void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
+                             Rigid3d cam_from_world, const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches,
                              const std::vector<bool>& valid_keypoints) {
   BowVector bow;
@@ -396,21 +383,20 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
     map.mutex().AssertHeld();  // locked by LockActiveMap
     live = &map;
     // (the frame's pose is the last pose: both move with a correction written meanwhile)
-    if (FollowAnchor(map, {{&R_cw, &t_cw}, {&last_R_, &last_t_}})) {
+    if (FollowAnchor(map, {&cam_from_world, &last_cam_from_world_})) {
       seen_epoch_ = map.correction_epoch();
     }
-    auto kf = map.AddKeyFrame(R_cw, t_cw, frame);
+    auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
     kf->bow = bow;
     kf->bow_features = std::move(bow_features);
-    const Eigen::Matrix3d R_wc = R_cw.transpose();
-    const Eigen::Vector3d t_wc = -R_wc * t_cw;
+    const Rigid3d world_from_cam = cam_from_world.Inverse();
     for (int i = 0; i < frame->NumKeypoints(); ++i) {
       if (point_matches[i] >= 0 && map.point(point_matches[i])) {
         map.AddPointObservation(point_matches[i], kf_id, i);
       } else if (frame->depth[i] > 0.0 && (valid_keypoints.empty() || valid_keypoints[i])) {
         // (a keypoint in a cell the dynamic-cell filter invalidated makes no map point)
-        const Eigen::Vector3d p_w = R_wc * frame->Backproject(options_.rig.camera, i) + t_wc;
+        const Eigen::Vector3d p_w = world_from_cam * frame->Backproject(options_.rig.camera, i);
         auto p = map.AddPoint(p_w, frame->keypoints.descriptors.row(i), kf_id);
         map.AddPointObservation(p->id, kf_id, i);
       }
@@ -420,8 +406,8 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
         if (line_matches[j] >= 0 && map.line(line_matches[j])) {
           map.AddLineObservation(line_matches[j], kf_id, j);
         } else if (frame->line_has_depth[j]) {
-          const Eigen::Vector3d s = R_wc * frame->line_endpoints[j][0] + t_wc;
-          const Eigen::Vector3d e = R_wc * frame->line_endpoints[j][1] + t_wc;
+          const Eigen::Vector3d s = world_from_cam * frame->line_endpoints[j][0];
+          const Eigen::Vector3d e = world_from_cam * frame->line_endpoints[j][1];
           if ((e - s).norm() < 1e-3) continue;
           auto l = map.AddLine(PluckerLine::FromPoints(s, e), s, e, frame->line_descriptors.row(j),
                                kf_id);
@@ -441,8 +427,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Ei
 
 Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Map& map,
                                                     int reference_kf,
-                                                    const Eigen::Matrix3d& R_pred,
-                                                    const Eigen::Vector3d& t_pred) const {
+                                                    const Rigid3d& pred_cam_from_world) const {
   const PinholeCamera& camera = options_.rig.camera;
   const auto start = Clock::now();
   LocalMapSnapshot snap;
@@ -471,7 +456,7 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
   for (int pid : point_ids) {
     auto p = map.point(pid);
     if (!p || p->bad) continue;
-    const Eigen::Vector3d x_c = R_pred * p->position + t_pred;
+    const Eigen::Vector3d x_c = pred_cam_from_world * p->position;
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
@@ -502,8 +487,8 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     for (int lid : line_ids) {
       auto l = map.line(lid);
       if (!l || l->bad) continue;
-      const Eigen::Vector3d s_c = R_pred * l->start + t_pred;
-      const Eigen::Vector3d e_c = R_pred * l->end + t_pred;
+      const Eigen::Vector3d s_c = pred_cam_from_world * l->start;
+      const Eigen::Vector3d e_c = pred_cam_from_world * l->end;
       if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
       LineSegment proj;
       proj.start = camera.Project(s_c).cast<float>();
@@ -531,8 +516,8 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
 
 Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
                                               const LocalMapSnapshot& local,
-                                              const Eigen::Matrix3d& R_pred,
-                                              const Eigen::Vector3d& t_pred, float radius_scale,
+                                              const Rigid3d& pred_cam_from_world,
+                                              float radius_scale,
                                               const std::vector<bool>* valid_keypoints) const {
   LocalTracking out;
   const auto match_start = Clock::now();
@@ -607,7 +592,7 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
     lines[i].end_px = frame.lines[out.segments[i]].end.cast<double>();
     lines[i].sigma_px = options_.line_sigma_px;
   }
-  out.pose = OptimizePose(options_.rig, R_pred, t_pred, points, lines, options_.pose);
+  out.pose = OptimizePose(options_.rig, pred_cam_from_world, points, lines, options_.pose);
   out.optimisation_ms = Ms(opt_start);
   out.weighted_inliers =
       out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
@@ -619,11 +604,11 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
 }
 
 Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
-                                              const Eigen::Matrix3d& R_pred,
-                                              const Eigen::Vector3d& t_pred, float radius_scale,
+                                              const Rigid3d& pred_cam_from_world,
+                                              float radius_scale,
                                               const std::vector<bool>* valid_keypoints) const {
-  return TrackSnapshot(frame, SnapshotLocalMap(frame, map, reference_kf, R_pred, t_pred), R_pred,
-                       t_pred, radius_scale, valid_keypoints);
+  return TrackSnapshot(frame, SnapshotLocalMap(frame, map, reference_kf, pred_cam_from_world),
+                       pred_cam_from_world, radius_scale, valid_keypoints);
 }
 
 GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scale) const {
@@ -635,8 +620,7 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
   return guided;
 }
 
-void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
-                                 const Eigen::Vector3d& t_cw) {
+void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world) {
   // Frame-to-frame evidence, as the paper's filter: the previous frame's stereo keypoints are
   // carried into this frame by the camera motion between the two estimated poses and matched
   // around their predicted pixels; a cell whose matches land far from the prediction moved on
@@ -649,14 +633,16 @@ void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d
     return;
   }
   const PinholeCamera& camera = options_.rig.camera;
-  // x_cur = R_cp x_prev + t_cp.
-  const Eigen::Matrix3d R_cp = R_cw * previous_R_.transpose();
-  const Eigen::Vector3d t_cp = t_cw - R_cp * previous_t_;
+  // x_cur = R_cp x_prev + t_cp: R_cp = R_cw R_pw^T, t_cp = t_cw - R_cp t_pw.
+  Rigid3d cam_from_prev;
+  cam_from_prev.rotation = cam_from_world.rotation * previous_cam_from_world_.rotation.transpose();
+  cam_from_prev.translation =
+      cam_from_world.translation - cam_from_prev.rotation * previous_cam_from_world_.translation;
   std::vector<int> rows;
   PixelArray predicted(previous->NumKeypoints(), 2);
   for (int i = 0; i < previous->NumKeypoints(); ++i) {
     if (!(previous->depth[i] > 0.0)) continue;
-    const Eigen::Vector3d x_c = R_cp * previous->Backproject(camera, i) + t_cp;
+    const Eigen::Vector3d x_c = cam_from_prev * previous->Backproject(camera, i);
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
@@ -768,13 +754,12 @@ bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
     if (!kf) continue;
     const auto matches = MatchByWords(desc, features, *kf, map, max_distance, ro.match_ratio);
     if (static_cast<int>(matches.size()) < ro.min_matches) continue;
-    Eigen::Matrix3d R_cw;
-    Eigen::Vector3d t_cw;
+    Rigid3d cam_from_world;
     if (!PoseFromMatches(frame, map, matches, options_.rig.camera, ro.ransac_iterations,
-                         ro.ransac_error_px, ro.min_pnp_inliers, &R_cw, &t_cw)) {
+                         ro.ransac_error_px, ro.min_pnp_inliers, &cam_from_world)) {
       continue;
     }
-    LocalTracking local = TrackLocalMap(frame, map, kf->id, R_cw, t_cw, 1.0f);
+    LocalTracking local = TrackLocalMap(frame, map, kf->id, cam_from_world, 1.0f);
 
     if (!local.pose.success || local.weighted_inliers < ro.min_inliers) continue;
     *tracking = std::move(local);
@@ -819,39 +804,36 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
 }
 
 Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
-                                                     const Eigen::Matrix3d& R_frozen,
-                                                     const Eigen::Vector3d& t_frozen) {
+                                                     const Rigid3d& frozen_cam_from_world) {
   // The robot most likely kept moving through the dark as before the loss: the local map is
   // tried from poses along the pre-loss motion (a fraction of the frames since the last
   // estimate) and from the frozen pose, with a wide window; the best-supported attempt wins.
   const int since = lost_count_ + 1;  // frames since the last estimated pose
-  std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> hypotheses = {{R_frozen, t_frozen}};
+  std::vector<Rigid3d> hypotheses = {frozen_cam_from_world};  // cam_from_world each
   // With the full pre-loss motion, and with its translation only: one frame's rotation may be
   // mostly vibration (roll, pitch), and twenty frames of it extrapolated tilt the camera by
   // degrees.
-  const Eigen::Vector3d center = -loss_R_.transpose() * loss_t_;
-  const Eigen::Matrix3d R_prev = loss_velocity_R_.transpose() * loss_R_;
-  const Eigen::Vector3d t_prev = loss_velocity_R_.transpose() * (loss_t_ - loss_velocity_t_);
+  const Rigid3d& loss = loss_cam_from_world_;
+  const Eigen::Vector3d center = loss.Center();
+  const Eigen::Matrix3d R_prev = loss_velocity_.rotation.transpose() * loss.rotation;
+  const Eigen::Vector3d t_prev =
+      loss_velocity_.rotation.transpose() * (loss.translation - loss_velocity_.translation);
   const Eigen::Vector3d step = center - (-R_prev.transpose() * t_prev);  // world, per frame
   for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
     const double steps = std::round(fraction * since);
     if (steps <= 0.0) continue;
-    hypotheses.emplace_back(loss_R_, -loss_R_ * (center + steps * step));
-    Eigen::Matrix3d R = loss_R_;
-    Eigen::Vector3d t = loss_t_;
-    for (int k = 0; k < static_cast<int>(steps); ++k) {
-      t = loss_velocity_R_ * t + loss_velocity_t_;
-      R = loss_velocity_R_ * R;
-    }
-    hypotheses.emplace_back(R, t);
+    hypotheses.emplace_back(loss.rotation, -loss.rotation * (center + steps * step));
+    Rigid3d moved = loss;
+    for (int k = 0; k < static_cast<int>(steps); ++k) moved = loss_velocity_ * moved;
+    hypotheses.push_back(moved);
   }
   LocalTracking best;
-  for (const auto& [R, t] : hypotheses) {
+  for (const Rigid3d& hypothesis : hypotheses) {
     const std::unique_lock<Mutex> lock = LockActiveMap();
     Map& map = atlas_.map(active_);
     map.mutex().AssertHeld();  // locked by LockActiveMap
     LocalTracking attempt =
-        TrackLocalMap(frame, map, last_keyframe_, R, t, options_.lost_search_scale);
+        TrackLocalMap(frame, map, last_keyframe_, hypothesis, options_.lost_search_scale);
     if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
       best = std::move(attempt);
     }
@@ -875,25 +857,23 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   // world): the prediction starts from where it is now.
   FollowCorrections();
   anchor_ = Anchor{};
-  Eigen::Matrix3d R_pred;
-  Eigen::Vector3d t_pred;
-  Predict(&R_pred, &t_pred);
+  Rigid3d predicted;  // cam_from_world
+  Predict(&predicted);
   if (atlas_.size() == 0) {  // not initialised yet
     const auto start = Clock::now();
     if (options_.localise_only) {
       throw std::runtime_error("localise-only mode needs a loaded map (the atlas is empty)");
     }
-    if (StartMap(frame, R_pred, t_pred)) {
+    if (StartMap(frame, predicted)) {
       result.state = TrackingState::kOk;
       result.keyframe = true;
       mode_ = Mode::kTracking;
-      SetPose(R_pred, t_pred, /*update_velocity=*/false);
+      SetPose(predicted, /*update_velocity=*/false);
       RecordFrame(*frame, /*keyframe=*/true);
     } else {
       result.state = TrackingState::kNotInitialized;
     }
-    result.R_cw = R_pred;
-    result.t_cw = t_pred;
+    result.cam_from_world = predicted;
     result.map_index = active_;
     result.mapping_ms = Ms(start);
     return result;
@@ -923,14 +903,14 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
         lock.unlock();
         active_ = predicted_in;  // FollowCorrections sees the change and follows it
         FollowCorrections();
-        Predict(&R_pred, &t_pred);
+        Predict(&predicted);
         continue;
       }
-      local = SnapshotLocalMap(*frame, map, last_keyframe_, R_pred, t_pred);
+      local = SnapshotLocalMap(*frame, map, last_keyframe_, predicted);
       SetAnchor(map, last_keyframe_);
       break;
     }
-    tracking = TrackSnapshot(*frame, local, R_pred, t_pred, scale, &valid);
+    tracking = TrackSnapshot(*frame, local, predicted, scale, &valid);
   };
   if (mode_ != Mode::kLost) {
     track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
@@ -947,7 +927,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     relocalised = Relocalise(*frame, order, &result, &tracking);
   }
   if (!tracked && !relocalised && mode_ == Mode::kLost && have_pose_) {
-    tracking = TrackAlongLossMotion(*frame, R_pred, t_pred);  // lost: `tracking` was empty
+    tracking = TrackAlongLossMotion(*frame, predicted);  // lost: `tracking` was empty
     tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
@@ -971,8 +951,8 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       // The last pose moves too when it was in the world the estimate was made in; otherwise
       // (a merge meanwhile) the motion between the two is unknown.
       const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
-      PoseRef estimate{&tracking.pose.R_cw, &tracking.pose.t_cw};
-      if (move_last ? FollowAnchor(map, {estimate, {&last_R_, &last_t_}})
+      Rigid3d* estimate = &tracking.pose.cam_from_world;
+      if (move_last ? FollowAnchor(map, {estimate, &last_cam_from_world_})
                     : FollowAnchor(map, {estimate})) {
         if (move_last) seen_epoch_ = map.correction_epoch();
         velocity_known = velocity_known && move_last;
@@ -986,20 +966,18 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       // weights still follow the evidence, so a mover seen while tracking is thin is masked as
       // soon as tracking is strong again.
       dynamic_masks_ = tracked && tracking.weighted_inliers >= options_.weak_keyframe_inliers;
-      if (tracked) UpdateDynamicCells(*frame, tracking.pose.R_cw, tracking.pose.t_cw);
+      if (tracked) UpdateDynamicCells(*frame, tracking.pose.cam_from_world);
       if (!tracked) dynamic_->Reset();  // relocalised: the cells start afresh from here
       valid.clear();
       if (dynamic_masks_) valid = dynamic_->KeypointMask(frame->keypoints.uv);
       previous_frame_ = frame;
-      previous_R_ = tracking.pose.R_cw;
-      previous_t_ = tracking.pose.t_cw;
+      previous_cam_from_world_ = tracking.pose.cam_from_world;
     }
     result.state = relocalised ? TrackingState::kRelocalised : TrackingState::kOk;
-    result.R_cw = tracking.pose.R_cw;
-    result.t_cw = tracking.pose.t_cw;
+    result.cam_from_world = tracking.pose.cam_from_world;
     result.map_index = active_;
     // After a loss the velocity is unknown: start again from rest.
-    SetPose(tracking.pose.R_cw, tracking.pose.t_cw, /*update_velocity=*/velocity_known);
+    SetPose(tracking.pose.cam_from_world, /*update_velocity=*/velocity_known);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     if (options_.localise_only) {
@@ -1027,7 +1005,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     }
     if (make_keyframe && !options_.localise_only) {
       const auto start = Clock::now();
-      InsertKeyFrame(frame, tracking.pose.R_cw, tracking.pose.t_cw, point_match, line_match, valid);
+      InsertKeyFrame(frame, tracking.pose.cam_from_world, point_match, line_match, valid);
       result.keyframe = true;
       result.mapping_ms = Ms(start);
     }
@@ -1043,10 +1021,8 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     dynamic_masks_ = false;
   }
   if (mode_ == Mode::kTracking) {  // the last estimate and the motion before the loss
-    loss_R_ = last_R_;
-    loss_t_ = last_t_;
-    loss_velocity_R_ = velocity_R_;
-    loss_velocity_t_ = velocity_t_;
+    loss_cam_from_world_ = last_cam_from_world_;
+    loss_velocity_ = velocity_;
   }
   ++lost_count_;
   if (lost_count_ > options_.recently_lost_frames)
@@ -1055,23 +1031,20 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     mode_ = Mode::kRecentlyLost;
   if (mode_ == Mode::kRecentlyLost) {
     result.state = TrackingState::kRecentlyLost;
-    last_R_ = R_pred;
-    last_t_ = t_pred;
+    last_cam_from_world_ = predicted;
     const double decay = options_.lost_velocity_decay;
-    const Eigen::AngleAxisd rotation(velocity_R_);
-    velocity_R_ = Eigen::AngleAxisd(decay * rotation.angle(), rotation.axis()).toRotationMatrix();
-    velocity_t_ *= decay;
-    result.R_cw = R_pred;
-    result.t_cw = t_pred;
+    const Eigen::AngleAxisd rotation(velocity_.rotation);
+    velocity_.rotation =
+        Eigen::AngleAxisd(decay * rotation.angle(), rotation.axis()).toRotationMatrix();
+    velocity_.translation *= decay;
+    result.cam_from_world = predicted;
     result.map_index = active_;
     return result;
   }
-  velocity_R_.setIdentity();
-  velocity_t_.setZero();
-  result.R_cw = last_R_;
-  result.t_cw = last_t_;
+  velocity_ = Rigid3d();
+  result.cam_from_world = last_cam_from_world_;
   const auto start = Clock::now();
-  if (!options_.localise_only && StartMap(frame, last_R_, last_t_)) {
+  if (!options_.localise_only && StartMap(frame, last_cam_from_world_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;
     mode_ = Mode::kTracking;

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/features/dynamic_cell_filter.h"
 #include "slslam/map/map.h"
@@ -134,14 +135,12 @@ struct FramePose {
   int index = 0;           ///< input frame number
   double timestamp = 0.0;  ///< [s]
   int map_index = -1;      ///< map of the atlas the pose is in (after merges)
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< world -> camera
 };
 
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialized;
-  Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< world -> camera
-  Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+  Rigid3d cam_from_world;  ///< world -> camera
   int map_index = -1;      ///< which map of the atlas the pose belongs to
   int matched_points = 0;  ///< guided matches before optimisation
   int inlier_points = 0;
@@ -209,11 +208,10 @@ class Tracker {
   double Weighted(int points, int lines) const {
     return points + options_.line_inlier_weight * lines;
   }
-  bool StartMap(const std::shared_ptr<const StereoFrame>& frame, const Eigen::Matrix3d& R_cw,
-                const Eigen::Vector3d& t_cw);
+  bool StartMap(const std::shared_ptr<const StereoFrame>& frame, const Rigid3d& cam_from_world);
   // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
-  void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Eigen::Matrix3d R_cw,
-                      Eigen::Vector3d t_cw, const std::vector<int>& point_matches,
+  void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
+                      const std::vector<int>& point_matches,
                       const std::vector<int>& line_matches,
                       const std::vector<bool>& valid_keypoints = {});
   // What tracking needs of the local map around a reference keyframe, copied under the map
@@ -233,18 +231,15 @@ class Tracker {
   };
   // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling).
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
-                                    const Eigen::Matrix3d& R_pred,
-                                    const Eigen::Vector3d& t_pred) const
+                                    const Rigid3d& pred_cam_from_world) const
       SLSLAM_REQUIRES(map.mutex());
   // No lock: guided matching of the snapshot in the frame and the motion-only BA.
   LocalTracking TrackSnapshot(const StereoFrame& frame, const LocalMapSnapshot& local,
-                              const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
-                              float radius_scale,
+                              const Rigid3d& pred_cam_from_world, float radius_scale,
                               const std::vector<bool>* valid_keypoints = nullptr) const;
   // Both in one (caller holds map.mutex()): relocalisation, loop verification.
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
-                              const Eigen::Matrix3d& R_pred, const Eigen::Vector3d& t_pred,
-                              float radius_scale,
+                              const Rigid3d& pred_cam_from_world, float radius_scale,
                               const std::vector<bool>* valid_keypoints = nullptr) const
       SLSLAM_REQUIRES(map.mutex());
   // Locks the live map of the active one (where a merge has moved it, threaded mode), makes it
@@ -254,8 +249,7 @@ class Tracker {
   GuidedMatchOptions GuidedOptions(int descriptor_type, float radius_scale) const;
   // Updates the dynamic-cell filter from the previous tracked frame's stereo keypoints matched
   // into this frame under the two frames' poses.
-  void UpdateDynamicCells(const StereoFrame& frame, const Eigen::Matrix3d& R_cw,
-                          const Eigen::Vector3d& t_cw);
+  void UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world);
   // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
   // map.mutex().
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
@@ -270,11 +264,11 @@ class Tracker {
                        int* keyframe_id);
   // Lost: the local map tracked from poses along the motion before the loss and from the frozen
   // pose; the best-supported attempt (the caller decides whether it is enough).
-  LocalTracking TrackAlongLossMotion(const StereoFrame& frame, const Eigen::Matrix3d& R_frozen,
-                                     const Eigen::Vector3d& t_frozen);
+  LocalTracking TrackAlongLossMotion(const StereoFrame& frame,
+                                     const Rigid3d& frozen_cam_from_world);
   // The pose predicted for the next frame from the current motion model.
-  void Predict(Eigen::Matrix3d* R_pred, Eigen::Vector3d* t_pred) const;
-  void SetPose(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, bool update_velocity);
+  void Predict(Rigid3d* pred_cam_from_world) const;
+  void SetPose(const Rigid3d& cam_from_world, bool update_velocity);
 
   TrackerOptions options_;
   Atlas atlas_;
@@ -282,21 +276,16 @@ class Tracker {
   std::unique_ptr<LocalMapper> mapper_;
   std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
   std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
-  Eigen::Matrix3d previous_R_ = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d previous_t_ = Eigen::Vector3d::Zero();
+  Rigid3d previous_cam_from_world_;  ///< of previous_frame_
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
   int lost_count_ = 0;          ///< frames since tracking failed
   bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
-  Eigen::Matrix3d loss_R_ = Eigen::Matrix3d::Identity();  ///< last estimated pose before a loss
-  Eigen::Vector3d loss_t_ = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d loss_velocity_R_ = Eigen::Matrix3d::Identity();  ///< motion before the loss
-  Eigen::Vector3d loss_velocity_t_ = Eigen::Vector3d::Zero();
+  Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
+  Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)
   bool have_pose_ = false;
-  Eigen::Matrix3d last_R_ = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d last_t_ = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d velocity_R_ = Eigen::Matrix3d::Identity();  ///< T_last * T_prev^-1
-  Eigen::Vector3d velocity_t_ = Eigen::Vector3d::Zero();
+  Rigid3d last_cam_from_world_;
+  Rigid3d velocity_;  ///< last camera from the camera before: T_last * T_prev^-1
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   double last_keyframe_time_s_ = 0.0;  ///< timestamp of the frame of the last keyframe [s]
@@ -312,16 +301,14 @@ class Tracker {
   // later lock FollowAnchor moves the given poses with that keyframe into the corrected world
   // and returns true when it did. Never fires in sequential mode (nothing runs in between).
   // Caller holds the map's lock for both.
-  using PoseRef = std::pair<Eigen::Matrix3d*, Eigen::Vector3d*>;
   void SetAnchor(const Map& map, int keyframe) SLSLAM_REQUIRES(map.mutex());
-  bool FollowAnchor(const Map& map, std::initializer_list<PoseRef> poses)
+  bool FollowAnchor(const Map& map, std::initializer_list<Rigid3d*> cams_from_world)
       SLSLAM_REQUIRES(map.mutex());
   struct Anchor {
     int keyframe = -1;  ///< -1: none for this frame
     const Map* map = nullptr;
     int epoch = -1;
-    Eigen::Matrix3d R_rw = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d t_rw = Eigen::Vector3d::Zero();
+    Rigid3d ref_from_world;  ///< the keyframe's pose then
   };
   Anchor anchor_;
 
@@ -330,10 +317,8 @@ class Tracker {
     double timestamp = 0.0;
     int map_index = -1;
     int reference_kf = -1;
-    Eigen::Matrix3d R_fr = Eigen::Matrix3d::Identity();  ///< frame <- reference keyframe
-    Eigen::Vector3d t_fr = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d R_cw = Eigen::Matrix3d::Identity();  ///< the online estimate (fallback)
-    Eigen::Vector3d t_cw = Eigen::Vector3d::Zero();
+    Rigid3d frame_from_ref;  ///< reference keyframe camera -> frame camera
+    Rigid3d cam_from_world;  ///< the online estimate (fallback)
   };
   std::vector<FrameRecord> records_;
   int loaded_descriptor_type_ = -1;  ///< of a loaded map file (-1: none loaded)

@@ -58,9 +58,9 @@ TEST(PluckerLine, TwoViewPlanesRecoverTheLine) {
     return camera.Project(R * p + t);
   };
   const Eigen::Vector4d plane1 =
-      BackProjectedPlane(camera, R1, t1, project(R1, t1, a), project(R1, t1, b));
+      BackProjectedPlane(camera, Rigid3d(R1, t1), project(R1, t1, a), project(R1, t1, b));
   const Eigen::Vector4d plane2 =
-      BackProjectedPlane(camera, R2, t2, project(R2, t2, a), project(R2, t2, b));
+      BackProjectedPlane(camera, Rigid3d(R2, t2), project(R2, t2, a), project(R2, t2, b));
   ExpectSameLine(PluckerLine::FromPlanes(plane1, plane2), PluckerLine::FromPoints(a, b), 1e-7);
   EXPECT_THROW(PluckerLine::FromPlanes(plane1, plane1), std::invalid_argument);
 }

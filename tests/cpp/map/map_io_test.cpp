@@ -96,7 +96,8 @@ void FillMap(Map* map, unsigned seed, int keyframes) {
   std::vector<int> kf_ids;
   for (int k = 0; k < keyframes; ++k) {
     auto kf =
-        map->AddKeyFrame(Rotation(0.05 * k, -0.01 * k), Eigen::Vector3d(0.02 * k, 0.0, -0.4 * k),
+        map->AddKeyFrame(
+            Rigid3d(Rotation(0.05 * k, -0.01 * k), Eigen::Vector3d(0.02 * k, 0.0, -0.4 * k)),
                          MakeFrame(rng, 10 * k + 3, n, m));
     kf_ids.push_back(kf->id);
     for (int w = 0; w < 4; ++w) kf->bow[static_cast<WordId>(rng() % 1000)] = 0.25;
@@ -160,8 +161,8 @@ void ExpectSameMap(const Map& a, const Map& b) {
     const auto kb = b.keyframe(id);
     ASSERT_NE(kb, nullptr);
     EXPECT_EQ(ka->id, kb->id);
-    EXPECT_EQ(ka->R_cw, kb->R_cw);
-    EXPECT_EQ(ka->t_cw, kb->t_cw);
+    EXPECT_EQ(ka->cam_from_world.rotation, kb->cam_from_world.rotation);
+    EXPECT_EQ(ka->cam_from_world.translation, kb->cam_from_world.translation);
     EXPECT_EQ(ka->point_ids, kb->point_ids);
     EXPECT_EQ(ka->line_ids, kb->line_ids);
     EXPECT_EQ(ka->covisibility, kb->covisibility);
@@ -176,8 +177,8 @@ void ExpectSameMap(const Map& a, const Map& b) {
     ASSERT_TRUE(b.retired().count(id)) << "culled keyframe " << id;
     const RetiredKeyFrame& rb = b.retired().at(id);
     EXPECT_EQ(ra.parent, rb.parent);
-    EXPECT_EQ(ra.R_kf_parent, rb.R_kf_parent);
-    EXPECT_EQ(ra.t_kf_parent, rb.t_kf_parent);
+    EXPECT_EQ(ra.kf_from_parent.rotation, rb.kf_from_parent.rotation);
+    EXPECT_EQ(ra.kf_from_parent.translation, rb.kf_from_parent.translation);
   }
   ASSERT_EQ(a.points().size(), b.points().size());
   for (const auto& [id, pa] : a.points()) {
@@ -325,7 +326,7 @@ TEST_F(MapIo, RoundTripGivesIdenticalMaps) {
   // Both loaded maps count on one id source, past every id in the file.
   EXPECT_EQ(&loaded.maps[0]->ids(), &loaded.maps[1]->ids());
   MutexLock lock(loaded.maps[1]->mutex());
-  const auto kf = loaded.maps[1]->AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(),
+  const auto kf = loaded.maps[1]->AddKeyFrame(Rigid3d(),
                                               std::make_shared<StereoFrame>());
   EXPECT_EQ(kf->id, ids_->next_keyframe);
 }
@@ -385,7 +386,7 @@ TEST_F(MapIo, SaveRefusesWhatCouldNotBeLoaded) {
   Map map;
   FillMap(&map, 4, 3);
   const auto kf = map.keyframes().begin()->second;
-  kf->R_cw(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  kf->cam_from_world.rotation(0, 0) = std::numeric_limits<double>::quiet_NaN();
   try {
     SaveMaps(path_, {&map}, Header());
     ADD_FAILURE() << "saved a keyframe with a NaN pose";
@@ -395,7 +396,7 @@ TEST_F(MapIo, SaveRefusesWhatCouldNotBeLoaded) {
         << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(path_));
-  kf->R_cw = Eigen::Matrix3d::Identity();
+  kf->cam_from_world.rotation = Eigen::Matrix3d::Identity();
   MapFileHeader float_header = Header();
   float_header.descriptor_type = CV_32F;
   EXPECT_THROW(SaveMaps(path_, {&map}, float_header), std::invalid_argument);

@@ -14,33 +14,32 @@ Eigen::Matrix3d Yaw(double deg) {
 
 TEST(Map, CulledKeyFrameKeepsItsPoseThroughItsParent) {
   Map map;
-  auto a = map.AddKeyFrame(Yaw(10), Eigen::Vector3d(1, 2, 3), EmptyFrame());
-  auto b = map.AddKeyFrame(Yaw(20), Eigen::Vector3d(2, 2, 3), EmptyFrame());
-  auto c = map.AddKeyFrame(Yaw(35), Eigen::Vector3d(4, 1, 3), EmptyFrame());
+  auto a = map.AddKeyFrame(Rigid3d(Yaw(10), Eigen::Vector3d(1, 2, 3)), EmptyFrame());
+  auto b = map.AddKeyFrame(Rigid3d(Yaw(20), Eigen::Vector3d(2, 2, 3)), EmptyFrame());
+  auto c = map.AddKeyFrame(Rigid3d(Yaw(35), Eigen::Vector3d(4, 1, 3)), EmptyFrame());
   b->parent = a->id;
   c->parent = b->id;
-  const Eigen::Matrix3d R_b = b->R_cw;
-  const Eigen::Vector3d t_b = b->t_cw;
+  const Eigen::Matrix3d R_b = b->cam_from_world.rotation;
+  const Eigen::Vector3d t_b = b->cam_from_world.translation;
   map.EraseKeyFrame(b->id);
   EXPECT_EQ(c->parent, a->id);  // reparented
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  ASSERT_TRUE(map.KeyFramePose(b->id, &R, &t));
-  EXPECT_TRUE(R.isApprox(R_b, 1e-12));
-  EXPECT_TRUE(t.isApprox(t_b, 1e-12));
+  Rigid3d pose;
+  ASSERT_TRUE(map.KeyFramePose(b->id, &pose));
+  EXPECT_TRUE(pose.rotation.isApprox(R_b, 1e-12));
+  EXPECT_TRUE(pose.translation.isApprox(t_b, 1e-12));
   // The parent moves (a loop correction): the culled keyframe moves with it, rigidly.
   const Eigen::Matrix3d dR = Yaw(5);
-  a->R_cw = a->R_cw * dR;
-  ASSERT_TRUE(map.KeyFramePose(b->id, &R, &t));
-  EXPECT_TRUE(R.isApprox(R_b * dR, 1e-12));
-  EXPECT_FALSE(map.KeyFramePose(99, &R, &t));
+  a->cam_from_world.rotation = a->cam_from_world.rotation * dR;
+  ASSERT_TRUE(map.KeyFramePose(b->id, &pose));
+  EXPECT_TRUE(pose.rotation.isApprox(R_b * dR, 1e-12));
+  EXPECT_FALSE(map.KeyFramePose(99, &pose));
 }
 
 TEST(Map, AbsorbKeepsIdsUniqueAcrossMapsSharingIds) {
   auto ids = std::make_shared<MapIds>();
   Map first(ids), second(ids);
-  auto a = first.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
-  auto b = second.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
+  auto a = first.AddKeyFrame(Rigid3d(), EmptyFrame());
+  auto b = second.AddKeyFrame(Rigid3d(), EmptyFrame());
   auto p = second.AddPoint(Eigen::Vector3d(1, 0, 5), cv::Mat::zeros(1, 32, CV_8U), b->id);
   EXPECT_NE(a->id, b->id);
   const int epoch = first.correction_epoch();
@@ -50,7 +49,7 @@ TEST(Map, AbsorbKeepsIdsUniqueAcrossMapsSharingIds) {
   EXPECT_TRUE(second.keyframes().empty());
   EXPECT_GT(first.correction_epoch(), epoch);
   // New entries in either map continue after every id in use.
-  auto c = first.AddKeyFrame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), EmptyFrame());
+  auto c = first.AddKeyFrame(Rigid3d(), EmptyFrame());
   EXPECT_GT(c->id, b->id);
   EXPECT_THROW(first.Absorb(&first), std::invalid_argument);
   auto duplicate = std::make_shared<KeyFrame>();

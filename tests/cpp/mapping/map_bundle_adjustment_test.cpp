@@ -27,8 +27,8 @@ struct World {
 TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedKeyFrame) {
   for (const bool carry : {true, false}) {
     Map map;
-    auto a = map.AddKeyFrame(Yaw(0), Eigen::Vector3d(0, 0, 0), EmptyFrame());
-    auto b = map.AddKeyFrame(Yaw(10), Eigen::Vector3d(-1, 0, 0.2), EmptyFrame());
+    auto a = map.AddKeyFrame(Rigid3d(Yaw(0), Eigen::Vector3d(0, 0, 0)), EmptyFrame());
+    auto b = map.AddKeyFrame(Rigid3d(Yaw(10), Eigen::Vector3d(-1, 0, 0.2)), EmptyFrame());
     b->parent = a->id;
     auto p = map.AddPoint(Eigen::Vector3d(0, 0, 5), cv::Mat(), a->id);
     p->observations[a->id] = 0;
@@ -40,42 +40,42 @@ TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedK
 
     // While the solve runs: local mapping adds a keyframe c (child of b), with a point and a
     // line that only c observes.
-    auto c = map.AddKeyFrame(Yaw(25), Eigen::Vector3d(-2, 0.1, 0.5), EmptyFrame());
+    auto c = map.AddKeyFrame(Rigid3d(Yaw(25), Eigen::Vector3d(-2, 0.1, 0.5)), EmptyFrame());
     c->parent = b->id;
     const Eigen::Vector3d q0(1, 1, 6), s0(2, -1, 7), e0(2, 1, 7);
     auto q = map.AddPoint(q0, cv::Mat(), c->id);
     q->observations[c->id] = 0;
     auto l = map.AddLine(PluckerLine::FromPoints(s0, e0), s0, e0, cv::Mat(), c->id);
     l->observations[c->id] = 0;
-    const Eigen::Matrix3d R_c0 = c->R_cw;
-    const Eigen::Vector3d t_c0 = c->t_cw;
+    const Eigen::Matrix3d R_c0 = c->cam_from_world.rotation;
+    const Eigen::Vector3d t_c0 = c->cam_from_world.translation;
 
     // The solution: b's world moved by W, the point solved to a new place.
     const World w;
     BaPose b_after = ba.problem().poses[1];
-    w.Move(&b_after.R_cw, &b_after.t_cw);
+    w.Move(&b_after.cam_from_world.rotation, &b_after.cam_from_world.translation);
     ba.problem().poses[1] = b_after;
     ba.problem().points[0] = Eigen::Vector3d(0.1, 0, 5.2);
     BundleAdjustmentReport report;
     report.solved = true;
     EXPECT_EQ(ba.Apply(&map, report, carry), carry ? 1 : 0);
 
-    EXPECT_TRUE(a->R_cw.isApprox(Yaw(0), 1e-12));  // fixed
-    EXPECT_TRUE(b->R_cw.isApprox(b_after.R_cw, 1e-12));
-    EXPECT_TRUE(b->t_cw.isApprox(b_after.t_cw, 1e-12));
+    EXPECT_TRUE(a->cam_from_world.rotation.isApprox(Yaw(0), 1e-12));  // fixed
+    EXPECT_TRUE(b->cam_from_world.rotation.isApprox(b_after.cam_from_world.rotation, 1e-12));
+    EXPECT_TRUE(b->cam_from_world.translation.isApprox(b_after.cam_from_world.translation, 1e-12));
     EXPECT_TRUE(p->position.isApprox(Eigen::Vector3d(0.1, 0, 5.2), 1e-12));
     if (carry) {  // c, its point and its line moved with b's world
       Eigen::Matrix3d R_c = R_c0;
       Eigen::Vector3d t_c = t_c0;
       w.Move(&R_c, &t_c);
-      EXPECT_TRUE(c->R_cw.isApprox(R_c, 1e-12));
-      EXPECT_LT((c->t_cw - t_c).norm(), 1e-12);
+      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(R_c, 1e-12));
+      EXPECT_LT((c->cam_from_world.translation - t_c).norm(), 1e-12);
       EXPECT_LT((q->position - (w.R * q0 + w.t)).norm(), 1e-12);
       EXPECT_LT((l->start - (w.R * s0 + w.t)).norm(), 1e-12);
       const Eigen::Vector3d e = w.R * e0 + w.t;
       EXPECT_LT((l->line.ClosestPointTo(e) - e).norm(), 1e-9);
     } else {  // inline (nothing can join meanwhile): left as they are
-      EXPECT_TRUE(c->R_cw.isApprox(R_c0, 1e-12));
+      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(R_c0, 1e-12));
       EXPECT_LT((q->position - q0).norm(), 1e-12);
       EXPECT_LT((l->start - s0).norm(), 1e-12);
     }
@@ -87,13 +87,14 @@ TEST(MapBundleAdjustment, ASolveAskedToAbortReportsUnsolved) {
   rig.camera = {400, 400, 320, 240, 640, 480};
   rig.baseline_m = 0.1;
   BaProblem problem;
-  problem.poses.push_back({Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), true});
-  problem.poses.push_back({Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.2, 0, 0), false});
+  problem.poses.push_back({Rigid3d(), true});
+  problem.poses.push_back(
+      {Rigid3d(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.2, 0, 0)), false});
   for (int i = 0; i < 20; ++i) {
     const Eigen::Vector3d x(0.3 * (i % 5) - 0.6, 0.2 * (i / 5) - 0.3, 4.0 + 0.1 * i);
     problem.points.push_back(x + Eigen::Vector3d(0.05, -0.03, 0.1));
     for (int k = 0; k < 2; ++k) {
-      const Eigen::Vector3d xc = problem.poses[k].R_cw * x + problem.poses[k].t_cw;
+      const Eigen::Vector3d xc = problem.poses[k].cam_from_world * x;
       BaPointObservation o;
       o.pose = k;
       o.point = i;

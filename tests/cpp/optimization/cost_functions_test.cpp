@@ -65,7 +65,8 @@ void CheckCost(const ceres::CostFunction& cost, std::vector<std::vector<double>>
 
 std::vector<double> PoseParams() {
   std::vector<double> p(kPoseSize);
-  PoseToParameters(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2)), Eigen::Vector3d(0.3, -0.1, 0.5),
+  PoseToParameters(
+      Rigid3d(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2)), Eigen::Vector3d(0.3, -0.1, 0.5)),
                    p.data());
   return p;
 }
@@ -124,7 +125,7 @@ TEST(CostFunctions, BehindCameraIsNotEvaluated) {
   const StereoRig rig = EurocLikeRig();
   PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.0);
   std::vector<double> pose(kPoseSize);
-  PoseToParameters(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), pose.data());
+  PoseToParameters(Rigid3d(), pose.data());
   const double point[3] = {0.0, 0.0, -3.0};
   const double* params[2] = {pose.data(), point};
   double residual[2];

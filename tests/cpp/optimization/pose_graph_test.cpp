@@ -29,7 +29,7 @@ Circle MakeCircle(int n) {
 }
 
 double CenterError(const BaPose& pose, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  return ((-pose.R_cw.transpose() * pose.t_cw) - (-R.transpose() * t)).norm();
+  return (pose.cam_from_world.Center() - (-R.transpose() * t)).norm();
 }
 
 TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
@@ -40,7 +40,7 @@ TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
   // Dead reckoning with a yaw bias of 0.3 deg per step and noisy translations.
   std::vector<PoseGraphEdge> edges;
   std::vector<BaPose> poses(n);
-  poses[0] = {truth.R[0], truth.t[0], true};
+  poses[0] = {Rigid3d(truth.R[0], truth.t[0]), true};
   const Eigen::Matrix3d bias =
       Eigen::AngleAxisd(0.3 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
   for (int i = 1; i < n; ++i) {
@@ -52,8 +52,9 @@ TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
     e.t_ab += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     edges.push_back(e);
     // T_i = T_{i-1,i}^-1 * T_{i-1}
-    poses[i].R_cw = e.R_ab.transpose() * poses[i - 1].R_cw;
-    poses[i].t_cw = e.R_ab.transpose() * (poses[i - 1].t_cw - e.t_ab);
+    const Rigid3d& previous = poses[i - 1].cam_from_world;
+    poses[i].cam_from_world.rotation = e.R_ab.transpose() * previous.rotation;
+    poses[i].cam_from_world.translation = e.R_ab.transpose() * (previous.translation - e.t_ab);
   }
   const double drift_before = CenterError(poses[n - 1], truth.R[n - 1], truth.t[n - 1]);
   ASSERT_GT(drift_before, 0.5);  // the bias really drifts
@@ -73,8 +74,8 @@ TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
   EXPECT_LT(CenterError(poses[n - 1], truth.R[n - 1], truth.t[n - 1]), 0.05 * drift_before);
   EXPECT_LT(worst, 0.35 * drift_before);
   // The fixed pose did not move.
-  EXPECT_TRUE(poses[0].R_cw.isApprox(truth.R[0]));
-  EXPECT_TRUE(poses[0].t_cw.isApprox(truth.t[0]));
+  EXPECT_TRUE(poses[0].cam_from_world.rotation.isApprox(truth.R[0]));
+  EXPECT_TRUE(poses[0].cam_from_world.translation.isApprox(truth.t[0]));
 }
 
 TEST(PoseGraph, RejectsBadEdgesAndOptions) {

@@ -71,7 +71,10 @@ void PerturbedStart(const Scene& s, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
   *t = s.t;
   Eigen::Matrix<double, 6, 1> delta;
   delta << 0.08, -0.05, 0.1, 0.03, -0.02, 0.025;  // 8-10 cm, about 2.5 deg
-  PerturbPose(delta, R, t);
+  Rigid3d perturbed(*R, *t);
+  PerturbPose(delta, &perturbed);
+  *R = perturbed.rotation;
+  *t = perturbed.translation;
 }
 
 TEST(PoseOptimizer, PointsWithOutliersRecoverPoseAndFlagOutliers) {
@@ -79,10 +82,10 @@ TEST(PoseOptimizer, PointsWithOutliersRecoverPoseAndFlagOutliers) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, s.points, {});
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, {});
   ASSERT_TRUE(r.success);
-  EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
-  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
+  EXPECT_LT((r.cam_from_world.translation - s.t).norm(), 0.01);
+  EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, s.R), 0.1);
   int agree = 0;
   for (size_t i = 0; i < s.points.size(); ++i) agree += r.point_inlier[i] != s.corrupted_points[i];
   EXPECT_GE(agree, static_cast<int>(0.97 * s.points.size()));
@@ -93,10 +96,10 @@ TEST(PoseOptimizer, LinesAloneRecoverPose) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, {}, s.lines);
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), {}, s.lines);
   ASSERT_TRUE(r.success);
-  EXPECT_LT((r.t_cw - s.t).norm(), 0.02);
-  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.2);
+  EXPECT_LT((r.cam_from_world.translation - s.t).norm(), 0.02);
+  EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, s.R), 0.2);
   int flagged = 0;
   for (size_t i = 0; i < s.lines.size(); ++i) {
     if (s.corrupted_lines[i]) flagged += !r.line_inlier[i];
@@ -109,21 +112,22 @@ TEST(PoseOptimizer, PointsAndLinesTogether) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
   ASSERT_TRUE(r.success);
-  EXPECT_LT((r.t_cw - s.t).norm(), 0.01);
-  EXPECT_LT(RotationErrorDeg(r.R_cw, s.R), 0.1);
+  EXPECT_LT((r.cam_from_world.translation - s.t).norm(), 0.01);
+  EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, s.R), 0.1);
   EXPECT_GT(r.line_inliers, 20);
 }
 
 TEST(PoseOptimizer, TooFewObservationsKeepsInitialPose) {
   const Scene s = MakeScene(2, 0, 0.0, 4);
-  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), s.R, s.t, s.points, {});
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), Rigid3d(s.R, s.t), s.points, {});
   EXPECT_FALSE(r.success);
-  EXPECT_TRUE(r.R_cw.isApprox(s.R));
+  EXPECT_TRUE(r.cam_from_world.rotation.isApprox(s.R));
   Eigen::Matrix3d nan_r = s.R;
   nan_r(0, 0) = NAN;
-  EXPECT_THROW(OptimizePose(EurocLikeRig(), nan_r, s.t, s.points, {}), std::invalid_argument);
+  EXPECT_THROW(OptimizePose(EurocLikeRig(), Rigid3d(nan_r, s.t), s.points, {}),
+               std::invalid_argument);
 }
 
 TEST(PoseOptimizer, Deterministic) {
@@ -131,10 +135,10 @@ TEST(PoseOptimizer, Deterministic) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
-  const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), R0, t0, s.points, s.lines);
-  EXPECT_EQ(a.t_cw, b.t_cw);
-  EXPECT_EQ(a.R_cw, b.R_cw);
+  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
+  const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
+  EXPECT_EQ(a.cam_from_world.translation, b.cam_from_world.translation);
+  EXPECT_EQ(a.cam_from_world.rotation, b.cam_from_world.rotation);
 }
 
 }  // namespace

@@ -245,7 +245,7 @@ TEST(OptionsCheck, OptimisationAndMappingOptions) {
     PoseOptimizerOptions bad;
     bad.line_weight = kNaN;
     EXPECT_THROW(
-        OptimizePose(rig, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), {}, {}, bad),
+        OptimizePose(rig, Rigid3d(), {}, {}, bad),
         std::invalid_argument);
   }
   {

@@ -182,7 +182,7 @@ double CenterError(const TrackResult& r, int k) {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   TruePose(k, &R, &t);
-  return ((-r.R_cw.transpose() * r.t_cw) - (-R.transpose() * t)).norm();
+  return (r.cam_from_world.Center() - (-R.transpose() * t)).norm();
 }
 
 TEST(TrackerTest, TracksASyntheticRoadwayWithPointsAndLines) {
@@ -232,8 +232,14 @@ TEST(TrackerTest, SequentialModeIsExactlyReproducible) {
     const TrackResult ra = a.Track(frame);
     const TrackResult rb = b.Track(frame);
     ASSERT_EQ(ra.state, rb.state);
-    for (int i = 0; i < 9; ++i) ASSERT_EQ(ra.R_cw.data()[i], rb.R_cw.data()[i]) << "frame " << k;
-    for (int i = 0; i < 3; ++i) ASSERT_EQ(ra.t_cw[i], rb.t_cw[i]) << "frame " << k;
+    for (int i = 0; i < 9; ++i) {
+      ASSERT_EQ(ra.cam_from_world.rotation.data()[i], rb.cam_from_world.rotation.data()[i])
+          << "frame " << k;
+    }
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_EQ(ra.cam_from_world.translation[i], rb.cam_from_world.translation[i])
+          << "frame " << k;
+    }
   }
 }
 
@@ -263,9 +269,8 @@ TEST(TrackerTest, AShortBlackoutIsRecentlyLostThenTrackingResumesInTheSameMap) {
   for (int k = 15; k < 20; ++k) EXPECT_EQ(results[k].state, TrackingState::kRecentlyLost) << k;
   // The prediction slows down while lost (decaying velocity): it never overtakes the truth.
   for (int k = 16; k < 20; ++k) {
-    const double step = ((-results[k].R_cw.transpose() * results[k].t_cw) -
-                         (-results[k - 1].R_cw.transpose() * results[k - 1].t_cw))
-                            .norm();
+    const double step =
+        (results[k].cam_from_world.Center() - results[k - 1].cam_from_world.Center()).norm();
     EXPECT_LT(step, 0.05) << k;
   }
   for (int k = 20; k < 40; ++k) {
@@ -291,12 +296,14 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   for (int k = 15 + recently; k < 40; ++k) {
     EXPECT_EQ(results[k].state, TrackingState::kLost) << k;
     // Frozen: every lost frame has the pose of the first one.
-    EXPECT_EQ(results[k].t_cw, results[15 + recently].t_cw) << k;
+    EXPECT_EQ(results[k].cam_from_world.translation,
+              results[15 + recently].cam_from_world.translation)
+        << k;
   }
   // No vocabulary: no relocalisation; the first frame with features starts map 2 at the frozen
   // pose, and tracking goes on there.
   EXPECT_EQ(results[40].state, TrackingState::kNewMap);
-  EXPECT_EQ(results[40].t_cw, results[39].t_cw);
+  EXPECT_EQ(results[40].cam_from_world.translation, results[39].cam_from_world.translation);
   for (int k = 41; k < 50; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
   EXPECT_EQ(tracker.num_maps(), 2);
 }
@@ -416,7 +423,7 @@ void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true) 
   for (int i = 30; i < 55; ++i) tracker.Track(RenderAt(scene, 0, i, 0.5, /*blind=*/true));
   const TrackResult first = tracker.Track(RenderAt(scene, 0, 55, 0.5));
   ASSERT_EQ(first.state, TrackingState::kNewMap);
-  EXPECT_GT((-first.R_cw.transpose() * first.t_cw - TrueCenterIn(0, 60)).norm(), 4.0);
+  EXPECT_GT((first.cam_from_world.Center() - TrueCenterIn(0, 60)).norm(), 4.0);
   for (int i = 56; i < 145; ++i) {
     ASSERT_NE(tracker.Track(RenderAt(scene, i - 55, i, 0.5)).state, TrackingState::kLost) << i;
   }
@@ -434,7 +441,7 @@ void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true) 
   int second = 0;
   for (const FramePose& f : tracker.Trajectory()) {
     const int pose_k = f.index < 30 ? 60 + f.index : f.index - 55;
-    const double error = (-f.R_cw.transpose() * f.t_cw - TrueCenterIn(pose_k, 60)).norm();
+    const double error = (f.cam_from_world.Center() - TrueCenterIn(pose_k, 60)).norm();
     EXPECT_LT(error, 0.05) << "frame " << f.index;
     second += f.index >= 55;
   }
@@ -628,9 +635,9 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
     return f;
   };
   TruePose(0, &R, &t);
-  auto a = map.AddKeyFrame(R, t, mono(0));
+  auto a = map.AddKeyFrame(Rigid3d(R, t), mono(0));
   TruePose(20, &R, &t);
-  auto b = map.AddKeyFrame(R, t, mono(20));
+  auto b = map.AddKeyFrame(Rigid3d(R, t), mono(20));
   // One shared point links them in the covisibility graph.
   auto anchor = map.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), a->id);
   map.AddPointObservation(anchor->id, a->id, 0);
@@ -670,8 +677,9 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
     true_t.push_back(t);
     Eigen::Matrix<double, 6, 1> delta;
     delta << 0.03, -0.02, 0.04, 0.01, -0.01, 0.008;
-    if (k != 0) PerturbPose(delta, &R, &t);
-    problem.poses.push_back({R, t, k == 0});
+    Rigid3d cam_from_world(R, t);
+    if (k != 0) PerturbPose(delta, &cam_from_world);
+    problem.poses.push_back({cam_from_world, k == 0});
   }
   std::mt19937 rng(3);
   std::normal_distribution<double> shift(0.0, 0.05);
@@ -724,7 +732,7 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
   ASSERT_TRUE(report.solved);
   EXPECT_LT(report.final_cost, 1e-6 * report.initial_cost);
   for (size_t f = 0; f < true_R.size(); ++f) {
-    const Eigen::Vector3d c = -problem.poses[f].R_cw.transpose() * problem.poses[f].t_cw;
+    const Eigen::Vector3d c = problem.poses[f].cam_from_world.Center();
     const Eigen::Vector3d c_true = -true_R[f].transpose() * true_t[f];
     EXPECT_LT((c - c_true).norm(), 1e-4) << "pose " << f;
   }
