@@ -1,0 +1,274 @@
+// Tracker: the local map around the reference keyframe, copied under the map lock
+// (SnapshotLocalMap) and matched in the frame with the motion-only BA outside it (TrackSnapshot);
+// the dynamic-cell filter's update from the previous frame.
+#include "slslam/tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+
+#include "slslam/core/check.h"
+#include "slslam/features/line_segment.h"
+#include "slslam/map/map_io.h"
+#include "slslam/tracking/tracker_internal.h"
+
+namespace slslam {
+
+using tracker_detail::Clock;
+using tracker_detail::InImage;
+using tracker_detail::Ms;
+using tracker_detail::SameKind;
+
+Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Map& map,
+                                                    int reference_kf,
+                                                    const Rigid3d& pred_cam_from_world) const {
+  const PinholeCamera& camera = options_.rig.camera;
+  const auto start = Clock::now();
+  LocalMapSnapshot snap;
+  // Local map: the reference keyframe and its covisible keyframes.
+  std::vector<int> local = {reference_kf};
+  if (!map.keyframe(reference_kf)) local.clear();
+  for (int id : map.BestCovisible(reference_kf, options_.mapping.local_keyframes)) {
+    local.push_back(id);
+  }
+  if (local.empty() && !map.keyframes().empty()) local.push_back(map.keyframes().rbegin()->first);
+  std::set<int> point_ids, line_ids;
+  for (int id : local) {
+    auto kf = map.keyframe(id);
+    if (!kf) continue;
+    for (int pid : kf->point_ids) {
+      if (pid >= 0) point_ids.insert(pid);
+    }
+    for (int lid : kf->line_ids) {
+      if (lid >= 0) line_ids.insert(lid);
+    }
+  }
+
+  // Points in front of the predicted camera and inside the image.
+  std::vector<std::shared_ptr<MapPoint>> points;
+  std::vector<Eigen::Vector2f> predicted;
+  for (int pid : point_ids) {
+    auto p = map.point(pid);
+    if (!p || p->bad) continue;
+    const Eigen::Vector3d x_c = pred_cam_from_world * p->position;
+    if (x_c.z() <= 0.05) continue;
+    const Eigen::Vector2d uv = camera.Project(x_c);
+    if (!InImage(camera, uv)) continue;
+    // A descriptor of another kind (a loaded map of another front end) cannot be matched.
+    if (frame.NumKeypoints() > 0 && !SameKind(p->descriptor, frame.keypoints.descriptors)) {
+      continue;
+    }
+    points.push_back(p);
+    predicted.push_back(uv.cast<float>());
+    p->visible += 1;
+  }
+  const cv::Mat& frame_desc = frame.keypoints.descriptors;
+  if (!points.empty() && frame.NumKeypoints() > 0) {
+    snap.point_uv.resize(static_cast<Eigen::Index>(points.size()), 2);
+    snap.point_descriptors =
+        cv::Mat(static_cast<int>(points.size()), frame_desc.cols, frame_desc.type());
+    for (size_t i = 0; i < points.size(); ++i) {
+      snap.point_ids.push_back(points[i]->id);
+      snap.point_w.push_back(points[i]->position);
+      snap.point_uv.row(static_cast<Eigen::Index>(i)) = predicted[i].transpose();
+      points[i]->descriptor.copyTo(snap.point_descriptors.row(static_cast<int>(i)));
+    }
+  }
+
+  // Lines whose predicted segment is in front of the camera, long enough and centred inside.
+  if (options_.use_lines && frame.NumLines() > 0) {
+    std::vector<std::shared_ptr<MapLine>> lines;
+    for (int lid : line_ids) {
+      auto l = map.line(lid);
+      if (!l || l->bad) continue;
+      const Eigen::Vector3d s_c = pred_cam_from_world * l->start;
+      const Eigen::Vector3d e_c = pred_cam_from_world * l->end;
+      if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
+      LineSegment proj;
+      proj.start = camera.Project(s_c).cast<float>();
+      proj.end = camera.Project(e_c).cast<float>();
+      const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
+      if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
+      if (!SameKind(l->descriptor, frame.line_descriptors)) continue;
+      l->visible += 1;
+      lines.push_back(l);
+      snap.line_px.push_back(proj);
+    }
+    if (!lines.empty()) {
+      const cv::Mat& kind = frame.line_descriptors;
+      snap.line_descriptors = cv::Mat(static_cast<int>(lines.size()), kind.cols, kind.type());
+      for (size_t i = 0; i < lines.size(); ++i) {
+        snap.line_ids.push_back(lines[i]->id);
+        snap.lines_w.push_back(lines[i]->line);
+        lines[i]->descriptor.copyTo(snap.line_descriptors.row(static_cast<int>(i)));
+      }
+    }
+  }
+  snap.ms = Ms(start);
+  return snap;
+}
+
+Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
+                                              const LocalMapSnapshot& local,
+                                              const Rigid3d& pred_cam_from_world,
+                                              float radius_scale,
+                                              const std::vector<bool>* valid_keypoints) const {
+  LocalTracking out;
+  const auto match_start = Clock::now();
+  // Points: matched in a window around the predicted position.
+  const cv::Mat& frame_desc = frame.keypoints.descriptors;
+  if (!local.point_ids.empty() && frame.NumKeypoints() > 0) {
+    GuidedMatchOptions guided = GuidedOptions(frame_desc.type(), radius_scale);
+    Eigen::VectorXi m = GuidedMatch(local.point_uv, local.point_descriptors, frame.keypoints.uv,
+                                    frame_desc, guided);
+    if ((m.array() >= 0).count() < 30) {  // fast motion: widen the window once
+      guided.radius_px *= 2.0f;
+      m = GuidedMatch(local.point_uv, local.point_descriptors, frame.keypoints.uv, frame_desc,
+                      guided);
+    }
+    for (size_t i = 0; i < local.point_ids.size(); ++i) {
+      if (m(i) < 0) continue;
+      const bool masked = valid_keypoints && !valid_keypoints->empty() && !(*valid_keypoints)[m(i)];
+      (masked ? out.masked_point_ids : out.point_ids).push_back(static_cast<int>(i));
+      (masked ? out.masked_keypoints : out.keypoints).push_back(m(i));
+    }
+  }
+
+  // Lines: predicted segments against frame segments (angle, distance, LBD).
+  std::vector<int> line_rows;  // snapshot rows of the matched lines
+  if (options_.use_lines && frame.NumLines() > 0) {
+    const float line_search = options_.line_search_px * radius_scale;
+    std::vector<std::tuple<float, int, int>> pairs;  // (LBD distance, snapshot row, segment)
+    for (size_t r = 0; r < local.line_ids.size(); ++r) {
+      const LineSegment& proj = local.line_px[r];
+      const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
+      for (int j = 0; j < frame.NumLines(); ++j) {
+        const LineSegment& seg = frame.lines[j];
+        if (AngleDifference(seg.Angle(), proj.Angle()) > options_.line_max_angle_rad) continue;
+        const Eigen::Vector2f seg_mid = 0.5f * (seg.start + seg.end);
+        if (proj.DistanceToLine(seg_mid) > line_search) continue;
+        if ((seg_mid - mid).norm() > 0.5f * (proj.Length() + seg.Length()) + line_search) {
+          continue;
+        }
+        const int row = static_cast<int>(r);
+        const float d = DescriptorDistance(local.line_descriptors, row, frame.line_descriptors, j);
+        if (d <= options_.line_max_lbd) pairs.emplace_back(d, row, j);
+      }
+    }
+    // Rows are in id order, so (distance, row, segment) sorts as (distance, id, segment).
+    std::sort(pairs.begin(), pairs.end());
+    std::set<int> used_rows, used_segments;
+    for (const auto& [d, r, j] : pairs) {
+      (void)d;
+      if (used_rows.count(r) || used_segments.count(j)) continue;
+      used_rows.insert(r);
+      used_segments.insert(j);
+      line_rows.push_back(r);
+      out.segments.push_back(j);
+    }
+  }
+  out.matching_ms = local.ms + Ms(match_start);
+
+  // Motion-only BA.
+  const auto opt_start = Clock::now();
+  std::vector<PointObservation> points(out.point_ids.size());
+  for (size_t i = 0; i < out.point_ids.size(); ++i) {
+    const int k = out.keypoints[i];
+    points[i].point_w = local.point_w[out.point_ids[i]];
+    points[i].stereo = frame.u_right[k] >= 0.0;
+    points[i].observed << frame.keypoints.uv(k, 0), frame.keypoints.uv(k, 1), frame.u_right[k];
+    points[i].sigma_px = options_.point_sigma_px;
+  }
+  std::vector<LineObservation> lines(line_rows.size());
+  for (size_t i = 0; i < line_rows.size(); ++i) {
+    lines[i].line_w = local.lines_w[line_rows[i]];
+    lines[i].start_px = frame.lines[out.segments[i]].start.cast<double>();
+    lines[i].end_px = frame.lines[out.segments[i]].end.cast<double>();
+    lines[i].sigma_px = options_.line_sigma_px;
+  }
+  out.pose = OptimizePose(options_.rig, pred_cam_from_world, points, lines, options_.pose);
+  out.optimisation_ms = Ms(opt_start);
+  out.weighted_inliers =
+      out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
+  // Snapshot rows to map ids.
+  for (int& row : out.point_ids) row = local.point_ids[row];
+  for (int& row : out.masked_point_ids) row = local.point_ids[row];
+  for (int row : line_rows) out.line_ids.push_back(local.line_ids[row]);
+  return out;
+}
+
+Tracker::LocalTracking Tracker::TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
+                                              const Rigid3d& pred_cam_from_world,
+                                              float radius_scale,
+                                              const std::vector<bool>* valid_keypoints) const {
+  return TrackSnapshot(frame, SnapshotLocalMap(frame, map, reference_kf, pred_cam_from_world),
+                       pred_cam_from_world, radius_scale, valid_keypoints);
+}
+
+GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scale) const {
+  GuidedMatchOptions guided;
+  guided.radius_px = options_.search_radius_px * radius_scale;
+  guided.max_distance =
+      descriptor_type == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+  guided.ratio = options_.match_ratio;
+  return guided;
+}
+
+void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world) {
+  // Frame-to-frame evidence, as the paper's filter: the previous frame's stereo keypoints are
+  // carried into this frame by the camera motion between the two estimated poses and matched
+  // around their predicted pixels; a cell whose matches land far from the prediction moved on
+  // its own. Unlike matches to the map, these exist for a mover too (it makes no map points once
+  // its cells are invalid), so its cells stay invalid while it moves.
+  // The caller replaces previous_frame_ with this frame afterwards.
+  const StereoFrame* previous = previous_frame_.get();
+  if (!previous || previous->NumKeypoints() == 0 || frame.NumKeypoints() == 0 ||
+      previous->keypoints.descriptors.type() != frame.keypoints.descriptors.type()) {
+    return;
+  }
+  const PinholeCamera& camera = options_.rig.camera;
+  // x_cur = R_cp x_prev + t_cp: R_cp = R_cw R_pw^T, t_cp = t_cw - R_cp t_pw.
+  Rigid3d cam_from_prev;
+  cam_from_prev.rotation = cam_from_world.rotation * previous_cam_from_world_.rotation.transpose();
+  cam_from_prev.translation =
+      cam_from_world.translation - cam_from_prev.rotation * previous_cam_from_world_.translation;
+  std::vector<int> rows;
+  PixelArray predicted(previous->NumKeypoints(), 2);
+  for (int i = 0; i < previous->NumKeypoints(); ++i) {
+    if (!(previous->depth[i] > 0.0)) continue;
+    const Eigen::Vector3d x_c = cam_from_prev * previous->Backproject(camera, i);
+    if (x_c.z() <= 0.05) continue;
+    const Eigen::Vector2d uv = camera.Project(x_c);
+    if (!InImage(camera, uv)) continue;
+    predicted.row(static_cast<Eigen::Index>(rows.size())) = uv.cast<float>().transpose();
+    rows.push_back(i);
+  }
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  cv::Mat query(static_cast<int>(rows.size()), desc.cols, desc.type());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    previous->keypoints.descriptors.row(rows[r]).copyTo(query.row(static_cast<int>(r)));
+  }
+  const GuidedMatchOptions guided = GuidedOptions(desc.type(), 1.0f);
+  const PixelArray pred = predicted.topRows(static_cast<Eigen::Index>(rows.size()));
+  const Eigen::VectorXi m = GuidedMatch(pred, query, frame.keypoints.uv, desc, guided);
+  PixelArray observed(m.size(), 2), expected(m.size(), 2);
+  Eigen::Index n = 0;
+  for (Eigen::Index r = 0; r < m.size(); ++r) {
+    if (m(r) < 0) continue;
+    observed.row(n) = frame.keypoints.uv.row(m(r));
+    expected.row(n) = pred.row(r);
+    ++n;
+  }
+  dynamic_->Update(observed.topRows(n), expected.topRows(n));
+}
+
+}  // namespace slslam

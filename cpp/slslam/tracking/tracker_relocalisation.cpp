@@ -1,0 +1,137 @@
+// Tracker: coming back after a loss: bag-of-words relocalisation in the maps of the atlas
+// (RelocaliseInMap, Relocalise) and tracking along the decayed loss motion.
+#include "slslam/tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+
+#include "slslam/core/check.h"
+#include "slslam/features/line_segment.h"
+#include "slslam/map/map_io.h"
+#include "slslam/tracking/tracker_internal.h"
+
+namespace slslam {
+
+using tracker_detail::Clock;
+using tracker_detail::InImage;
+using tracker_detail::Ms;
+using tracker_detail::SameKind;
+
+bool Tracker::RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
+                              const FeatureVector& features, int map_index, LocalTracking* tracking,
+                              int* keyframe_id) {
+  const RelocalisationOptions& ro = options_.relocalisation;
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  Map& map = atlas_.map(map_index);
+  MutexLock lock(map.mutex());
+  const auto candidates =
+      atlas_.database(map_index).Query(bow, ro.candidates, 0.0, 0.8, [&](int id) {
+        map.mutex().AssertHeld();  // the lock above (a lambda is not followed)
+        auto kf = map.keyframe(id);
+        return kf && !kf->bad;
+      });
+  const float max_distance =
+      desc.type() == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
+  for (const auto& candidate : candidates) {
+    auto kf = map.keyframe(candidate.keyframe_id);
+    if (!kf) continue;
+    const auto matches = MatchByWords(desc, features, *kf, map, max_distance, ro.match_ratio);
+    if (static_cast<int>(matches.size()) < ro.min_matches) continue;
+    Rigid3d cam_from_world;
+    if (!PoseFromMatches(frame, map, matches, options_.rig.camera, ro.ransac_iterations,
+                         ro.ransac_error_px, ro.min_pnp_inliers, &cam_from_world)) {
+      continue;
+    }
+    LocalTracking local = TrackLocalMap(frame, map, kf->id, cam_from_world, 1.0f);
+
+    if (!local.pose.success || local.weighted_inliers < ro.min_inliers) continue;
+    *tracking = std::move(local);
+    *keyframe_id = kf->id;
+    // The pose is in the map's world as of now (not as of an earlier, failed local tracking).
+    SetAnchor(map, kf->id);
+    return true;
+  }
+  return false;
+}
+
+bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order,
+                         TrackResult* result, LocalTracking* tracking) {
+  if (!vocabulary_) return false;
+  const auto start = Clock::now();
+  ++stats_.relocalisation_attempts;
+  const cv::Mat& desc = frame.keypoints.descriptors;
+  if (frame.NumKeypoints() < options_.relocalisation.min_matches ||
+      desc.type() != vocabulary_->descriptor_type() ||
+      desc.cols != vocabulary_->descriptor_cols()) {
+    result->relocalisation_ms = Ms(start);
+    return false;
+  }
+  // The frame's words, once for every map tried.
+  BowVector bow;
+  FeatureVector features;
+  vocabulary_->Transform(desc, &bow, &features, options_.relocalisation.vocabulary_levels_up);
+  for (int m : order) {
+    int keyframe_id = -1;
+    if (!RelocaliseInMap(frame, bow, features, m, tracking, &keyframe_id)) continue;
+    active_ = m;
+    last_keyframe_ = keyframe_id;
+    last_keyframe_frame_ = frame.index;
+    last_keyframe_time_s_ = frame.timestamp;
+    first_tracked_ = 0;
+    ++stats_.relocalisations;
+    result->relocalisation_ms = Ms(start);
+    return true;
+  }
+  result->relocalisation_ms = Ms(start);
+  return false;
+}
+
+Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
+                                                     const Rigid3d& frozen_cam_from_world) {
+  // The robot most likely kept moving through the dark as before the loss: the local map is
+  // tried from poses along the pre-loss motion (a fraction of the frames since the last
+  // estimate) and from the frozen pose, with a wide window; the best-supported attempt wins.
+  const int since = lost_count_ + 1;  // frames since the last estimated pose
+  std::vector<Rigid3d> hypotheses = {frozen_cam_from_world};  // cam_from_world each
+  // With the full pre-loss motion, and with its translation only: one frame's rotation may be
+  // mostly vibration (roll, pitch), and twenty frames of it extrapolated tilt the camera by
+  // degrees.
+  const Rigid3d& loss = loss_cam_from_world_;
+  const Eigen::Vector3d center = loss.Center();
+  const Eigen::Matrix3d R_prev = loss_velocity_.rotation.transpose() * loss.rotation;
+  const Eigen::Vector3d t_prev =
+      loss_velocity_.rotation.transpose() * (loss.translation - loss_velocity_.translation);
+  const Eigen::Vector3d step = center - (-R_prev.transpose() * t_prev);  // world, per frame
+  for (const double fraction : {0.5, 0.75, 1.0, 1.25}) {
+    const double steps = std::round(fraction * since);
+    if (steps <= 0.0) continue;
+    hypotheses.emplace_back(loss.rotation, -loss.rotation * (center + steps * step));
+    Rigid3d moved = loss;
+    for (int k = 0; k < static_cast<int>(steps); ++k) moved = loss_velocity_ * moved;
+    hypotheses.push_back(moved);
+  }
+  LocalTracking best;
+  for (const Rigid3d& hypothesis : hypotheses) {
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    LocalTracking attempt =
+        TrackLocalMap(frame, map, last_keyframe_, hypothesis, options_.lost_search_scale);
+    if (attempt.pose.success && attempt.weighted_inliers > best.weighted_inliers) {
+      best = std::move(attempt);
+    }
+  }
+  return best;
+}
+
+}  // namespace slslam
