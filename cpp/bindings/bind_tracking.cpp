@@ -181,8 +181,8 @@ class TrackerSession {
     out["index"] = index;
     out["timestamp"] = timestamp;
     out["map_index"] = map_index;
-    out["R_cw"] = R_cw;
-    out["t_cw"] = t_cw;
+    out["cam_from_world_rotation"] = R_cw;
+    out["cam_from_world_translation"] = t_cw;
     return out;
   }
 
@@ -386,7 +386,8 @@ void BindTracking(py::module_& m) {
       .def("load_map", &TrackerSession::LoadMap, py::arg("path"),
            "Loads a saved atlas before the first frame; tracking starts by relocalising in it.")
       .def("trajectory", &TrackerSession::Trajectory,
-           "Every estimated frame pose (index, timestamp, map_index, R_cw, t_cw arrays) in the "
+           "Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and "
+           "_translation arrays) in the "
            "final map: after loop correction, merges and bundle adjustment.")
       .def("flush", &TrackerSession::Flush);
 }

@@ -1328,7 +1328,7 @@ class TrackerCore:
         """
     def trajectory(self) -> dict:
         """
-        Every estimated frame pose (index, timestamp, map_index, R_cw, t_cw arrays) in the final map: after loop correction, merges and bundle adjustment.
+        Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and _translation arrays) in the final map: after loop correction, merges and bundle adjustment.
         """
 class VocabularyOptions:
     """

@@ -555,8 +555,8 @@ class Tracker:
             np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kr.descriptors),
         )
-        T_wc = np.linalg.inv(out.cam_from_world)
-        if not np.all(np.isfinite(T_wc)):  # never hand out a NaN pose
+        T_world_cam = np.linalg.inv(out.cam_from_world)
+        if not np.all(np.isfinite(T_world_cam)):  # never hand out a NaN pose
             raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
         timings = StageTimings(
             inference=inference_ms,
@@ -581,7 +581,7 @@ class Tracker:
             weighted_inliers=round(float(out.weighted_inliers), 3),
             masked_keypoints=out.masked_keypoints,
         )
-        result = TrackResult(index, timestamp, out.state, T_wc, timings, counts)
+        result = TrackResult(index, timestamp, out.state, T_world_cam, timings, counts)
         self.last_image, self.last_keypoints_uv = left, kl.uv
         self._results.append(result)
         return result
@@ -593,7 +593,7 @@ class Tracker:
         return list(self._results)
 
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
-        """(timestamps (N,), poses T_wc (N, 4, 4), states) for every frame so far; the poses of
+        """(timestamps (N,), poses T_world_cam (N, 4, 4), states) for every frame so far; the poses of
         frames whose state is not in ``TRACKED_STATES`` are predictions, not estimates."""
         stamps = np.array([r.timestamp for r in self._results])
         poses = np.array([r.T_world_cam for r in self._results]).reshape(-1, 4, 4)
@@ -625,11 +625,11 @@ class Tracker:
         global bundle adjustment (each frame follows its reference keyframe). Waits for local
         mapping first."""
         t = self._core.trajectory()
-        R_cw = np.asarray(t["R_cw"]).reshape(-1, 3, 3)
-        t_cw = np.asarray(t["t_cw"]).reshape(-1, 3)
-        T_world_cam = np.tile(np.eye(4), (len(R_cw), 1, 1))
-        T_world_cam[:, :3, :3] = np.transpose(R_cw, (0, 2, 1))
-        T_world_cam[:, :3, 3] = -np.einsum("nji,nj->ni", R_cw, t_cw)
+        R_cam_world = np.asarray(t["cam_from_world_rotation"]).reshape(-1, 3, 3)
+        t_cam_world = np.asarray(t["cam_from_world_translation"]).reshape(-1, 3)
+        T_world_cam = np.tile(np.eye(4), (len(R_cam_world), 1, 1))
+        T_world_cam[:, :3, :3] = np.transpose(R_cam_world, (0, 2, 1))
+        T_world_cam[:, :3, 3] = -np.einsum("nji,nj->ni", R_cam_world, t_cam_world)
         return FinalTrajectory(
             np.asarray(t["index"], dtype=int),
             np.asarray(t["timestamp"], dtype=float),
