@@ -84,5 +84,25 @@ TEST(PoseGraph, RejectsBadEdgesAndOptions) {
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 
+TEST(PoseGraph, RelativePoseIsAFromWorldTimesWorldFromB) {
+  const Rigid3d a_from_world(
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, -0.5).normalized()).toRotationMatrix(),
+      Eigen::Vector3d(0.3, -1.2, 2.0));
+  const Rigid3d b_from_world(
+      Eigen::AngleAxisd(-0.9, Eigen::Vector3d(0.2, 1.0, 0.7).normalized()).toRotationMatrix(),
+      Eigen::Vector3d(-2.0, 0.5, 1.1));
+  const Rigid3d a_from_b = RelativePose(a_from_world, b_from_world);
+  const Rigid3d expected = a_from_world * b_from_world.Inverse();
+  EXPECT_TRUE(a_from_b.rotation.isApprox(expected.rotation, 1e-12));
+  EXPECT_LT((a_from_b.translation - expected.translation).norm(), 1e-12);
+  // Its arithmetic, bit for bit: R_ab = R_aw R_bw^T, then t_aw - R_ab t_bw.
+  const Eigen::Matrix3d R_ab = a_from_world.rotation * b_from_world.rotation.transpose();
+  EXPECT_EQ(a_from_b.rotation, R_ab);
+  const Eigen::Vector3d t_ab = a_from_world.translation - R_ab * b_from_world.translation;
+  EXPECT_EQ(a_from_b.translation, t_ab);
+  const Eigen::Vector3d x_b(0.7, -0.1, 4.0);
+  EXPECT_LT((a_from_b * x_b - a_from_world * (b_from_world.Inverse() * x_b)).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace slslam
