@@ -29,11 +29,10 @@ PluckerLine PluckerLine::FromPlanes(const Eigen::Vector4d& plane1, const Eigen::
   return line;
 }
 
-PluckerLine PluckerLine::Transformed(const Eigen::Matrix3d& R_ba,
-                                     const Eigen::Vector3d& t_ba) const {
+PluckerLine PluckerLine::Transformed(const Rigid3d& b_from_a) const {
   PluckerLine out;
-  out.v = R_ba * v;
-  out.n = R_ba * n + t_ba.cross(out.v);
+  out.v = b_from_a.rotation * v;
+  out.n = b_from_a.rotation * n + b_from_a.translation.cross(out.v);
   return out;
 }
 

@@ -24,8 +24,9 @@ struct PluckerLine {
   // Pluecker matrix L* = pi1 pi2^T - pi2 pi1^T. Throws when the planes are (nearly) parallel.
   static PluckerLine FromPlanes(const Eigen::Vector4d& plane1, const Eigen::Vector4d& plane2);
 
-  // The same line expressed in frame b, given x_b = R_ba x_a + t_ba.
-  PluckerLine Transformed(const Eigen::Matrix3d& R_ba, const Eigen::Vector3d& t_ba) const;
+  // The same line expressed in frame b, given the line in frame a and
+  // x_b = b_from_a * x_a = R_ba x_a + t_ba.
+  PluckerLine Transformed(const Rigid3d& b_from_a) const;
   // Scaled so that |v| = 1 (then |n| is the distance to the origin).
   PluckerLine Normalized() const;
   // Point of the line nearest to the origin.

@@ -73,8 +73,7 @@ bool LineResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
                   const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px,
                   double angle_weight, Eigen::Vector3d* residual,
                   Eigen::Matrix<double, 3, 6>* d_pose, Eigen::Matrix<double, 3, 6>* d_plucker) {
-  const PluckerLine line_c =
-      line_w.Transformed(cam_from_world.rotation, cam_from_world.translation);
+  const PluckerLine line_c = line_w.Transformed(cam_from_world);
   const Eigen::Matrix3d k_line = LineProjectionMatrix(camera);
   const Eigen::Vector3d l = k_line * line_c.n;
   const double norm_sq = l.x() * l.x() + l.y() * l.y();

@@ -206,10 +206,11 @@ bool LoopCloser::Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int ta
   }
   out->target_map = target_map;
   out->candidate = candidate;
-  // T_target_source = T_target_K * T_K_source (the keyframe's pose in its own map: kf).
+  // target_from_source = target_from_K * K_from_source (the keyframe's pose in its own map: kf).
   const Rigid3d& target_cam = match.cam_from_world;  // K in the target map
-  out->R_ts = target_cam.rotation.transpose() * kf.cam_from_world.rotation;
-  out->t_ts =
+  Rigid3d& target_from_source = out->target_from_source;
+  target_from_source.rotation = target_cam.rotation.transpose() * kf.cam_from_world.rotation;
+  target_from_source.translation =
       target_cam.rotation.transpose() * (kf.cam_from_world.translation - target_cam.translation);
   out->match = std::move(match);
   if (target_map != source_map) return true;
@@ -311,10 +312,12 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
       std::lock_guard<std::mutex> stats_lock(stats_mutex_);
       ++stats_.loops_detected;
     }
+    const Rigid3d& before = pending.target_from_source;
+    const Rigid3d& now = verified.target_from_source;
     const bool agrees =
         pending.count > 0 && pending.target_map == verified.target_map &&
-        (pending.t_ts - verified.t_ts).norm() <= options_.agree_m &&
-        RotationAngle(pending.R_ts.transpose() * verified.R_ts) <= options_.agree_rad;
+        (before.translation - now.translation).norm() <= options_.agree_m &&
+        RotationAngle(before.rotation.transpose() * now.rotation) <= options_.agree_rad;
     if (agrees) {
       ++pending.count;
     } else {
@@ -322,11 +325,10 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         std::lock_guard<std::mutex> stats_lock(stats_mutex_);
         ++stats_.loops_rejected;
       }
-      pending = Pending{verified.target_map, 1, 0, verified.R_ts, verified.t_ts};
+      pending = Pending{verified.target_map, 1, 0, verified.target_from_source};
     }
     pending.misses = 0;
-    pending.R_ts = verified.R_ts;
-    pending.t_ts = verified.t_ts;
+    pending.target_from_source = verified.target_from_source;
     accept = pending.count >= options_.consistency;
   } else if (pending.count > 0 && ++pending.misses > 1) {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
@@ -375,7 +377,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
       source_map.mutex().AssertHeld();  // (the analysis does not follow std::scoped_lock)
       target_map.mutex().AssertHeld();
       if (source_map.keyframe(keyframe_id)) {
-        TransformMap(&source_map, verified.R_ts, verified.t_ts);
+        TransformMap(&source_map, verified.target_from_source);
         std::vector<std::pair<int, BowVector>> moved;
         for (const auto& [id, k] : source_map.keyframes()) moved.emplace_back(id, k->bow);
         target_map.Absorb(&source_map);
@@ -411,23 +413,23 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   return changed;
 }
 
-void LoopCloser::TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts) {
-  // x_t = R_ts x_s + t_ts; a pose T_cs becomes T_ct = T_cs T_st.
-  const Eigen::Matrix3d R_st = R_ts.transpose();
-  const Eigen::Vector3d t_st = -R_st * t_ts;
+void LoopCloser::TransformMap(Map* map, const Rigid3d& target_from_source) {
+  // x_t = target_from_source * x_s; a pose cam_from_source becomes
+  // cam_from_target = cam_from_source * source_from_target.
+  const Rigid3d source_from_target = target_from_source.Inverse();
   for (auto& [id, kf] : map->keyframes()) {
     (void)id;
-    kf->cam_from_world = kf->cam_from_world * Rigid3d(R_st, t_st);
+    kf->cam_from_world = kf->cam_from_world * source_from_target;
   }
   for (auto& [id, p] : map->points()) {
     (void)id;
-    p->position = R_ts * p->position + t_ts;
+    p->position = target_from_source * p->position;
   }
   for (auto& [id, l] : map->lines()) {
     (void)id;
-    l->line = l->line.Transformed(R_ts, t_ts);
-    l->start = R_ts * l->start + t_ts;
-    l->end = R_ts * l->end + t_ts;
+    l->line = l->line.Transformed(target_from_source);
+    l->start = target_from_source * l->start;
+    l->end = target_from_source * l->end;
   }
   map->BumpCorrectionEpoch();
 }
@@ -472,7 +474,7 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     PoseGraphEdge e;
     e.a = index[a];
     e.b = index[b];
-    RelativePose(pa.rotation, pa.translation, pb.rotation, pb.translation, &e.R_ab, &e.t_ab);
+    e.a_from_b = RelativePose(pa, pb);
     edges.push_back(e);
   };
   for (const auto& [id, kf] : map->keyframes()) {
@@ -491,8 +493,7 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     PoseGraphEdge edge;
     edge.a = index[e.a];
     edge.b = index[e.b];
-    edge.R_ab = e.R_ab;
-    edge.t_ab = e.t_ab;
+    edge.a_from_b = e.a_from_b;
     edges.push_back(edge);
   }
   const Rigid3d C = poses[index[verified.candidate]].cam_from_world;
@@ -502,7 +503,7 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     LoopEdge loop;
     loop.a = verified.candidate;
     loop.b = g;
-    RelativePose(C.rotation, C.translation, p.rotation, p.translation, &loop.R_ab, &loop.t_ab);
+    loop.a_from_b = RelativePose(C, p);
     loop_edges_[verified.target_map].push_back(loop);
   }
   const PoseGraphReport report = OptimizePoseGraph(&poses, edges, options_.pose_graph);
@@ -538,11 +539,10 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     if (ref < 0) continue;
     const Rigid3d& o = original[ref];
     const Rigid3d& n = poses[index[ref]].cam_from_world;
-    const Eigen::Matrix3d R_wn = n.rotation.transpose();
-    const Eigen::Vector3d t_wn = -R_wn * n.translation;
-    l->line = l->line.Transformed(o.rotation, o.translation).Transformed(R_wn, t_wn);
-    l->start = R_wn * (o.rotation * l->start + o.translation) + t_wn;
-    l->end = R_wn * (o.rotation * l->end + o.translation) + t_wn;
+    const Rigid3d world_from_n = n.Inverse();
+    l->line = l->line.Transformed(o).Transformed(world_from_n);
+    l->start = world_from_n * (o * l->start);
+    l->end = world_from_n * (o * l->end);
   }
   Fuse(map, keyframe_id, verified.match);
   for (int g : group) map->UpdateConnections(g);

@@ -157,29 +157,27 @@ class LoopCloser {
   struct Verified {
     int target_map = -1;
     int candidate = -1;
-    LocalMapMatch match;                                 ///< K in the target map's world
-    Eigen::Matrix3d R_ts = Eigen::Matrix3d::Identity();  ///< T_target_source (worlds)
-    Eigen::Vector3d t_ts = Eigen::Vector3d::Zero();
+    LocalMapMatch match;         ///< K in the target map's world
+    Rigid3d target_from_source;  ///< source map's world -> target map's world
   };
   struct Pending {
     int target_map = -1;
     int count = 0;
     int misses = 0;
-    Eigen::Matrix3d R_ts = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d t_ts = Eigen::Vector3d::Zero();
+    Rigid3d target_from_source;  ///< of the latest verified hypothesis
   };
   struct LoopEdge {
-    int a = -1, b = -1;
-    Eigen::Matrix3d R_ab = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d t_ab = Eigen::Vector3d::Zero();
+    int a = -1, b = -1;  ///< keyframe ids
+    Rigid3d a_from_b;
   };
 
   bool Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map, int candidate,
               Verified* out);
   // Path length along the keyframes (by id) between two keyframes of a map [m]. Caller locks.
   static double PathLength(const Map& map, int from_id, int to_id) SLSLAM_REQUIRES(map.mutex());
-  // Transforms every keyframe, point and line of `map` by T_target_source (caller locks).
-  static void TransformMap(Map* map, const Eigen::Matrix3d& R_ts, const Eigen::Vector3d& t_ts)
+  // Moves every keyframe, point and line of `map` from the source world into the target world
+  // (caller locks).
+  static void TransformMap(Map* map, const Rigid3d& target_from_source)
       SLSLAM_REQUIRES(map->mutex());
   // Fusion, essential graph and global BA in `map` after K got its verified pose. Caller locks.
   void Correct(Map* map, int keyframe_id, const Verified& verified) SLSLAM_REQUIRES(map->mutex());

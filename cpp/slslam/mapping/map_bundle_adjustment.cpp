@@ -3,17 +3,9 @@
 #include <set>
 #include <unordered_set>
 
+#include "slslam/core/rigid3.h"
+
 namespace slslam {
-
-namespace {
-
-// A correction of the world: x_after = R x_before + t.
-struct WorldCorrection {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-};
-
-}  // namespace
 
 void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<int>& window,
                                              std::unordered_map<int, int>* pose_index,
@@ -59,22 +51,24 @@ int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
 
 int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
                                bool carry_new) const {
-  // Per keyframe of the problem: how its world moved (before = its pose now, which local mapping
-  // may have changed since the problem was built; after = the solution).
-  std::unordered_map<int, WorldCorrection> moved;
+  // Per keyframe of the problem: how its world moved, after_from_before (x_after =
+  // after_from_before * x_before; before = its pose now, which local mapping may have changed
+  // since the problem was built; after = the solution).
+  std::unordered_map<int, Rigid3d> moved;
   for (size_t i = 0; i < problem_.poses.size(); ++i) {
     auto kf = map->keyframe(pose_kf_[i]);
     if (!kf) continue;
     if (problem_.poses[i].fixed) {
-      if (carry_new) moved[kf->id] = WorldCorrection{};
+      if (carry_new) moved[kf->id] = Rigid3d();
       continue;
     }
     const Rigid3d& after = problem_.poses[i].cam_from_world;
     if (carry_new) {
-      WorldCorrection w;
-      w.R = after.rotation.transpose() * kf->cam_from_world.rotation;
-      w.t = after.rotation.transpose() * (kf->cam_from_world.translation - after.translation);
-      moved[kf->id] = w;
+      Rigid3d after_from_before;
+      after_from_before.rotation = after.rotation.transpose() * kf->cam_from_world.rotation;
+      after_from_before.translation =
+          after.rotation.transpose() * (kf->cam_from_world.translation - after.translation);
+      moved[kf->id] = after_from_before;
     }
     kf->cam_from_world = after;
   }
@@ -120,7 +114,7 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
     if (!moved.count(id)) fresh.push_back(kf);
   }
   for (const auto& kf : fresh) {
-    const WorldCorrection* w = nullptr;
+    const Rigid3d* w = nullptr;  // after_from_before of the ancestor
     int ancestor = kf->parent;
     for (size_t hops = 0; ancestor >= 0 && hops <= map->keyframes().size(); ++hops) {
       if (auto it = moved.find(ancestor); it != moved.end()) {
@@ -131,18 +125,19 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
       ancestor = a ? a->parent : -1;
     }
     if (!w) continue;
-    const WorldCorrection correction = *w;
-    // y = R_cw x + t_cw for x = R^T (x' - t): R_cw' = R_cw R^T, t_cw' = t_cw - R_cw' t.
+    const Rigid3d correction = *w;
+    // y = R_cw x + t_cw for x = R^T (x' - t) (R, t: the correction): R_cw' = R_cw R^T,
+    // t_cw' = t_cw - R_cw' t.
     Rigid3d& pose = kf->cam_from_world;
-    pose.rotation = pose.rotation * correction.R.transpose();
-    pose.translation = pose.translation - pose.rotation * correction.t;
+    pose.rotation = pose.rotation * correction.rotation.transpose();
+    pose.translation = pose.translation - pose.rotation * correction.translation;
     moved[kf->id] = correction;
     ++carried;
   }
   // Landmarks outside the problem follow their oldest observer that moved.
   const std::unordered_set<int> solved_points(point_id_.begin(), point_id_.end());
   const std::unordered_set<int> solved_lines(line_id_.begin(), line_id_.end());
-  auto reference = [&](const std::map<int, int>& observations) -> const WorldCorrection* {
+  auto reference = [&](const std::map<int, int>& observations) -> const Rigid3d* {
     for (const auto& [kf_id, idx] : observations) {
       (void)idx;
       if (auto it = moved.find(kf_id); it != moved.end()) return &it->second;
@@ -151,16 +146,14 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
   };
   for (auto& [id, p] : map->points()) {
     if (solved_points.count(id)) continue;
-    if (const WorldCorrection* w = reference(p->observations)) {
-      p->position = w->R * p->position + w->t;
-    }
+    if (const Rigid3d* w = reference(p->observations)) p->position = *w * p->position;
   }
   for (auto& [id, l] : map->lines()) {
     if (solved_lines.count(id)) continue;
-    if (const WorldCorrection* w = reference(l->observations)) {
-      l->line = l->line.Transformed(w->R, w->t);
-      l->start = w->R * l->start + w->t;
-      l->end = w->R * l->end + w->t;
+    if (const Rigid3d* w = reference(l->observations)) {
+      l->line = l->line.Transformed(*w);
+      l->start = *w * l->start;
+      l->end = *w * l->end;
     }
   }
   return carried;

@@ -23,11 +23,11 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }
 
 // Fundamental matrix mapping pixels of view 1 to epipolar lines of view 2 (same intrinsics).
-Eigen::Matrix3d Fundamental21(const PinholeCamera& camera, const Eigen::Matrix3d& R1,
-                              const Eigen::Vector3d& t1, const Eigen::Matrix3d& R2,
-                              const Eigen::Vector3d& t2) {
-  const Eigen::Matrix3d R21 = R2 * R1.transpose();
-  const Eigen::Vector3d t21 = t2 - R21 * t1;
+Eigen::Matrix3d Fundamental21(const PinholeCamera& camera, const Rigid3d& cam1_from_world,
+                              const Rigid3d& cam2_from_world) {
+  // cam2_from_cam1 (as RelativePose in optimization/pose_graph.h).
+  const Eigen::Matrix3d R21 = cam2_from_world.rotation * cam1_from_world.rotation.transpose();
+  const Eigen::Vector3d t21 = cam2_from_world.translation - R21 * cam1_from_world.translation;
   Eigen::Matrix3d K;
   K << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
   const Eigen::Matrix3d K_inv = K.inverse();
@@ -57,9 +57,7 @@ std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const Vi
   }
   const bool binary = ka.descriptors.type() == CV_8U;
   const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
-  const Eigen::Matrix3d F =
-      Fundamental21(camera, a.cam_from_world.rotation, a.cam_from_world.translation,
-                    b.cam_from_world.rotation, b.cam_from_world.translation);
+  const Eigen::Matrix3d F = Fundamental21(camera, a.cam_from_world, b.cam_from_world);
   OneToOne one_to_one(kb.size());
   std::vector<int> match(ka.size(), -1);
   for (int i = 0; i < ka.size(); ++i) {
@@ -143,9 +141,8 @@ int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& r
     const Eigen::Vector2d uv_a = a.frame->keypoints.uv.row(i).cast<double>().transpose();
     const Eigen::Vector2d uv_b = b.frame->keypoints.uv.row(j).cast<double>().transpose();
     Eigen::Vector3d p;
-    if (!TriangulatePoint(a.cam_from_world.rotation, a.cam_from_world.translation,
-                          camera.Unproject(uv_a), b.cam_from_world.rotation,
-                          b.cam_from_world.translation, camera.Unproject(uv_b), &p)) {
+    if (!TriangulatePoint(a.cam_from_world, camera.Unproject(uv_a), b.cam_from_world,
+                          camera.Unproject(uv_b), &p)) {
       continue;
     }
     const Eigen::Vector3d ray_a = p - a.center;
@@ -193,10 +190,8 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
       continue;
     }
     // Endpoints: where the rays of view a's segment endpoints pass the line, in both cameras.
-    const PluckerLine in_a =
-        line.Transformed(a.cam_from_world.rotation, a.cam_from_world.translation);
-    const PluckerLine in_b =
-        line.Transformed(b.cam_from_world.rotation, b.cam_from_world.translation);
+    const PluckerLine in_a = line.Transformed(a.cam_from_world);
+    const PluckerLine in_b = line.Transformed(b.cam_from_world);
     const Eigen::Vector3d s_a = in_a.ClosestPointToRay(camera.Unproject(a0));
     const Eigen::Vector3d e_a = in_a.ClosestPointToRay(camera.Unproject(a1));
     const Eigen::Vector3d s_b = in_b.ClosestPointToRay(camera.Unproject(b0));
@@ -229,14 +224,14 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
 
 }  // namespace
 
-bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
-                      const Eigen::Vector3d& x1, const Eigen::Matrix3d& R2,
-                      const Eigen::Vector3d& t2, const Eigen::Vector3d& x2, Eigen::Vector3d* p_w) {
+bool TriangulatePoint(const Rigid3d& cam1_from_world, const Eigen::Vector3d& x1,
+                      const Rigid3d& cam2_from_world, const Eigen::Vector3d& x2,
+                      Eigen::Vector3d* p_w) {
   // x ~ P X with P = [R | t]: each view gives two rows of A X = 0.
   Eigen::Matrix4d A;
   Eigen::Matrix<double, 3, 4> P1, P2;
-  P1 << R1, t1;
-  P2 << R2, t2;
+  P1 << cam1_from_world.rotation, cam1_from_world.translation;
+  P2 << cam2_from_world.rotation, cam2_from_world.translation;
   A.row(0) = x1.x() * P1.row(2) - P1.row(0);
   A.row(1) = x1.y() * P1.row(2) - P1.row(1);
   A.row(2) = x2.x() * P2.row(2) - P2.row(0);

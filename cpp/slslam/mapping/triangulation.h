@@ -15,6 +15,7 @@
 // front of both cameras and its projection is within the chi-square bound of both observations.
 #pragma once
 
+#include "slslam/core/rigid3.h"
 #include "slslam/geometry/reprojection.h"
 #include "slslam/map/map.h"
 
@@ -45,10 +46,10 @@ struct TriangulationStats {
 };
 
 // Linear two-view triangulation of the rays x1, x2 (normalised image coordinates, z = 1) seen
-// from poses T1, T2 (x_c = R x_w + t). False when the system is degenerate.
-bool TriangulatePoint(const Eigen::Matrix3d& R1, const Eigen::Vector3d& t1,
-                      const Eigen::Vector3d& x1, const Eigen::Matrix3d& R2,
-                      const Eigen::Vector3d& t2, const Eigen::Vector3d& x2, Eigen::Vector3d* p_w);
+// from the poses cam1_from_world, cam2_from_world. False when the system is degenerate.
+bool TriangulatePoint(const Rigid3d& cam1_from_world, const Eigen::Vector3d& x1,
+                      const Rigid3d& cam2_from_world, const Eigen::Vector3d& x2,
+                      Eigen::Vector3d* p_w);
 
 // Pairs keyframe `keyframe_id` with its best covisible keyframes and adds the new landmarks to
 // the map. The caller holds map.mutex().

@@ -61,7 +61,7 @@ double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservati
     return INFINITY;
   }
   const Eigen::Vector3d middle =
-      line.Transformed(cam_from_world.rotation, cam_from_world.translation)
+      line.Transformed(cam_from_world)
           .ClosestPointToRay(rig.camera.Unproject(0.5 * (o.start_px + o.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;
   return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);

@@ -16,16 +16,18 @@ namespace {
 
 // Parameter blocks: q_cw [x, y, z, w] (Eigen's order) and t_cw.
 struct RelativePoseCost {
-  RelativePoseCost(const Eigen::Matrix3d& R_ab, const Eigen::Vector3d& t_ab, double rot_scale,
-                   double trans_scale)
-      : q_ab(R_ab), t_ab(t_ab), rot_scale(rot_scale), trans_scale(trans_scale) {}
+  RelativePoseCost(const Rigid3d& a_from_b, double rot_scale, double trans_scale)
+      : q_ab(a_from_b.rotation),
+        t_ab(a_from_b.translation),
+        rot_scale(rot_scale),
+        trans_scale(trans_scale) {}
 
   template <typename T>
   bool operator()(const T* qa_raw, const T* ta_raw, const T* qb_raw, const T* tb_raw,
                   T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> qa(qa_raw), qb(qb_raw);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> ta(ta_raw), tb(tb_raw);
-    // Estimated T_a_b = T_a_w T_b_w^-1.
+    // Estimated a_from_b = a_from_world * b_from_world^-1.
     const Eigen::Quaternion<T> q_est = qa * qb.conjugate();
     const Eigen::Matrix<T, 3, 1> t_est = ta - q_est * tb;
     const Eigen::Quaternion<T> dq = q_ab.cast<T>().conjugate() * q_est;
@@ -52,11 +54,11 @@ void PoseGraphOptions::Check() const {
                "pose graph translation_sigma_m must be > 0, got ", translation_sigma_m);
 }
 
-void RelativePose(const Eigen::Matrix3d& R_aw, const Eigen::Vector3d& t_aw,
-                  const Eigen::Matrix3d& R_bw, const Eigen::Vector3d& t_bw, Eigen::Matrix3d* R_ab,
-                  Eigen::Vector3d* t_ab) {
-  *R_ab = R_aw * R_bw.transpose();
-  *t_ab = t_aw - *R_ab * t_bw;
+Rigid3d RelativePose(const Rigid3d& a_from_world, const Rigid3d& b_from_world) {
+  Rigid3d a_from_b;
+  a_from_b.rotation = a_from_world.rotation * b_from_world.rotation.transpose();
+  a_from_b.translation = a_from_world.translation - a_from_b.rotation * b_from_world.translation;
+  return a_from_b;
 }
 
 PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
@@ -81,7 +83,7 @@ PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
     const double w = std::sqrt(e.weight);
     auto* cost =
         new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 4, 3, 4, 3>(new RelativePoseCost(
-            e.R_ab, e.t_ab, w / options.rotation_sigma_rad, w / options.translation_sigma_m));
+            e.a_from_b, w / options.rotation_sigma_rad, w / options.translation_sigma_m));
     problem.AddResidualBlock(cost, nullptr, q[e.a].coeffs().data(), t[e.a].data(),
                              q[e.b].coeffs().data(), t[e.b].data());
     used[e.a] = used[e.b] = true;

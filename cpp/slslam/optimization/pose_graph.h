@@ -9,16 +9,17 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/optimization/bundle_adjustment.h"
 
 namespace slslam {
 
-// Measured T_a_b = T_a_w * T_w_b (x_a = R_ab x_b + t_ab) between keyframes a and b.
+// A measured relative pose between keyframes a and b: a_from_b = a_from_world * world_from_b
+// (x_a = a_from_b * x_b).
 struct PoseGraphEdge {
   int a = 0;  ///< index into the pose vector
   int b = 0;
-  Eigen::Matrix3d R_ab = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t_ab = Eigen::Vector3d::Zero();
+  Rigid3d a_from_b;     ///< identity unless set
   double weight = 1.0;  ///< information scale of the edge [-]
 };
 
@@ -44,9 +45,9 @@ PoseGraphReport OptimizePoseGraph(std::vector<BaPose>* poses,
                                   const std::vector<PoseGraphEdge>& edges,
                                   const PoseGraphOptions& options = {});
 
-// T_a_b from two poses T_a_w, T_b_w.
-void RelativePose(const Eigen::Matrix3d& R_aw, const Eigen::Vector3d& t_aw,
-                  const Eigen::Matrix3d& R_bw, const Eigen::Vector3d& t_bw, Eigen::Matrix3d* R_ab,
-                  Eigen::Vector3d* t_ab);
+// a_from_b from two poses a_from_world, b_from_world: rotation R_aw R_bw^T, then translation
+// t_aw - R_ab t_bw with the rotation just formed (not a_from_world * b_from_world.Inverse(), which
+// rounds differently).
+Rigid3d RelativePose(const Rigid3d& a_from_world, const Rigid3d& b_from_world);
 
 }  // namespace slslam

@@ -39,8 +39,7 @@ double LineChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
     return INFINITY;
   }
   // The line must also be in front of the camera: its point nearest to the segment's middle ray.
-  const PluckerLine line_c =
-      obs.line_w.Transformed(cam_from_world.rotation, cam_from_world.translation);
+  const PluckerLine line_c = obs.line_w.Transformed(cam_from_world);
   const Eigen::Vector3d middle = line_c.ClosestPointToRay(
       rig.camera.Unproject(0.5 * (obs.start_px + obs.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;

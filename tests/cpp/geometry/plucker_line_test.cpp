@@ -70,7 +70,7 @@ TEST(PluckerLine, TransformMatchesTransformedPoints) {
   const Eigen::Vector3d b(0.5, 1.0, 4.0);
   const Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.3, -0.2, 0.7));
   const Eigen::Vector3d t(0.4, -1.0, 2.0);
-  ExpectSameLine(PluckerLine::FromPoints(a, b).Transformed(R, t),
+  ExpectSameLine(PluckerLine::FromPoints(a, b).Transformed(Rigid3d(R, t)),
                  PluckerLine::FromPoints(R * a + t, R * b + t));
 }
 

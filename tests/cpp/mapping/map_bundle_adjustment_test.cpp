@@ -14,13 +14,14 @@ Eigen::Matrix3d Yaw(double deg) {
   return Eigen::AngleAxisd(deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
 }
 
-// A correction of the world, x' = R x + t, applied to a pose T_cw: T_cw' = T_cw W^-1.
+// A correction of the world, after_from_before (x' = R x + t), applied to a pose
+// cam_from_world: cam_from_world' = cam_from_world * after_from_before^-1.
 struct World {
-  Eigen::Matrix3d R = Yaw(4.0);
-  Eigen::Vector3d t = Eigen::Vector3d(0.3, -0.1, 0.2);
-  void Move(Eigen::Matrix3d* R_cw, Eigen::Vector3d* t_cw) const {
-    *R_cw = *R_cw * R.transpose();
-    *t_cw = *t_cw - *R_cw * t;
+  Rigid3d after_from_before = Rigid3d(Yaw(4.0), Eigen::Vector3d(0.3, -0.1, 0.2));
+  void Move(Rigid3d* cam_from_world) const {
+    cam_from_world->rotation = cam_from_world->rotation * after_from_before.rotation.transpose();
+    cam_from_world->translation =
+        cam_from_world->translation - cam_from_world->rotation * after_from_before.translation;
   }
 };
 
@@ -47,13 +48,12 @@ TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedK
     q->observations[c->id] = 0;
     auto l = map.AddLine(PluckerLine::FromPoints(s0, e0), s0, e0, cv::Mat(), c->id);
     l->observations[c->id] = 0;
-    const Eigen::Matrix3d R_c0 = c->cam_from_world.rotation;
-    const Eigen::Vector3d t_c0 = c->cam_from_world.translation;
+    const Rigid3d c0 = c->cam_from_world;
 
     // The solution: b's world moved by W, the point solved to a new place.
     const World w;
     BaPose b_after = ba.problem().poses[1];
-    w.Move(&b_after.cam_from_world.rotation, &b_after.cam_from_world.translation);
+    w.Move(&b_after.cam_from_world);
     ba.problem().poses[1] = b_after;
     ba.problem().points[0] = Eigen::Vector3d(0.1, 0, 5.2);
     BundleAdjustmentReport report;
@@ -65,17 +65,16 @@ TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedK
     EXPECT_TRUE(b->cam_from_world.translation.isApprox(b_after.cam_from_world.translation, 1e-12));
     EXPECT_TRUE(p->position.isApprox(Eigen::Vector3d(0.1, 0, 5.2), 1e-12));
     if (carry) {  // c, its point and its line moved with b's world
-      Eigen::Matrix3d R_c = R_c0;
-      Eigen::Vector3d t_c = t_c0;
-      w.Move(&R_c, &t_c);
-      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(R_c, 1e-12));
-      EXPECT_LT((c->cam_from_world.translation - t_c).norm(), 1e-12);
-      EXPECT_LT((q->position - (w.R * q0 + w.t)).norm(), 1e-12);
-      EXPECT_LT((l->start - (w.R * s0 + w.t)).norm(), 1e-12);
-      const Eigen::Vector3d e = w.R * e0 + w.t;
+      Rigid3d c_moved = c0;
+      w.Move(&c_moved);
+      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(c_moved.rotation, 1e-12));
+      EXPECT_LT((c->cam_from_world.translation - c_moved.translation).norm(), 1e-12);
+      EXPECT_LT((q->position - w.after_from_before * q0).norm(), 1e-12);
+      EXPECT_LT((l->start - w.after_from_before * s0).norm(), 1e-12);
+      const Eigen::Vector3d e = w.after_from_before * e0;
       EXPECT_LT((l->line.ClosestPointTo(e) - e).norm(), 1e-9);
     } else {  // inline (nothing can join meanwhile): left as they are
-      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(R_c0, 1e-12));
+      EXPECT_TRUE(c->cam_from_world.rotation.isApprox(c0.rotation, 1e-12));
       EXPECT_LT((q->position - q0).norm(), 1e-12);
       EXPECT_LT((l->start - s0).norm(), 1e-12);
     }

@@ -615,7 +615,7 @@ TEST(TriangulationTest, TwoViewPointIsExact) {
   const Eigen::Vector3d p(0.7, -0.4, 6.0);
   const Eigen::Vector3d c1 = R1 * p + t1, c2 = R2 * p + t2;
   Eigen::Vector3d q;
-  ASSERT_TRUE(TriangulatePoint(R1, t1, c1 / c1.z(), R2, t2, c2 / c2.z(), &q));
+  ASSERT_TRUE(TriangulatePoint(Rigid3d(R1, t1), c1 / c1.z(), Rigid3d(R2, t2), c2 / c2.z(), &q));
   EXPECT_LT((q - p).norm(), 1e-9);
 }
 
