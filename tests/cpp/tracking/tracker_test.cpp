@@ -338,7 +338,10 @@ std::string SceneVocabulary(const Scene& scene) {
   VocabularyOptions options;
   options.branching = 8;
   options.levels = 3;
-  const std::string path = ::testing::TempDir() + "/tracker_test_vocabulary.slvoc";
+  // One file per test: ctest runs the tests in parallel processes, which must not share it.
+  const std::string path = ::testing::TempDir() + "/tracker_test_vocabulary_" +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+                           ".slvoc";
   Vocabulary::Train(images, options).Save(path);
   return path;
 }
