@@ -44,6 +44,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 clang, db_path, *sources = sys.argv[1:]
 db = {os.path.realpath(e["file"]): e for e in json.load(open(db_path))}
+# GCC's own include directory (omp.h), after clang's.
+GCC_INCLUDE = subprocess.run(["gcc", "-print-file-name=include"], capture_output=True,
+                             text=True).stdout.strip()
 
 
 def check(source: str) -> tuple[str, int, str]:
@@ -62,10 +65,8 @@ def check(source: str) -> tuple[str, int, str]:
         elif a.startswith(("-I", "-isystem", "-D", "-std=")):
             keep.append(a)
         i += 1
-    gcc_omp = subprocess.run(["gcc", "-print-file-name=include"], capture_output=True,
-                             text=True).stdout.strip()
-    cmd = [clang, "-fsyntax-only", "-Wno-everything", "-Wthread-safety", "-Werror=thread-safety", "-ferror-limit=0",
-           *keep, "-idirafter", gcc_omp, os.path.realpath(source)]
+    cmd = [clang, "-fsyntax-only", "-Wno-everything", "-Wthread-safety", "-Werror=thread-safety",
+           "-ferror-limit=0", *keep, "-idirafter", GCC_INCLUDE, os.path.realpath(source)]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=entry["directory"])
     return source, run.returncode, run.stderr
 

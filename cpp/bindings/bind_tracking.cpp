@@ -35,20 +35,10 @@ Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, cons
 }
 
 // One frame through the session: the tracker's result, the front end's stage times and the
-// number of left-image line segments.
-struct FrameOutput {
-  TrackResult result;
-  StereoFrontendTiming timing;
+// number of left-image line segments (flat, so each field binds as it is).
+struct FrameOutput : TrackResult, StereoFrontendTiming {
   int lines = 0;
 };
-
-// cam_from_world as a 4x4 matrix (x_cam = T * x_world), last row 0 0 0 1.
-Eigen::Matrix4d CamFromWorldMatrix(const TrackResult& r) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = r.cam_from_world.rotation;
-  T.topRightCorner<3, 1>() = r.cam_from_world.translation;
-  return T;
-}
 
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
 class TrackerSession {
@@ -68,9 +58,9 @@ class TrackerSession {
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out.timing);
+      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out);
       out.lines = frame->NumLines();
-      out.result = tracker_.Track(frame);
+      static_cast<TrackResult&>(out) = tracker_.Track(frame);
     }
     return out;
   }
@@ -335,40 +325,26 @@ void BindTracking(py::module_& m) {
   py::class_<FrameOutput>(m, "FrameOutput",
                           "One frame's result from TrackerCore.track (slslam.Tracker wraps it "
                           "into a TrackResult).")
-      .def_property_readonly("state",
-                             [](const FrameOutput& o) {
-                               return std::string(TrackingStateName(o.result.state));
-                             })
       .def_property_readonly(
-          "cam_from_world", [](const FrameOutput& o) { return CamFromWorldMatrix(o.result); },
+          "state", [](const FrameOutput& o) { return std::string(TrackingStateName(o.state)); })
+      .def_property_readonly(
+          "cam_from_world", [](const FrameOutput& o) { return o.cam_from_world.ToMatrix4(); },
           "4x4 pose: x_cam = T x_world.")
-      .def_property_readonly("map_index", [](const FrameOutput& o) { return o.result.map_index; })
-      .def_property_readonly("matched_points",
-                             [](const FrameOutput& o) { return o.result.matched_points; })
-      .def_property_readonly("inlier_points",
-                             [](const FrameOutput& o) { return o.result.inlier_points; })
-      .def_property_readonly("matched_lines",
-                             [](const FrameOutput& o) { return o.result.matched_lines; })
-      .def_property_readonly("inlier_lines",
-                             [](const FrameOutput& o) { return o.result.inlier_lines; })
+      .def_readonly("map_index", &FrameOutput::map_index)
+      .def_readonly("matched_points", &FrameOutput::matched_points)
+      .def_readonly("inlier_points", &FrameOutput::inlier_points)
+      .def_readonly("matched_lines", &FrameOutput::matched_lines)
+      .def_readonly("inlier_lines", &FrameOutput::inlier_lines)
       .def_readonly("lines", &FrameOutput::lines, "left-image line segments")
-      .def_property_readonly("keyframe", [](const FrameOutput& o) { return o.result.keyframe; })
-      .def_property_readonly("masked_keypoints",
-                             [](const FrameOutput& o) { return o.result.masked_keypoints; })
-      .def_property_readonly("weighted_inliers",
-                             [](const FrameOutput& o) { return o.result.weighted_inliers; })
-      .def_property_readonly("relocalisation_ms",
-                             [](const FrameOutput& o) { return o.result.relocalisation_ms; })
-      .def_property_readonly("line_extraction_ms",
-                             [](const FrameOutput& o) { return o.timing.line_extraction_ms; })
-      .def_property_readonly("stereo_matching_ms",
-                             [](const FrameOutput& o) { return o.timing.stereo_matching_ms; })
-      .def_property_readonly("matching_ms",
-                             [](const FrameOutput& o) { return o.result.matching_ms; })
-      .def_property_readonly("optimisation_ms",
-                             [](const FrameOutput& o) { return o.result.optimisation_ms; })
-      .def_property_readonly("mapping_ms",
-                             [](const FrameOutput& o) { return o.result.mapping_ms; });
+      .def_readonly("keyframe", &FrameOutput::keyframe)
+      .def_readonly("masked_keypoints", &FrameOutput::masked_keypoints)
+      .def_readonly("weighted_inliers", &FrameOutput::weighted_inliers)
+      .def_readonly("relocalisation_ms", &FrameOutput::relocalisation_ms)
+      .def_readonly("line_extraction_ms", &FrameOutput::line_extraction_ms)
+      .def_readonly("stereo_matching_ms", &FrameOutput::stereo_matching_ms)
+      .def_readonly("matching_ms", &FrameOutput::matching_ms)
+      .def_readonly("optimisation_ms", &FrameOutput::optimisation_ms)
+      .def_readonly("mapping_ms", &FrameOutput::mapping_ms);
 
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")

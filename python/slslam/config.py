@@ -172,10 +172,6 @@ GRID_TO_CORE: dict[str, tuple[str, ...]] = {
 }
 
 
-def _cpp_default(options: Any, table: dict[str, tuple[str, ...]], name: str) -> Any:
-    return as_written(core_attribute(options, table[name][0]))
-
-
 _TRACKER = _core.TrackerOptions()
 _LINES = _core.LineExtractorOptions()
 _GRID = _core.GridLimitOptions()
@@ -186,10 +182,8 @@ def _mirrored(
 ) -> Any:
     """A dataclass field whose default is the C++ default (``table[name]`` of ``options``) and
     whose allowed range is ``interval`` (none: any value of the type)."""
-    default = _cpp_default(options, table, name)
-    if not interval:
-        return field(default=default)
-    return field(default=default, metadata={"range": Range.parse(interval)})
+    default = as_written(core_attribute(options, table[name][0]))
+    return _option(default, interval) if interval else field(default=default)
 
 
 #: Ranges of the options whose dataclasses live with their front end (slslam.features).

@@ -16,7 +16,6 @@
 #define SLSLAM_CAPABILITY(x) SLSLAM_THREAD_ANNOTATION(capability(x))
 #define SLSLAM_SCOPED_CAPABILITY SLSLAM_THREAD_ANNOTATION(scoped_lockable)
 #define SLSLAM_GUARDED_BY(x) SLSLAM_THREAD_ANNOTATION(guarded_by(x))
-#define SLSLAM_PT_GUARDED_BY(x) SLSLAM_THREAD_ANNOTATION(pt_guarded_by(x))
 #define SLSLAM_REQUIRES(...) SLSLAM_THREAD_ANNOTATION(requires_capability(__VA_ARGS__))
 #define SLSLAM_ACQUIRE(...) SLSLAM_THREAD_ANNOTATION(acquire_capability(__VA_ARGS__))
 #define SLSLAM_RELEASE(...) SLSLAM_THREAD_ANNOTATION(release_capability(__VA_ARGS__))
@@ -24,13 +23,12 @@
 #define SLSLAM_EXCLUDES(...) SLSLAM_THREAD_ANNOTATION(locks_excluded(__VA_ARGS__))
 #define SLSLAM_RETURN_CAPABILITY(x) SLSLAM_THREAD_ANNOTATION(lock_returned(x))
 #define SLSLAM_ASSERT_CAPABILITY(x) SLSLAM_THREAD_ANNOTATION(assert_capability(x))
-#define SLSLAM_NO_THREAD_SAFETY_ANALYSIS SLSLAM_THREAD_ANNOTATION(no_thread_safety_analysis)
 
 namespace slslam {
 
-// A std::mutex the analysis knows as a capability. Use it with MutexLock (scoped), with
-// std::scoped_lock for several at once (then tell the analysis with AssertHeld), or through
-// native() where a std::condition_variable needs the std::mutex itself.
+// A std::mutex the analysis knows as a capability. Use it with MutexLock (scoped), or with
+// std::scoped_lock / std::unique_lock where the analysis cannot follow (then tell it with
+// AssertHeld).
 class SLSLAM_CAPABILITY("mutex") Mutex {
  public:
   void lock() SLSLAM_ACQUIRE() { mutex_.lock(); }
@@ -39,7 +37,6 @@ class SLSLAM_CAPABILITY("mutex") Mutex {
   // Tells the analysis that the calling thread holds this mutex (taken by a construct it cannot
   // follow, such as std::scoped_lock over several mutexes). Checks nothing at run time.
   void AssertHeld() const SLSLAM_ASSERT_CAPABILITY(this) {}
-  std::mutex& native() { return mutex_; }
 
  private:
   std::mutex mutex_;
@@ -55,26 +52,6 @@ class SLSLAM_SCOPED_CAPABILITY MutexLock {
 
  private:
   Mutex& mutex_;
-};
-
-// Holds a Mutex for its scope, with an early Unlock() (std::unique_lock without the rest).
-class SLSLAM_SCOPED_CAPABILITY ReleasableMutexLock {
- public:
-  explicit ReleasableMutexLock(Mutex& mutex) SLSLAM_ACQUIRE(mutex) : mutex_(&mutex) {
-    mutex_->lock();
-  }
-  ~ReleasableMutexLock() SLSLAM_RELEASE() {
-    if (mutex_ != nullptr) mutex_->unlock();
-  }
-  void Unlock() SLSLAM_RELEASE() {
-    mutex_->unlock();
-    mutex_ = nullptr;
-  }
-  ReleasableMutexLock(const ReleasableMutexLock&) = delete;
-  ReleasableMutexLock& operator=(const ReleasableMutexLock&) = delete;
-
- private:
-  Mutex* mutex_;
 };
 
 }  // namespace slslam

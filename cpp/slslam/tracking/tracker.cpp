@@ -1,29 +1,18 @@
 #include "slslam/tracking/tracker.h"
 
 #include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <filesystem>
-#include <limits>
 #include <map>
-#include <set>
 #include <stdexcept>
-#include <tuple>
 
 #include <Eigen/Geometry>
-#include <opencv2/calib3d.hpp>
 
 #include "slslam/core/check.h"
-#include "slslam/features/line_segment.h"
-#include "slslam/map/map_io.h"
 #include "slslam/tracking/tracker_internal.h"
 
 namespace slslam {
 
 using tracker_detail::Clock;
-using tracker_detail::InImage;
 using tracker_detail::Ms;
-using tracker_detail::SameKind;
 
 const char* TrackingStateName(TrackingState state) {
   switch (state) {
