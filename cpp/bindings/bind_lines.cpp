@@ -74,6 +74,12 @@ void BindLines(py::module_& m) {
       .def_readwrite("min_disparity_px", &StereoLineOptions::min_disparity_px)
       .def("check", &StereoLineOptions::Check);
 
+  py::class_<LbdOptions>(m, "LbdOptions", "Our line band descriptor (features/lbd.h).")
+      .def(py::init<>())
+      .def_readwrite("band_width_px", &LbdOptions::band_width_px)
+      .def_readwrite("max_samples_along", &LbdOptions::max_samples_along)
+      .def_readwrite("smoothing_sigma_px", &LbdOptions::smoothing_sigma_px)
+      .def("check", &LbdOptions::Check);
   py::class_<LineExtractorOptions>(m, "LineExtractorOptions",
                                    "Line front end of the tracker: detector, scale, preprocessing, "
                                    "cap (tracking.line_* keys).")
@@ -87,8 +93,35 @@ void BindLines(py::module_& m) {
             o.detector = ParseLineDetector(name);
           },
           "lsd or fld")
+      .def_property(
+          "descriptor",
+          [](const LineExtractorOptions& o) { return LineDescriptorName(o.descriptor); },
+          [](LineExtractorOptions& o, const std::string& name) {
+            o.descriptor = ParseLineDescriptor(name);
+          },
+          "lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor)")
+      .def_readwrite("lbd", &LineExtractorOptions::lbd)
       .def("check", &LineExtractorOptions::Check);
 
+  m.def(
+      "line_band_descriptors",
+      [](const py::array& image, const SegmentArray& segments, const LbdOptions& options,
+         bool binary) {
+        const cv::Mat img = WrapGray(image, "image");
+        const Segments s = ToSegments(segments);
+        cv::Mat d;
+        {
+          py::gil_scoped_release release;
+          d = binary ? ComputeBandDescriptors(img, s, options)
+                     : ComputeBandDescriptorsFloat(img, s, options);
+        }
+        return ToNumpy(d);
+      },
+      py::arg("image"), py::arg("segments"), py::arg("options") = LbdOptions{},
+      py::arg("binary") = true,
+      "Our LBD (features/lbd.h) of segments (float32 (N, 4) as u0 v0 u1 v1) on an image, in "
+      "the image's pixels: uint8 (N, 32), or with binary=False the 72 normalised floats "
+      "(float32 (N, 72)) before binarisation.");
   m.def(
       "extract_lines",
       [](const py::array& image, const LineExtractorOptions& options) {

@@ -34,6 +34,7 @@ void BindMapIo(py::module_& m) {
             py::arg("slslam_version") = h.slslam_version,
             py::arg("descriptor_type") = descriptor_type,
             py::arg("descriptor_cols") = h.descriptor_cols, py::arg("vocabulary") = h.vocabulary,
+            py::arg("line_descriptor") = h.line_descriptor,
             py::arg("camera") =
                 py::dict(py::arg("fx") = camera.fx, py::arg("fy") = camera.fy,
                          py::arg("cx") = camera.cx, py::arg("cy") = camera.cy,
@@ -46,7 +47,8 @@ void BindMapIo(py::module_& m) {
       },
       py::arg("path"),
       "Header of a map file (.slmap) as a dict: format_version, slslam_version, descriptor_type "
-      "('binary', 'float' or None), descriptor_cols, vocabulary, camera {fx, fy, cx, cy, width, "
+      "('binary', 'float' or None), descriptor_cols, vocabulary, line_descriptor ('opencv_lbd' or "
+      "'lbd'; format 1 files: 'opencv_lbd'), camera {fx, fy, cx, cy, width, "
       "height} [px], baseline_m, next_ids {keyframe, point, line}, and per map {keyframes, "
       "culled_keyframes, points, lines}. Checks magic, version, size and checksum (the whole file "
       "is read) but builds no map; a foreign, damaged or newer file raises ValueError naming it.");

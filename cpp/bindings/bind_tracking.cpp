@@ -41,10 +41,17 @@ struct FrameOutput : TrackResult, StereoFrontendTiming {
 };
 
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
+// The tracker's options with the line front end's descriptor kind (for map files).
+TrackerOptions WithLineDescriptor(TrackerOptions options, LineDescriptor descriptor) {
+  options.line_descriptor = descriptor;
+  return options;
+}
+
 class TrackerSession {
  public:
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
-      : tracker_(options), frontend_({options.rig, options.stereo, lines, options.use_lines}) {}
+      : tracker_(WithLineDescriptor(options, lines.descriptor)),
+        frontend_({options.rig, options.stereo, lines, options.use_lines}) {}
 
   FrameOutput Track(int index, double timestamp, const py::array& left_image,
                     const py::array& right_image, const PixelArray& left_uv,

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LbdOptions', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'line_band_descriptors', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -698,14 +698,49 @@ class StereoLineOptions:
     @min_row_overlap.setter
     def min_row_overlap(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
+class LbdOptions:
+    """
+    Our line band descriptor (features/lbd.h).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def band_width_px(self) -> int:
+        ...
+    @band_width_px.setter
+    def band_width_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_samples_along(self) -> int:
+        ...
+    @max_samples_along.setter
+    def max_samples_along(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def smoothing_sigma_px(self) -> float:
+        ...
+    @smoothing_sigma_px.setter
+    def smoothing_sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class LineExtractorOptions:
     """
     Line front end of the tracker: detector, scale, preprocessing, cap (tracking.line_* keys).
     """
+    lbd: LbdOptions
     preprocess: LinePreprocessOptions
     def __init__(self) -> None:
         ...
     def check(self) -> None:
+        ...
+    @property
+    def descriptor(self) -> str:
+        """
+        lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor)
+        """
+    @descriptor.setter
+    def descriptor(self, arg1: str) -> None:
         ...
     @property
     def detection_scale(self) -> float:
@@ -2198,6 +2233,10 @@ def guided_match(predicted: typing.Annotated[numpy.typing.ArrayLike, numpy.float
     """
     For each predicted position (M x 2) with descriptor, the index of the best keypoint within the radius, or -1.
     """
+def line_band_descriptors(image: numpy.ndarray, segments: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], options: LbdOptions = ..., binary: bool = True) -> numpy.ndarray:
+    """
+    Our LBD (features/lbd.h) of segments (float32 (N, 4) as u0 v0 u1 v1) on an image, in the image's pixels: uint8 (N, 32), or with binary=False the 72 normalised floats (float32 (N, 72)) before binarisation.
+    """
 def match_descriptors(query: numpy.ndarray, train: numpy.ndarray, options: MatchOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
     """
     Mutual nearest-neighbour + ratio matching; returns (query index, train index) pairs N x 2.
@@ -2226,7 +2265,7 @@ def read_gray_image(path: str) -> numpy.ndarray:
     """
 def read_map_file_header(path: str) -> dict:
     """
-    Header of a map file (.slmap) as a dict: format_version, slslam_version, descriptor_type ('binary', 'float' or None), descriptor_cols, vocabulary, camera {fx, fy, cx, cy, width, height} [px], baseline_m, next_ids {keyframe, point, line}, and per map {keyframes, culled_keyframes, points, lines}. Checks magic, version, size and checksum (the whole file is read) but builds no map; a foreign, damaged or newer file raises ValueError naming it.
+    Header of a map file (.slmap) as a dict: format_version, slslam_version, descriptor_type ('binary', 'float' or None), descriptor_cols, vocabulary, line_descriptor ('opencv_lbd' or 'lbd'; format 1 files: 'opencv_lbd'), camera {fx, fy, cx, cy, width, height} [px], baseline_m, next_ids {keyframe, point, line}, and per map {keyframes, culled_keyframes, points, lines}. Checks magic, version, size and checksum (the whole file is read) but builds no map; a foreign, damaged or newer file raises ValueError naming it.
     """
 def read_point_cloud(path: str) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]"]:
     """

@@ -160,6 +160,7 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
 LINES_TO_CORE: dict[str, tuple[str, ...]] = {
     "line_detection_scale": ("detection_scale",),
     "line_detector": ("detector",),
+    "line_descriptor": ("descriptor",),
     "max_lines": ("max_lines",),
 }
 DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
@@ -331,12 +332,16 @@ class TrackingConfig:
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")
-    # LSD runs on the image scaled by this (segments mapped back; LBD at full resolution)
+    # LSD runs on the image scaled by this (segments mapped back; OpenCV's LBD at full
+    # resolution, ours on the scaled image)
     line_detection_scale: float = _lines("line_detection_scale", "[0.1, 1]")
     # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
     line_detector: Literal["lsd", "fld"] = _lines("line_detector")
-    # keep at most this many segments per image after preprocessing, the longest (0: all); LBD
-    # costs about 60 us a segment
+    # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor, about 60 us a segment) or lbd
+    # (ours, from the LBD paper, about 10 us a segment; less accurate tracking so far, see
+    # benchmarks/README.md); a saved map keeps the kind it was made with
+    line_descriptor: Literal["opencv_lbd", "lbd"] = _lines("line_descriptor")
+    # keep at most this many segments per image after preprocessing, the longest (0: all)
     max_lines: int = _lines("max_lines", "[0, 100000]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)

@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from slslam.config import config_from_dict
 from slslam.errors import InputError
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import run_sequence
@@ -83,6 +84,15 @@ def test_a_saved_map_localises_a_second_pass_without_changing(loop_run, small_lo
     assert m["ape"]["rmse"] < 0.1
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert saved["states"].get("NEW_MAP", 0) == 0
+
+
+def test_a_map_with_other_line_descriptors_is_refused(loop_run, small_loop, tmp_path):
+    out, _ = loop_run
+    other = config_from_dict({"tracking": {"line_descriptor": "lbd"}})
+    with pytest.raises(InputError, match=r"atlas\.slmap.*lines carry opencv_lbd descriptors"):
+        run_sequence(
+            small_loop, tmp_path, other, max_frames=2, progress=False, load_map=out / "atlas.slmap"
+        )
 
 
 def test_bad_map_files_are_clear_errors(small_loop, tmp_path):

@@ -38,9 +38,12 @@ def empty_map_section() -> bytes:
     return keyframe + frame + point
 
 
-def map_file(version: int = 1) -> bytes:
+def map_file(version: int = 2, line_descriptor: str = "lbd") -> bytes:
+    """Format 2; format 1 lacks the line descriptor name after the vocabulary name."""
     section = empty_map_section()
     payload = string("0.1.0") + struct.pack("<ii", 0, 32) + string("orb_vocabulary.slvoc")
+    if version >= 2:
+        payload += string(line_descriptor)
     payload += struct.pack("<4d2id", 458.0, 457.5, 367.2, 248.4, 752, 480, 0.11)
     payload += struct.pack("<3i", 1, 1, 0)  # next keyframe, point, line ids
     payload += struct.pack("<I", 1) + struct.pack("<4IQ", 1, 0, 1, 0, len(section)) + section
@@ -51,7 +54,8 @@ def test_header_of_a_file_written_from_the_documented_layout(tmp_path: Path) -> 
     path = tmp_path / "atlas.slmap"
     path.write_bytes(map_file())
     header = _core.read_map_file_header(str(path))
-    assert header["format_version"] == 1
+    assert header["format_version"] == 2
+    assert header["line_descriptor"] == "lbd"
     assert header["slslam_version"] == "0.1.0"
     assert header["descriptor_type"] == "binary"
     assert header["descriptor_cols"] == 32
@@ -69,12 +73,23 @@ def test_header_of_a_file_written_from_the_documented_layout(tmp_path: Path) -> 
     assert header["maps"] == [{"keyframes": 1, "culled_keyframes": 0, "points": 1, "lines": 0}]
 
 
+def test_format_one_files_still_load_as_opencv_line_descriptors(tmp_path: Path) -> None:
+    path = tmp_path / "old.slmap"
+    path.write_bytes(map_file(version=1))
+    header = _core.read_map_file_header(str(path))
+    assert header["format_version"] == 1
+    assert header["line_descriptor"] == "opencv_lbd"
+    assert header["vocabulary"] == "orb_vocabulary.slvoc"
+    assert header["baseline_m"] == 0.11
+
+
 @pytest.mark.parametrize(
     ("name", "content", "message"),
     [
         ("cloud.ply", b"ply\nformat ascii 1.0\n", "not an slslam map file"),
         ("empty.slmap", b"", "not an slslam map file"),
-        ("newer.slmap", map_file(version=2), "newer than this slslam reads"),
+        ("newer.slmap", map_file(version=3), "newer than this slslam reads"),
+        ("unknown_lines.slmap", map_file(line_descriptor="sift"), "line descriptor 'sift'"),
         ("truncated.slmap", map_file()[:-5], "truncated"),
         ("flipped.slmap", map_file()[:-3] + b"\xff" + map_file()[-2:], "checksum mismatch"),
     ],

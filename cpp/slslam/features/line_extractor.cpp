@@ -12,8 +12,9 @@ namespace slslam {
 
 namespace ld = cv::line_descriptor;
 
-cv::Mat ComputeLbd(const cv::Mat& image, const Segments& segments) {
-  Require(!image.empty() && image.type() == CV_8UC1, "LBD needs a non-empty 8-bit gray image");
+namespace {
+
+cv::Mat ComputeOpenCvLbd(const cv::Mat& image, const Segments& segments) {
   if (segments.empty()) return cv::Mat(0, 32, CV_8U);
   std::vector<ld::KeyLine> keylines(segments.size());
   const float max_side = static_cast<float>(std::max(image.cols, image.rows));
@@ -40,8 +41,6 @@ cv::Mat ComputeLbd(const cv::Mat& image, const Segments& segments) {
   return descriptors;
 }
 
-namespace {
-
 // FastLineDetector settings: OpenCV's defaults (segments from 10 px, 1.414 px off the fit line,
 // Canny 50 / 50 with a 3 x 3 Sobel) without its merging step, which compares every pair of
 // segments (0.7 s against 40 ms without it on a textured simulated 752 x 480 frame, loaded
@@ -63,6 +62,13 @@ void DetectSegments(const cv::Mat& image, LineDetector detector, std::vector<cv:
 
 }  // namespace
 
+cv::Mat ComputeLineDescriptors(const cv::Mat& image, const Segments& segments,
+                               LineDescriptor descriptor, const LbdOptions& lbd) {
+  Require(!image.empty() && image.type() == CV_8UC1, "LBD needs a non-empty 8-bit gray image");
+  if (descriptor == LineDescriptor::kLbd) return ComputeBandDescriptors(image, segments, lbd);
+  return ComputeOpenCvLbd(image, segments);
+}
+
 LineDetector ParseLineDetector(const std::string& name) {
   if (name == "lsd") return LineDetector::kLsd;
   if (name == "fld") return LineDetector::kFld;
@@ -76,6 +82,7 @@ std::string LineDetectorName(LineDetector detector) {
 
 void LineExtractorOptions::Check() const {
   preprocess.Check();
+  lbd.Check();
   CheckAboveInRange("lines.detection_scale", detection_scale, 0.0f, 1.0f);
   SLSLAM_CHECK(max_lines >= 0, "lines.max_lines must be >= 0 (0: all), got ", max_lines);
 }
@@ -125,7 +132,19 @@ LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& opti
     if (c.Length() > 1.0f) inside.push_back(c);
   }
   out.segments = std::move(inside);
-  out.descriptors = ComputeLbd(image, out.segments);
+  if (options.descriptor == LineDescriptor::kLbd) {
+    Segments on_detection_image;
+    on_detection_image.reserve(out.segments.size());
+    const auto small = [&](const Eigen::Vector2f& p) {
+      return Eigen::Vector2f((p.x() + 0.5f) / sx - 0.5f, (p.y() + 0.5f) / sy - 0.5f);
+    };
+    for (const LineSegment& s : out.segments) {
+      on_detection_image.push_back({small(s.start), small(s.end)});
+    }
+    out.descriptors = ComputeBandDescriptors(detect_on, on_detection_image, options.lbd);
+  } else {
+    out.descriptors = ComputeLineDescriptors(image, out.segments, options.descriptor);
+  }
   return out;
 }
 

@@ -1,11 +1,12 @@
-// Line features: OpenCV's LSD segments, preprocessing (SPEC A3) and LBD descriptors (OpenCV
-// contrib line_descriptor).
+// Line features: OpenCV's LSD segments, preprocessing (SPEC A3) and LBD descriptors (ours,
+// features/lbd.h, or OpenCV contrib line_descriptor's).
 #pragma once
 
 #include <string>
 
 #include <opencv2/core.hpp>
 
+#include "slslam/features/lbd.h"
 #include "slslam/features/line_preprocess.h"
 #include "slslam/features/line_segment.h"
 
@@ -13,7 +14,7 @@ namespace slslam {
 
 struct LineFeatures {
   Segments segments;    ///< preprocessed segments, longest first
-  cv::Mat descriptors;  ///< LBD, one 32-byte row (CV_8U) per segment
+  cv::Mat descriptors;  ///< LBD (options.descriptor), one 32-byte row (CV_8U) per segment
   int raw_count = 0;    ///< LSD segments before preprocessing
 };
 
@@ -37,9 +38,15 @@ struct LineExtractorOptions {
   /// benchmarks/tracking_recovery.py (benchmarks/README.md) [-], (0, 1]
   float detection_scale = 0.5f;
   LineDetector detector = LineDetector::kLsd;
-  /// Keep at most this many segments after preprocessing, the longest (0: all). LBD costs about
-  /// 60 us per segment (a 752 x 480 mine frame gives 250 after preprocessing) [-], >= 0
+  /// Keep at most this many segments after preprocessing, the longest (0: all). OpenCV's LBD
+  /// costs about 60 us per segment (a 752 x 480 mine frame gives 250 after preprocessing) [-],
+  /// >= 0
   int max_lines = 150;
+  /// Descriptor of the segments: OpenCV's BinaryDescriptor at full resolution, or our LBD
+  /// (features/lbd.h) on the image LSD ran on (the detection scale): about 7x cheaper, but it
+  /// tracked less accurately on the simulated sequences so far (benchmarks/README.md).
+  LineDescriptor descriptor = LineDescriptor::kOpenCvLbd;
+  LbdOptions lbd;  ///< our LBD's settings (in pixels of the detection image)
 
   void Check() const;
 };
@@ -48,7 +55,9 @@ struct LineExtractorOptions {
 // descriptors. A textureless image yields no segments, not an error.
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options = {});
 
-// LBD descriptors (32 bytes each) of given segments on an image.
-cv::Mat ComputeLbd(const cv::Mat& image, const Segments& segments);
+// Descriptors (32 bytes each) of given segments on an image: ours (ComputeBandDescriptors) or
+// OpenCV's BinaryDescriptor.
+cv::Mat ComputeLineDescriptors(const cv::Mat& image, const Segments& segments,
+                               LineDescriptor descriptor, const LbdOptions& lbd = {});
 
 }  // namespace slslam

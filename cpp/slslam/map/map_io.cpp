@@ -97,6 +97,7 @@ void WriteFront(const MapFileHeader& h, const MapIds& ids, ByteWriter* out) {
   out->I32(h.descriptor_type);
   out->I32(h.descriptor_cols);
   out->String(h.vocabulary);
+  out->String(h.line_descriptor);
   const PinholeCamera& camera = h.rig.camera;
   out->F64(camera.fx);
   out->F64(camera.fy);
@@ -111,13 +112,17 @@ void WriteFront(const MapFileHeader& h, const MapIds& ids, ByteWriter* out) {
 }
 
 // Header, counters and table; checks the header and that the sections fill the payload.
-Front ReadFront(ByteReader* in, const Where& where) {
+Front ReadFront(ByteReader* in, uint32_t version, const Where& where) {
   Front f;
   MapFileHeader& h = f.header;
   h.slslam_version = in->String(map_io_detail::kMaxVersionBytes, "version string");
   h.descriptor_type = in->I32("header");
   h.descriptor_cols = in->I32("header");
   h.vocabulary = in->String(map_io_detail::kMaxVocabularyBytes, "vocabulary name");
+  // Version 1 predates our LBD: its lines carry OpenCV's.
+  h.line_descriptor = version >= 2
+                          ? in->String(map_io_detail::kMaxVersionBytes, "line descriptor name")
+                          : std::string("opencv_lbd");
   PinholeCamera& camera = h.rig.camera;
   camera.fx = in->F64("camera");
   camera.fy = in->F64("camera");
@@ -315,7 +320,7 @@ LoadedMaps LoadMaps(const std::string& path, std::shared_ptr<MapIds> ids) {
   uint32_t version = 0;
   const std::vector<uint8_t> data = ReadCheckedFile(path, &version);
   ByteReader in(data.data() + kPreambleBytes, data.size() - kPreambleBytes, path);
-  Front front = ReadFront(&in, where);
+  Front front = ReadFront(&in, version, where);
   std::vector<MapContent> contents;
   contents.reserve(front.table.size());
   for (size_t m = 0; m < front.table.size(); ++m) {
@@ -349,7 +354,7 @@ MapFileSummary ReadMapFileSummary(const std::string& path) {
   MapFileSummary summary;
   const std::vector<uint8_t> data = ReadCheckedFile(path, &summary.format_version);
   ByteReader in(data.data() + kPreambleBytes, data.size() - kPreambleBytes, path);
-  Front front = ReadFront(&in, Where(path, /*saving=*/false));
+  Front front = ReadFront(&in, summary.format_version, Where(path, /*saving=*/false));
   summary.header = front.header;
   summary.next_ids = front.ids;
   for (const TableEntry& e : front.table) {

@@ -2,7 +2,8 @@
 // keyframe (with the stereo frame it was made from), culled-keyframe record, map point and map
 // line, with their ids, so a map kept from one shift can be tracked in on the next (issue 14).
 //
-// File layout (format version 1). Integers are little-endian two's complement, floats IEEE-754
+// File layout (format version 2; version 1 lacks line_descriptor, its lines carry OpenCV's LBD).
+// Integers are little-endian two's complement, floats IEEE-754
 // little-endian; "str" is a u32 byte count and the bytes; "[T]" is a u32 count and that many T;
 // ids and counts are i32/u32 and every id fits an int.
 //
@@ -14,8 +15,9 @@
 //   28      ...   payload:
 //     header    str slslam_version (<= 256 bytes); i32 descriptor_type (OpenCV type of the
 //               keypoint descriptors: 0 CV_8U binary, 5 CV_32F float, -1 none); i32
-//               descriptor_cols; str vocabulary (<= 4096 bytes); f64 fx, fy, cx, cy [px]; i32
-//               width, height [px]; f64 baseline_m [m]
+//               descriptor_cols; str vocabulary (<= 4096 bytes); str line_descriptor ("lbd" or
+//               "opencv_lbd", <= 256 bytes); f64 fx, fy, cx, cy [px]; i32 width, height [px];
+//               f64 baseline_m [m]
 //     ids       i32 next_keyframe, next_point, next_line: the id counters the maps share
 //     table     u32 map count M; M x (u32 keyframes, retired, points, lines; u64 section bytes)
 //     M map sections, each exactly its table's byte count, entries in ascending id:
@@ -57,7 +59,7 @@
 
 namespace slslam {
 
-constexpr uint32_t kMapFileFormatVersion = 1;
+constexpr uint32_t kMapFileFormatVersion = 2;
 
 // What the maps were made with: a tracker refuses a map made with another front end or rig.
 struct MapFileHeader {
@@ -65,6 +67,9 @@ struct MapFileHeader {
   int descriptor_type = -1;    ///< keypoint descriptors: CV_8U (binary) or CV_32F; -1: none
   int descriptor_cols = 0;     ///< bytes (binary) or floats per descriptor
   std::string vocabulary;      ///< name or checksum of the bag-of-words vocabulary; empty: none
+  /// Descriptor of the keyframes' line segments and the map lines: "lbd" or "opencv_lbd"
+  /// (features/lbd.h); files of format version 1 read as "opencv_lbd".
+  std::string line_descriptor = "opencv_lbd";
   StereoRig rig;               ///< the rectified stereo rig of the frames
 };
 

@@ -24,6 +24,7 @@
 #include "slslam/core/rigid3.h"
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/features/dynamic_cell_filter.h"
+#include "slslam/features/lbd.h"
 #include "slslam/map/map.h"
 #include "slslam/mapping/atlas.h"
 #include "slslam/mapping/local_mapper.h"
@@ -88,6 +89,9 @@ struct TrackerOptions {
   float line_search_px = 20.0f;        ///< frame segment midpoint to predicted line [px]
   float line_max_angle_rad = 0.2f;     ///< [rad]
   float line_max_lbd = 80.0f;          ///< [bits]
+  /// The kind of line descriptors the frames carry (the line front end's, LineExtractorOptions::
+  /// descriptor): written into map files, and a map file of another kind is refused.
+  LineDescriptor line_descriptor = LineDescriptor::kOpenCvLbd;
   int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
   int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
   /// ... nor sooner than this after it, while tracking is strong: a gap in time, the same at any

@@ -91,5 +91,26 @@ TEST(LineExtractor, FastLineDetectorFindsTheLinesLsdFinds) {
   EXPECT_THROW(ParseLineDetector("hough"), std::invalid_argument);
 }
 
+TEST(LineExtractor, OurLbdDescribesEverySegmentOnTheDetectionImage) {
+  const cv::Mat image = Rectangles();
+  LineExtractorOptions opencv, ours;
+  ours.descriptor = LineDescriptor::kLbd;
+  const LineFeatures a = ExtractLines(image, opencv), b = ExtractLines(image, ours);
+  ASSERT_GE(b.segments.size(), 6u);
+  ASSERT_EQ(a.segments.size(), b.segments.size());  // the descriptor changes no segment
+  ASSERT_EQ(b.descriptors.rows, static_cast<int>(b.segments.size()));
+  ASSERT_EQ(b.descriptors.type(), CV_8U);
+  // The same as describing the segments, mapped to half size, on the half-size image.
+  cv::Mat half;
+  cv::resize(image, half, cv::Size(376, 240), 0, 0, cv::INTER_AREA);
+  Segments on_half;
+  for (const LineSegment& s : b.segments) {
+    on_half.push_back(
+        {(s.start.array() + 0.5f) * 0.5f - 0.5f, (s.end.array() + 0.5f) * 0.5f - 0.5f});
+  }
+  EXPECT_EQ(cv::norm(b.descriptors, ComputeBandDescriptors(half, on_half), cv::NORM_HAMMING), 0.0);
+  EXPECT_GT(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0.0);  // another descriptor
+}
+
 }  // namespace
 }  // namespace slslam

@@ -293,8 +293,8 @@ void PutF64(std::vector<uint8_t>* bytes, size_t offset, double v) {
 // map_io.h.
 size_t MapCountOffset() {
   const MapFileHeader h = Header();
-  return kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 + h.vocabulary.size() + 4 * 8 +
-         2 * 4 + 8 + 3 * 4;
+  return kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 + h.vocabulary.size() + 4 +
+         h.line_descriptor.size() + 4 * 8 + 2 * 4 + 8 + 3 * 4;
 }
 size_t FirstSectionOffset(int maps) { return MapCountOffset() + 4 + maps * 24; }
 
@@ -305,6 +305,7 @@ TEST_F(MapIo, RoundTripGivesIdenticalMaps) {
   EXPECT_EQ(loaded.header.descriptor_type, CV_8U);
   EXPECT_EQ(loaded.header.descriptor_cols, 32);
   EXPECT_EQ(loaded.header.vocabulary, "orb_vocabulary.slvoc");
+  EXPECT_EQ(loaded.header.line_descriptor, "opencv_lbd");
   EXPECT_EQ(loaded.header.rig.camera.fx, 458.0);
   EXPECT_EQ(loaded.header.rig.camera.fy, 457.5);
   EXPECT_EQ(loaded.header.rig.camera.cx, 367.2);
@@ -433,6 +434,43 @@ TEST_F(MapIo, NewerAndZeroVersionsAreRefused) {
   ExpectRefused(Write(bytes, "newer.slmap"), "is newer than this slslam reads");
   PutU32(&bytes, 8, 0);
   ExpectRefused(Write(bytes, "zero.slmap"), "format version 0");
+}
+
+TEST_F(MapIo, VersionOneFilesReadAsOpenCvLineDescriptors) {
+  // A version-2 file less its line descriptor name is the version-1 layout of the same maps;
+  // version 1 predates the name, and its lines carry OpenCV's LBD whatever the name said.
+  SaveAtlas();
+  MapFileHeader h = Header();
+  h.line_descriptor = "lbd";
+  SaveMaps(path_, {first_.get(), second_.get()}, h);
+  std::vector<uint8_t> bytes = ReadBytes(path_);
+  EXPECT_EQ(LoadMaps(path_).header.line_descriptor, "lbd");
+  const size_t name = kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 +
+                      h.vocabulary.size();
+  ASSERT_EQ(std::string(bytes.begin() + name + 4, bytes.begin() + name + 4 + 3), "lbd");
+  bytes.erase(bytes.begin() + name, bytes.begin() + name + 4 + 3);
+  PutU32(&bytes, 8, 1);
+  const uint64_t payload = bytes.size() - kPreambleBytes;
+  for (int i = 0; i < 8; ++i) bytes[12 + i] = static_cast<uint8_t>(payload >> (8 * i));
+  Rechecksum(&bytes);
+  const LoadedMaps loaded = LoadMaps(Write(bytes, "v1.slmap"));
+  EXPECT_EQ(loaded.header.line_descriptor, "opencv_lbd");
+  ASSERT_EQ(loaded.maps.size(), 2u);
+  ExpectSameMap(*first_, *loaded.maps[0]);
+  EXPECT_EQ(ReadMapFileSummary(Write(bytes, "v1.slmap")).format_version, 1u);
+}
+
+TEST_F(MapIo, UnknownLineDescriptorIsRefused) {
+  SaveAtlas();
+  MapFileHeader h = Header();
+  h.line_descriptor = "sift";
+  try {
+    SaveMaps(path_, {first_.get()}, h);
+    ADD_FAILURE() << "saved a map with line descriptor 'sift'";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("line descriptor 'sift'"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(MapIo, TruncatedFilesAreRefusedAtEveryLength) {
