@@ -180,8 +180,10 @@ double EstimateNoiseSigma(const cv::Mat& image) {
   Require(!image.empty() && image.type() == CV_8UC1, "noise estimation needs an 8-bit gray image");
   if (image.rows < 3 || image.cols < 3) return 0.0;
   const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  // 16-bit output: |response| <= 16 * 255 fits, the sum below is the same integer as with float
+  // output, and filtering is about 1.7x faster.
   cv::Mat response;
-  cv::filter2D(image, response, CV_32F, mask, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT_101);
+  cv::filter2D(image, response, CV_16S, mask, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT_101);
   const cv::Mat inner = response(cv::Rect(1, 1, image.cols - 2, image.rows - 2));
   const double sum_abs = cv::norm(inner, cv::NORM_L1);
   return std::sqrt(CV_PI / 2.0) * sum_abs / (6.0 * inner.total());
@@ -191,9 +193,22 @@ std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
                                            const std::vector<cv::Point2f>& points, int radius_px) {
   Require(!image.empty() && image.type() == CV_8UC1, "angles need an 8-bit gray image");
   Require(radius_px >= 1, "angle radius must be >= 1");
+  // The reflected copy only when a disc reaches past the edge (the extractor's keypoints never
+  // do: they keep edge_threshold >= radius from it).
+  const int pad = radius_px + 1;
+  bool inside = true;
+  for (const cv::Point2f& p : points) {
+    const long u = std::lround(p.x), v = std::lround(p.y);
+    inside = inside && u >= pad && v >= pad && u < image.cols - pad && v < image.rows - pad;
+  }
   cv::Mat padded;
-  cv::copyMakeBorder(image, padded, radius_px + 1, radius_px + 1, radius_px + 1, radius_px + 1,
-                     cv::BORDER_REFLECT_101);
+  int offset = 0;  // padded pixel of image pixel (0, 0)
+  if (inside) {
+    padded = image;
+  } else {
+    cv::copyMakeBorder(image, padded, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
+    offset = pad;
+  }
   // Half-widths of the disc per row offset.
   std::vector<int> half_width(radius_px + 1);
   for (int v = 0; v <= radius_px; ++v) {
@@ -201,8 +216,8 @@ std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
   }
   std::vector<float> angles(points.size(), 0.0f);
   for (size_t k = 0; k < points.size(); ++k) {
-    const int u0 = static_cast<int>(std::lround(points[k].x)) + radius_px + 1;
-    const int v0 = static_cast<int>(std::lround(points[k].y)) + radius_px + 1;
+    const int u0 = static_cast<int>(std::lround(points[k].x)) + offset;
+    const int v0 = static_cast<int>(std::lround(points[k].y)) + offset;
     if (u0 < radius_px || v0 < radius_px || u0 >= padded.cols - radius_px ||
         v0 >= padded.rows - radius_px) {
       continue;
