@@ -1,10 +1,10 @@
 """Line descriptors side by side: OpenCV's BinaryDescriptor (opencv_lbd) and ours (lbd).
 
-    python benchmarks/line_descriptors.py [--seed 11] [--frames 300] [--out FILE]
+    python benchmarks/line_descriptors.py [--seed 11] [--frames 300] [--gap 3] [--out FILE]
 
 Both describe the same segments: the tracker's line front end (LSD on the half-size image, the
 150 longest after preprocessing), on simulated frames (the loop at light 1.0, the loop at 0.15
-with dust, the junction at 0.15 with dust) every 30 frames, each against the frame 3 later. A
+with dust, the junction at 0.15 with dust) every 30 frames, each against the frame --gap later. A
 pair of segments (a, b) is a true match when a's endpoints, moved into the later frame through
 the simulator's depth and poses, lie within 3 px of b's line and overlap it (line_frontend.py's
 test). Per descriptor:
@@ -53,13 +53,13 @@ def _angles(s: np.ndarray) -> np.ndarray:
     return np.arctan2(s[:, 3] - s[:, 1], s[:, 2] - s[:, 0])
 
 
-def pairs_of(seed: int, frames: int) -> list:
+def pairs_of(seed: int, frames: int, gap: int) -> list:
     out = []
     for preset, light, dust in SCENES:
         sim = Simulator(SimOptions(preset=preset, frames=frames, light=light, seed=seed, dust=dust))
         cam = sim.camera
-        for a in range(35, frames - 5, 30):
-            b = a + 3
+        for a in range(35, frames - gap, 30):
+            b = a + gap
             img_a, _, depth_a = sim.render_stereo(a)
             img_b, _, _ = sim.render_stereo(b)
             T_w_a, T_w_b = (
@@ -122,9 +122,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=11)
     parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--gap", type=int, default=3, help="frames between the two of a pair")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
-    pairs = pairs_of(args.seed, args.frames)
+    if args.gap < 1:
+        parser.error("--gap must be >= 1")
+    pairs = pairs_of(args.seed, args.frames, args.gap)
     results = {d: evaluate(d, pairs) for d in DESCRIPTORS}
     scenes = ", ".join(results["lbd"]["local_choice"])
     print(
@@ -140,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
             f"| {r['true_at_false_4.5pct']:.3f} ({r['distance_at_false_4.5pct']:.0f}) "
             f"| {r['line_frontend_ms_median']:.1f} |"
         )
-    print(f"wrote {write_results('line_descriptors', {'seed': args.seed, **results}, args.out)}")
+    saved = {"seed": args.seed, "gap": args.gap, **results}
+    print(f"wrote {write_results('line_descriptors', saved, args.out)}")
     return 0
 
 
