@@ -28,7 +28,8 @@ constexpr float kClip = 0.4f;
 //   and the across means against the along ones;
 // * 4 zero bits (32 bytes in all).
 // This set found 95.6 % of the true matches at the distance where 4.5 % of the false ones pass,
-// the first version (all 8 components of 32 band pairs) 90.5 % (benchmarks/README.md).
+// the first version (all 8 components of 32 band pairs) 90.5 %, on the frames it was chosen on
+// (seed 5); on held-out frames 96.3 %, OpenCV's descriptor 91.0 % (line_descriptors.py).
 constexpr int kBandPairs = kBands * (kBands - 1) / 2;  // 36
 constexpr std::array<int, 4> kAcross = {0, 1, 4, 5};  // component indices, see Component()
 constexpr std::array<std::array<int, 2>, 12> kWithin = {{{0, 1},
