@@ -104,25 +104,6 @@ void BindLines(py::module_& m) {
       .def("check", &LineExtractorOptions::Check);
 
   m.def(
-      "line_band_descriptors",
-      [](const py::array& image, const SegmentArray& segments, const LbdOptions& options,
-         bool binary) {
-        const cv::Mat img = WrapGray(image, "image");
-        const Segments s = ToSegments(segments);
-        cv::Mat d;
-        {
-          py::gil_scoped_release release;
-          d = binary ? ComputeBandDescriptors(img, s, options)
-                     : ComputeBandDescriptorsFloat(img, s, options);
-        }
-        return ToNumpy(d);
-      },
-      py::arg("image"), py::arg("segments"), py::arg("options") = LbdOptions{},
-      py::arg("binary") = true,
-      "Our LBD (features/lbd.h) of segments (float32 (N, 4) as u0 v0 u1 v1) on an image, in "
-      "the image's pixels: uint8 (N, 32), or with binary=False the 72 normalised floats "
-      "(float32 (N, 72)) before binarisation.");
-  m.def(
       "extract_lines",
       [](const py::array& image, const LineExtractorOptions& options) {
         const cv::Mat img = WrapGray(image, "image");

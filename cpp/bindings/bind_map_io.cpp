@@ -34,7 +34,7 @@ void BindMapIo(py::module_& m) {
             py::arg("slslam_version") = h.slslam_version,
             py::arg("descriptor_type") = descriptor_type,
             py::arg("descriptor_cols") = h.descriptor_cols, py::arg("vocabulary") = h.vocabulary,
-            py::arg("line_descriptor") = h.line_descriptor,
+            py::arg("line_descriptor") = LineDescriptorName(h.line_descriptor),
             py::arg("camera") =
                 py::dict(py::arg("fx") = camera.fx, py::arg("fy") = camera.fy,
                          py::arg("cx") = camera.cx, py::arg("cy") = camera.cy,

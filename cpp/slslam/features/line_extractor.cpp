@@ -132,19 +132,20 @@ LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& opti
     if (c.Length() > 1.0f) inside.push_back(c);
   }
   out.segments = std::move(inside);
-  if (options.descriptor == LineDescriptor::kLbd) {
-    Segments on_detection_image;
-    on_detection_image.reserve(out.segments.size());
+  // Ours on the image LSD ran on (the segments mapped onto it), OpenCV's at full resolution.
+  const bool on_detection_image = options.descriptor == LineDescriptor::kLbd;
+  Segments scaled;
+  if (on_detection_image) {
+    scaled.reserve(out.segments.size());
     const auto small = [&](const Eigen::Vector2f& p) {
       return Eigen::Vector2f((p.x() + 0.5f) / sx - 0.5f, (p.y() + 0.5f) / sy - 0.5f);
     };
-    for (const LineSegment& s : out.segments) {
-      on_detection_image.push_back({small(s.start), small(s.end)});
-    }
-    out.descriptors = ComputeBandDescriptors(detect_on, on_detection_image, options.lbd);
-  } else {
-    out.descriptors = ComputeLineDescriptors(image, out.segments, options.descriptor);
+    for (const LineSegment& s : out.segments) scaled.push_back({small(s.start), small(s.end)});
   }
+  out.descriptors =
+      ComputeLineDescriptors(on_detection_image ? detect_on : image,
+                             on_detection_image ? scaled : out.segments, options.descriptor,
+                             options.lbd);
   return out;
 }
 

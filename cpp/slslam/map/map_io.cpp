@@ -97,7 +97,7 @@ void WriteFront(const MapFileHeader& h, const MapIds& ids, ByteWriter* out) {
   out->I32(h.descriptor_type);
   out->I32(h.descriptor_cols);
   out->String(h.vocabulary);
-  out->String(h.line_descriptor);
+  out->String(LineDescriptorName(h.line_descriptor));
   const PinholeCamera& camera = h.rig.camera;
   out->F64(camera.fx);
   out->F64(camera.fy);
@@ -120,9 +120,16 @@ Front ReadFront(ByteReader* in, uint32_t version, const Where& where) {
   h.descriptor_cols = in->I32("header");
   h.vocabulary = in->String(map_io_detail::kMaxVocabularyBytes, "vocabulary name");
   // Version 1 predates our LBD: its lines carry OpenCV's.
-  h.line_descriptor = version >= 2
-                          ? in->String(map_io_detail::kMaxVersionBytes, "line descriptor name")
-                          : std::string("opencv_lbd");
+  if (version >= 2) {
+    const std::string name = in->String(map_io_detail::kMaxVersionBytes, "line descriptor name");
+    try {
+      h.line_descriptor = ParseLineDescriptor(name);
+    } catch (const std::invalid_argument&) {
+      where.Fail("line descriptor '", name, "' (lbd or opencv_lbd)");
+    }
+  } else {
+    h.line_descriptor = LineDescriptor::kOpenCvLbd;
+  }
   PinholeCamera& camera = h.rig.camera;
   camera.fx = in->F64("camera");
   camera.fy = in->F64("camera");

@@ -54,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "slslam/features/lbd.h"
 #include "slslam/geometry/reprojection.h"
 #include "slslam/map/map.h"
 
@@ -67,9 +68,9 @@ struct MapFileHeader {
   int descriptor_type = -1;    ///< keypoint descriptors: CV_8U (binary) or CV_32F; -1: none
   int descriptor_cols = 0;     ///< bytes (binary) or floats per descriptor
   std::string vocabulary;      ///< name or checksum of the bag-of-words vocabulary; empty: none
-  /// Descriptor of the keyframes' line segments and the map lines: "lbd" or "opencv_lbd"
-  /// (features/lbd.h); files of format version 1 read as "opencv_lbd".
-  std::string line_descriptor = "opencv_lbd";
+  /// Descriptor of the keyframes' line segments and the map lines (features/lbd.h); files of
+  /// format version 1 read as OpenCV's.
+  LineDescriptor line_descriptor = LineDescriptor::kOpenCvLbd;
   StereoRig rig;               ///< the rectified stereo rig of the frames
 };
 

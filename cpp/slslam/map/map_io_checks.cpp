@@ -219,9 +219,6 @@ void CheckHeader(const MapFileHeader& header, const Where& where) {
     where.Fail("descriptor width ", header.descriptor_cols, " is outside [1, ", kMaxDescriptorCols,
                "]");
   }
-  if (header.line_descriptor != "lbd" && header.line_descriptor != "opencv_lbd") {
-    where.Fail("line descriptor '", header.line_descriptor, "' (lbd or opencv_lbd)");
-  }
   if (header.slslam_version.size() > kMaxVersionBytes ||
       header.vocabulary.size() > kMaxVocabularyBytes) {
     where.Fail("version string or vocabulary name too long (", kMaxVersionBytes, " / ",

@@ -18,7 +18,7 @@ void Tracker::SaveMap(const std::string& path, const std::string& version) {
   header.rig = options_.rig;
   // The file name, not the path: the same vocabulary sits elsewhere on another machine.
   header.vocabulary = std::filesystem::path(options_.vocabulary_path).filename().string();
-  header.line_descriptor = LineDescriptorName(options_.line_descriptor);
+  header.line_descriptor = options_.line_descriptor;
   std::vector<const Map*> maps;
   std::vector<std::unique_lock<Mutex>> locks;
   for (int m = 0; m < atlas_.size(); ++m) {
@@ -62,8 +62,8 @@ void Tracker::LoadMap(const std::string& path) {
                a.fx, ", baseline ", loaded.header.rig.baseline_m, " m; this run: ", b.width, "x",
                b.height, ", fx ", b.fx, ", baseline ", options_.rig.baseline_m, " m)");
   SLSLAM_CHECK(!loaded.maps.empty(), path, ": the file holds no map");
-  SLSLAM_CHECK(loaded.header.line_descriptor == LineDescriptorName(options_.line_descriptor), path,
-               ": the map's lines carry ", loaded.header.line_descriptor,
+  SLSLAM_CHECK(loaded.header.line_descriptor == options_.line_descriptor, path,
+               ": the map's lines carry ", LineDescriptorName(loaded.header.line_descriptor),
                " descriptors and this run computes ", LineDescriptorName(options_.line_descriptor),
                " (tracking.line_descriptor); their bits do not compare");
   for (auto& map : loaded.maps) {
