@@ -66,6 +66,30 @@ def transfer_pixels(
     return uv_b, z, q[:, 2]
 
 
+def sim_cam_b_from_cam_a(sim, a: int, b: int) -> np.ndarray:
+    """T_b_a (4 x 4): the rectified left camera of simulated frame a seen from frame b's."""
+    T_w_a, T_w_b = (
+        sim.trajectory.pose(np.array([f / sim.options.rate_hz]))[0] @ sim.camera.T_body_cam0
+        for f in (a, b)
+    )
+    return np.linalg.inv(T_w_b) @ T_w_a
+
+
+def segment_match_correct(a_in_b: np.ndarray, b: np.ndarray, eps_px: float) -> bool:
+    """A line match is right when segment a, moved into B (u0 v0 u1 v1), lies within eps_px of
+    b's line on average over its endpoints and overlaps b along it."""
+    if not np.all(np.isfinite(a_in_b)):
+        return False
+    p0, p1 = b[:2], b[2:]
+    d = (p1 - p0) / max(np.linalg.norm(p1 - p0), 1e-9)
+    n = np.array([-d[1], d[0]])
+    a0, a1 = a_in_b[:2], a_in_b[2:]
+    distance = 0.5 * (abs(n @ (a0 - p0)) + abs(n @ (a1 - p0)))
+    t = sorted([(a0 - p0) @ d, (a1 - p0) @ d])
+    overlap = min(t[1], np.linalg.norm(p1 - p0)) - max(t[0], 0.0)
+    return distance < eps_px and overlap > 0
+
+
 def parse_overrides(items: list[str]) -> dict:
     """``a.b.c=value`` pairs as a nested dict (values parsed as YAML scalars)."""
     import yaml

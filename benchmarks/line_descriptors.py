@@ -31,22 +31,11 @@ import numpy as np
 from slslam import _core
 from slslam.sim import SimOptions, Simulator
 
-from common import transfer_pixels, write_results
+from common import segment_match_correct, sim_cam_b_from_cam_a, transfer_pixels, write_results
 
 EPS_PX = 3.0
 SCENES = (("loop", 1.0, False), ("loop", 0.15, True), ("junction", 0.15, True))
 DESCRIPTORS = ("opencv_lbd", "lbd")
-
-
-def _correct(a_in_b: np.ndarray, b: np.ndarray) -> bool:
-    if not np.all(np.isfinite(a_in_b)):
-        return False
-    p0, p1 = b[:2], b[2:]
-    d = (p1 - p0) / max(np.linalg.norm(p1 - p0), 1e-9)
-    n = np.array([-d[1], d[0]])
-    distance = 0.5 * (abs(n @ (a_in_b[:2] - p0)) + abs(n @ (a_in_b[2:] - p0)))
-    t = sorted([(a_in_b[:2] - p0) @ d, (a_in_b[2:] - p0) @ d])
-    return distance < EPS_PX and min(t[1], np.linalg.norm(p1 - p0)) - max(t[0], 0.0) > 0
 
 
 def _angles(s: np.ndarray) -> np.ndarray:
@@ -62,11 +51,7 @@ def pairs_of(seed: int, frames: int, gap: int) -> list:
             b = a + gap
             img_a, _, depth_a = sim.render_stereo(a)
             img_b, _, _ = sim.render_stereo(b)
-            T_w_a, T_w_b = (
-                sim.trajectory.pose(np.array([f / sim.options.rate_hz]))[0] @ cam.T_body_cam0
-                for f in (a, b)
-            )
-            T_b_a = np.linalg.inv(T_w_b) @ T_w_a
+            T_b_a = sim_cam_b_from_cam_a(sim, a, b)
 
             def transfer(uv, depth_a=depth_a, T_b_a=T_b_a, cam=cam):
                 return transfer_pixels(uv, depth_a, T_b_a, cam)[0]
@@ -92,7 +77,10 @@ def evaluate(descriptor: str, pairs: list) -> dict:
         for i in range(len(seg_a)):
             if not np.all(np.isfinite(moved[i])):
                 continue
-            ok = np.array([_correct(moved[i], seg_b[j]) for j in range(len(seg_b))], dtype=bool)
+            ok = np.array(
+                [segment_match_correct(moved[i], seg_b[j], EPS_PX) for j in range(len(seg_b))],
+                dtype=bool,
+            )
             true_d += dist[i, ok].tolist()
             false_d += dist[i, ~ok].tolist()
             mid = 0.5 * (moved[i, :2] + moved[i, 2:])

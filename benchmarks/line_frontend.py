@@ -28,7 +28,13 @@ from slslam.datasets import EurocSequence
 from slslam.features.orb import Orb
 from slslam.sim import SimOptions, Simulator
 
-from common import SHARED_DATA, transfer_pixels, write_results
+from common import (
+    SHARED_DATA,
+    segment_match_correct,
+    sim_cam_b_from_cam_a,
+    transfer_pixels,
+    write_results,
+)
 
 EPS_PX = 3.0
 
@@ -43,25 +49,17 @@ def _timed(fn, repeats: int = 5):
     return out, float(np.median(samples))
 
 
-def _line_correct(seg_a_in_b: np.ndarray, seg_b: np.ndarray) -> bool:
-    if not np.all(np.isfinite(seg_a_in_b)):
-        return False
-    p0, p1 = seg_b[:2], seg_b[2:]
-    d = (p1 - p0) / max(np.linalg.norm(p1 - p0), 1e-9)
-    n = np.array([-d[1], d[0]])
-    a0, a1 = seg_a_in_b[:2], seg_a_in_b[2:]
-    distance = 0.5 * (abs(n @ (a0 - p0)) + abs(n @ (a1 - p0)))
-    ta = sorted([(a0 - p0) @ d, (a1 - p0) @ d])
-    overlap = min(ta[1], np.linalg.norm(p1 - p0)) - max(ta[0], 0.0)
-    return distance < EPS_PX and overlap > 0
-
-
 def _precision(pairs: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray, transfer) -> float:
     if len(pairs) == 0:
         return float("nan")
     moved = transfer(seg_a[pairs[:, 0]].reshape(-1, 2)).reshape(-1, 4)
     return float(
-        np.mean([_line_correct(m, seg_b[j]) for m, j in zip(moved, pairs[:, 1], strict=True)])
+        np.mean(
+            [
+                segment_match_correct(m, seg_b[j], EPS_PX)
+                for m, j in zip(moved, pairs[:, 1], strict=True)
+            ]
+        )
     )
 
 
@@ -152,11 +150,7 @@ def simulated(points, figures: Path | None) -> dict:
             b = a + 10
             img_a, _, depth_a = sim.render_stereo(a)
             img_b, _, _ = sim.render_stereo(b)
-            T_w_a, T_w_b = (
-                sim.trajectory.pose(np.array([f / sim.options.rate_hz]))[0] @ cam.T_body_cam0
-                for f in (a, b)
-            )
-            transfer = _depth_transfer(depth_a, np.linalg.inv(T_w_b) @ T_w_a, cam)
+            transfer = _depth_transfer(depth_a, sim_cam_b_from_cam_a(sim, a, b), cam)
             fig = None if figures is None else figures / f"sim_light{light}_{a}_{b}.png"
             rows.append(evaluate_pair(img_a, img_b, transfer, points, fig))
         out[f"sim_light{light}"] = rows

@@ -29,7 +29,13 @@ import numpy as np
 from slslam import _core
 from slslam.sim import SimOptions, Simulator
 
-from common import SHARED_DATA, time_calls, transfer_pixels, write_results
+from common import (
+    SHARED_DATA,
+    sim_cam_b_from_cam_a,
+    time_calls,
+    transfer_pixels,
+    write_results,
+)
 
 EPS_PX = 3.0
 NUM_KEYPOINTS = 1000
@@ -166,11 +172,7 @@ def simulated(front_ends, lights=(1.0, 0.5, 0.15), pairs=((20, 30), (60, 75), (1
         for a, b in pairs:
             img_a, _, depth_a = sim.render_stereo(a)
             img_b, _, depth_b = sim.render_stereo(b)
-            T_w_a, T_w_b = (
-                sim.trajectory.pose(np.array([f / sim.options.rate_hz]))[0] @ cam.T_body_cam0
-                for f in (a, b)
-            )
-            T_b_a = np.linalg.inv(T_w_b) @ T_w_a
+            T_b_a = sim_cam_b_from_cam_a(sim, a, b)
             warp_a = _depth_warp(depth_a, T_b_a, cam, depth_b)
             warp_b = _depth_warp(depth_b, np.linalg.inv(T_b_a), cam, depth_a)
             for fe in front_ends:
