@@ -72,6 +72,20 @@ class TrackerSession {
     return out;
   }
 
+  // IMU samples (N timestamps [s], N x 3 gyro [rad/s], N x 3 specific force [m/s^2]) for the
+  // bridge through visual outages; before the frames they precede.
+  void AddImu(const Eigen::VectorXd& t_s, const Eigen::Matrix<double, Eigen::Dynamic, 3>& gyro,
+              const Eigen::Matrix<double, Eigen::Dynamic, 3>& acc) {
+    SLSLAM_CHECK(gyro.rows() == t_s.size() && acc.rows() == t_s.size(), "IMU samples: ",
+                 t_s.size(), " timestamps, ", gyro.rows(), " gyro rows, ", acc.rows(),
+                 " accelerometer rows");
+    py::gil_scoped_release release;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (Eigen::Index i = 0; i < t_s.size(); ++i) {
+      tracker_.AddImu(t_s[i], gyro.row(i).transpose(), acc.row(i).transpose());
+    }
+  }
+
   py::dict Map() {
     MapExport m;
     LocalMappingStats s;
@@ -104,6 +118,7 @@ class TrackerSession {
     out["points_triangulated"] = s.points_triangulated;
     out["lines_triangulated"] = s.lines_triangulated;
     out["local_mapping_ms"] = s.total_ba_ms;
+    out["inertial_frames"] = t.inertial_frames;
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;
     out["maps_started"] = t.maps_started;
@@ -258,6 +273,26 @@ void BindTracking(py::module_& m) {
       .def_readwrite("vocabulary_levels_up", &RelocalisationOptions::vocabulary_levels_up)
       .def("check", &RelocalisationOptions::Check);
 
+  py::class_<InertialBridgeOptions>(
+      m, "InertialBridgeOptions",
+      "The IMU bridge through short visual outages (gravity, velocity and gyro bias fitted to the "
+      "recent tracked poses).")
+      .def(py::init<>())
+      .def_readwrite("window_s", &InertialBridgeOptions::window_s)
+      .def_readwrite("min_window_s", &InertialBridgeOptions::min_window_s)
+      .def_readwrite("max_gap_s", &InertialBridgeOptions::max_gap_s)
+      .def_readwrite("max_sample_gap_s", &InertialBridgeOptions::max_sample_gap_s)
+      .def_readwrite("gravity_mps2", &InertialBridgeOptions::gravity_mps2)
+      .def_readwrite("gravity_tolerance_mps2", &InertialBridgeOptions::gravity_tolerance_mps2)
+      .def_property(
+          "T_body_cam",
+          [](const InertialBridgeOptions& o) { return o.body_from_cam.ToMatrix4(); },
+          [](InertialBridgeOptions& o, const Eigen::Matrix4d& T) {
+            o.body_from_cam = Rigid3d::FromMatrix4(T);
+          },
+          "4x4 pose of the rectified left camera in the IMU (body) frame.")
+      .def("check", &InertialBridgeOptions::Check);
+
   py::class_<PoseGraphOptions>(m, "PoseGraphOptions", "Essential-graph optimisation.")
       .def(py::init<>())
       .def_readwrite("max_iterations", &PoseGraphOptions::max_iterations)
@@ -327,6 +362,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("localise_only", &TrackerOptions::localise_only)
       .def_readwrite("dynamic_cells", &TrackerOptions::dynamic_cells)
       .def_readwrite("dynamic", &TrackerOptions::dynamic)
+      .def_readwrite("use_imu", &TrackerOptions::use_imu)
+      .def_readwrite("imu", &TrackerOptions::imu)
       .def("check", &TrackerOptions::Check);
 
   py::class_<FrameOutput>(m, "FrameOutput",
@@ -363,6 +400,9 @@ void BindTracking(py::module_& m) {
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
            "Tracks one rectified stereo frame; returns its FrameOutput.")
+      .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
+           "IMU samples (body frame) for the bridge through visual outages, before the frames "
+           "they precede.")
       .def("map", &TrackerSession::Map, "Waits for local mapping, returns points and lines.")
       .def("save_map", &TrackerSession::SaveMap, py::arg("path"), py::arg("version"),
            "Writes every live map (versioned binary, checksummed); waits for mapping.")

@@ -92,6 +92,10 @@ def _dynamic_cells(name: str, interval: str = "") -> Any:
     return _mirrored(_TRACKER, DYNAMIC_CELLS_TO_CORE, name, interval)
 
 
+def _imu(name: str, interval: str = "") -> Any:
+    return _mirrored(_TRACKER, IMU_TO_CORE, name, interval)
+
+
 def _lines(name: str, interval: str = "") -> Any:
     return _mirrored(_LINES, LINES_TO_CORE, name, interval)
 
@@ -155,6 +159,17 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
         "max_correction_ratio",
         "max_correction_floor_m",
         "welding_keyframes",
+    )
+}
+IMU_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("use_imu",)} | {
+    name: (f"imu.{name}",)
+    for name in (
+        "window_s",
+        "min_window_s",
+        "max_gap_s",
+        "max_sample_gap_s",
+        "gravity_mps2",
+        "gravity_tolerance_mps2",
     )
 }
 LINES_TO_CORE: dict[str, tuple[str, ...]] = {
@@ -282,6 +297,29 @@ class LoopClosingConfig:
 
 
 @dataclass(frozen=True)
+class ImuConfig:
+    """The IMU bridge through short visual outages (state INERTIAL); mirrors C++
+    ``InertialBridgeOptions`` (``TrackerOptions.imu``; ``enabled`` is ``use_imu``). Used when the
+    sequence has IMU samples (EuRoC ``imu0/``) or they are given to ``Tracker.add_imu``; the
+    camera's pose in the IMU frame is the calibration's ``T_body_cam``."""
+
+    # bridge frames the camera cannot track with the IMU (gravity, velocity and gyro bias fitted
+    # to the recent tracked poses)
+    enabled: bool = _imu("enabled")
+    window_s: float = _imu("window_s", "[0.1, 1000]")  # tracked poses the fit uses [s]
+    # the fit needs tracked poses spanning at least this [s] (at most window_s)
+    min_window_s: float = _imu("min_window_s", "[0.05, 1000]")
+    # longest time after the last tracked pose that is bridged [s] (dead reckoning's error grows
+    # with its square; 0: never)
+    max_gap_s: float = _imu("max_gap_s", "[0, 100]")
+    # IMU samples further apart than this: no bridge across the hole [s]
+    max_sample_gap_s: float = _imu("max_sample_gap_s", "(0, 10]")
+    gravity_mps2: float = _imu("gravity_mps2", "[1, 100]")  # expected |g| [m/s^2]
+    # a fitted gravity further off than this is a bad fit: no bridge [m/s^2]
+    gravity_tolerance_mps2: float = _imu("gravity_tolerance_mps2", "(0, 100]")
+
+
+@dataclass(frozen=True)
 class TrackingConfig:
     """Tracking and local mapping (SPEC A5-A6); mirrors C++ ``TrackerOptions``."""
 
@@ -361,6 +399,7 @@ class TrackingConfig:
     # made with `slslam vocab train`)
     vocabulary_path: str | None = None
     loop_closing: LoopClosingConfig = field(default_factory=LoopClosingConfig)
+    imu: ImuConfig = field(default_factory=ImuConfig)
 
 
 @dataclass(frozen=True)

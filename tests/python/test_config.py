@@ -133,6 +133,7 @@ def test_every_mirrored_default_equals_the_cpp_default():
     from slslam._cpp_defaults import core_attribute
     from slslam.config import (
         DYNAMIC_CELLS_TO_CORE,
+        IMU_TO_CORE,
         LINES_TO_CORE,
         LOOP_CLOSING_TO_CORE,
         TRACKING_TO_CORE,
@@ -144,6 +145,7 @@ def test_every_mirrored_default_equals_the_cpp_default():
     for section, table in (
         (config.tracking, TRACKING_TO_CORE),
         (config.tracking.loop_closing, LOOP_CLOSING_TO_CORE),
+        (config.tracking.imu, IMU_TO_CORE),
         (config.features.dynamic_cells, DYNAMIC_CELLS_TO_CORE),
     ):
         for name, paths in table.items():
@@ -161,8 +163,8 @@ def test_every_mirrored_default_equals_the_cpp_default():
             else:
                 assert value == pytest.approx(expected, rel=1e-6), (name, path)
             checked += 1
-    assert checked >= 43
-    python_only = {"pipeline", "relocalisation", "vocabulary_path", "loop_closing"}
+    assert checked >= 50
+    python_only = {"pipeline", "relocalisation", "vocabulary_path", "loop_closing", "imu"}
     fields = {f.name for f in dataclasses.fields(config.tracking)}
     assert fields - set(TRACKING_TO_CORE) - set(LINES_TO_CORE) == python_only
 

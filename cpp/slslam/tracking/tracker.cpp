@@ -28,6 +28,8 @@ const char* TrackingStateName(TrackingState state) {
       return "RECENTLY_LOST";
     case TrackingState::kRelocalised:
       return "RELOCALISED";
+    case TrackingState::kInertial:
+      return "INERTIAL";
   }
   return "UNKNOWN";
 }
@@ -106,6 +108,7 @@ void Tracker::FollowCorrections() {
   if (resolved == active_ && map.correction_epoch() == seen_epoch_) return;
   active_ = resolved;
   seen_epoch_ = map.correction_epoch();
+  if (bridge_) bridge_->ResetPoses();  // its poses are in the world before the correction
   // The last pose relative to the reference keyframe, as recorded, on the keyframe's new pose.
   if (records_.empty() || !have_pose_) return;
   const FrameRecord& r = records_.back();
@@ -135,6 +138,22 @@ Tracker::~Tracker() {
 void Tracker::Flush() {
   mapper_->Flush();
   if (loop_closer_) loop_closer_->WaitForGlobalBa();
+}
+
+void Tracker::AddImu(double t_s, const Eigen::Vector3d& gyro_radps,
+                     const Eigen::Vector3d& acc_mps2) {
+  if (!options_.use_imu) return;
+  if (!bridge_) bridge_ = std::make_unique<InertialBridge>(options_.imu);
+  bridge_->AddImu(t_s, gyro_radps, acc_mps2);
+}
+
+void Tracker::BridgePose(const StereoFrame& frame, const Rigid3d& cam_from_world) {
+  if (!bridge_) return;
+  if (bridge_map_ != active_) {  // another map's world: the poses before do not fit
+    bridge_->ResetPoses();
+    bridge_map_ = active_;
+  }
+  bridge_->AddPose(frame.timestamp, cam_from_world);
 }
 
 void Tracker::Predict(Rigid3d* pred_cam_from_world) const {
@@ -320,6 +339,10 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
   anchor_ = Anchor{};
   Rigid3d predicted;  // cam_from_world
   Predict(&predicted);
+  // Recently lost with the IMU: its pose is the better guess (kept when it cannot bridge).
+  if (bridge_ && mode_ == Mode::kRecentlyLost && bridge_map_ == active_) {
+    bridge_->Predict(frame->timestamp, &predicted);
+  }
   if (atlas_.size() == 0) {  // not initialised yet
     const auto start = Clock::now();
     if (options_.localise_only) {
@@ -331,6 +354,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
       mode_ = Mode::kTracking;
       SetPose(predicted, /*update_velocity=*/false);
       RecordFrame(*frame, /*keyframe=*/true);
+      BridgePose(*frame, predicted);
     } else {
       result.state = TrackingState::kNotInitialized;
     }
@@ -439,6 +463,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     result.map_index = active_;
     // After a loss the velocity is unknown: start again from rest.
     SetPose(tracking.pose.cam_from_world, /*update_velocity=*/velocity_known);
+    BridgePose(*frame, tracking.pose.cam_from_world);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     if (options_.localise_only) {
@@ -486,6 +511,20 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     loss_velocity_ = velocity_;
   }
   ++lost_count_;
+  // A short outage with the IMU: the bridged pose is an estimate, and the frame is recorded.
+  // Tracking goes on retrying the local map around it (a wider window, as recently lost).
+  Rigid3d inertial;
+  if (bridge_ && mode_ != Mode::kLost && bridge_map_ == active_ &&
+      bridge_->Predict(frame->timestamp, &inertial)) {
+    mode_ = Mode::kRecentlyLost;
+    ++stats_.inertial_frames;
+    SetPose(inertial, /*update_velocity=*/true);
+    result.state = TrackingState::kInertial;
+    result.cam_from_world = inertial;
+    result.map_index = active_;
+    RecordFrame(*frame, /*keyframe=*/false);
+    return result;
+  }
   if (lost_count_ > options_.recently_lost_frames)
     mode_ = Mode::kLost;
   else
@@ -511,6 +550,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     RecordFrame(*frame, /*keyframe=*/true);
+    BridgePose(*frame, last_cam_from_world_);
   } else {
     result.state = TrackingState::kLost;
   }

@@ -32,12 +32,14 @@
 #include "slslam/optimization/pose_optimizer.h"
 #include "slslam/place/keyframe_database.h"
 #include "slslam/place/vocabulary.h"
+#include "slslam/tracking/inertial_bridge.h"
 #include "slslam/tracking/stereo_matching.h"
 
 namespace slslam {
 
-// OK, NEW_MAP and RELOCALISED frames carry an estimated pose; RECENTLY_LOST frames a prediction
-// (decaying velocity), LOST frames the frozen last prediction.
+// OK, NEW_MAP and RELOCALISED frames carry a pose the camera estimated, INERTIAL frames one the
+// IMU carried on from the last of those (a short visual outage, see inertial_bridge.h);
+// RECENTLY_LOST frames a prediction (decaying velocity), LOST frames the frozen last prediction.
 enum class TrackingState {
   kNotInitialized = 0,
   kOk = 1,
@@ -45,6 +47,7 @@ enum class TrackingState {
   kNewMap = 3,
   kRecentlyLost = 4,
   kRelocalised = 5,
+  kInertial = 6,
 };
 
 // Relocalisation (ORB-SLAM's): keyframe candidates by bag of words, frame keypoints matched to
@@ -65,6 +68,7 @@ struct RelocalisationOptions {
 
 // Counts of the loss / recovery machinery since the tracker started.
 struct TrackingStats {
+  int inertial_frames = 0;  ///< frames the IMU bridged
   int relocalisations = 0;
   int relocalisation_attempts = 0;
   int maps_started = 0;
@@ -129,6 +133,10 @@ struct TrackerOptions {
   /// only after a frame tracked with at least `weak_keyframe_inliers` weighted inliers.
   bool dynamic_cells = true;
   DynamicCellOptions dynamic;
+  /// Bridge visual outages with the IMU (state INERTIAL) once samples are given (Tracker::AddImu);
+  /// without samples the tracker is camera-only whatever this says.
+  bool use_imu = true;
+  InertialBridgeOptions imu;
 
   void Check() const;
 };
@@ -175,6 +183,10 @@ class Tracker {
   Tracker& operator=(const Tracker&) = delete;
 
   TrackResult Track(std::shared_ptr<const StereoFrame> frame);
+  // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
+  // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
+  // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
+  void AddImu(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
   // Waits for local mapping to finish its queue and for a global BA running in the background
   // to be written back (threaded mode).
   void Flush();
@@ -279,6 +291,10 @@ class Tracker {
   std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
   std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
+  std::unique_ptr<InertialBridge> bridge_;  ///< from the first IMU sample on (use_imu)
+  int bridge_map_ = -1;                     ///< the map whose world the bridge's poses are in
+  // Gives the bridge the pose the camera estimated for `frame` (in the active map's world).
+  void BridgePose(const StereoFrame& frame, const Rigid3d& cam_from_world);
   std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
   Rigid3d previous_cam_from_world_;  ///< of previous_frame_
   int active_ = -1;  ///< index of the map being tracked in

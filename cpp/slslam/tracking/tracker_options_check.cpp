@@ -50,6 +50,7 @@ void TrackerOptions::Check() const {
   relocalisation.Check();
   if (dynamic_cells) dynamic.Check();
   loop_closing.Check();
+  if (use_imu) imu.Check();
   CheckInRange("tracking.min_init_points", min_init_points, 3, limits::kMaxKeypoints);
   CheckInRange("tracking.min_inliers", min_inliers, 3, limits::kMaxKeypoints);
   // doubled on a retry and scaled by lost_search_scale: still far inside int

@@ -460,6 +460,7 @@ def run_sequence(
             " + lines" if config.tracking.use_lines else "",
         )
         _dump_effective_config(config, tracker, out / "config.yaml")
+        _give_imu(sequence, config, tracker)
         with (
             (out / "trajectory.tum").open("w", encoding="ascii") as traj_file,
             (out / "lost_predictions.tum").open("w", encoding="ascii") as lost_file,
@@ -570,6 +571,22 @@ def run_sequence(
     return RunSummary(out, metrics, results)
 
 
+def _give_imu(sequence, config: Config, tracker: Tracker) -> None:
+    """The sequence's IMU samples to the tracker's bridge (``tracking.imu``), when it has any."""
+    if not config.tracking.imu.enabled or not callable(getattr(sequence, "imu", None)):
+        return
+    imu_csv = getattr(sequence, "root", Path(".")) / "imu0" / "data.csv"
+    if isinstance(sequence, EurocSequence) and not imu_csv.is_file():
+        log.info("no IMU samples (%s): camera only", imu_csv)
+        return
+    samples = sequence.imu()
+    t = samples["t_ns"].astype(np.float64) * 1e-9
+    tracker.add_imu(t, samples["gyro"], samples["acc"])
+    if len(t) > 1:
+        rate = (len(t) - 1) / (t[-1] - t[0])
+        log.info("IMU: %d samples at %.0f Hz bridge short visual outages", len(t), rate)
+
+
 def _show(viewer, show: Callable, *args):
     """``show(viewer, *args)``; the viewer, or None once it failed (logged once)."""
     if viewer is None:
@@ -613,6 +630,8 @@ def _loss_metrics(results: list[TrackResult]) -> dict:
     return {
         "posed_ratio_after_init": sum(r.state in TRACKED_STATES for r in after) / len(after),
         "relocalisations": sum(r.state == "RELOCALISED" for r in after),
+        # frames the IMU carried through a visual outage (posed, state INERTIAL)
+        "inertial_frames": sum(r.state == "INERTIAL" for r in after),
         "new_maps_after_loss": sum(r.state == "NEW_MAP" for r in after),
         "lost_frames": len(unposed),
         "lost_s": round(lost_s, 6),

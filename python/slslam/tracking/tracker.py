@@ -40,6 +40,7 @@ from slslam._cpp_defaults import core_attribute
 from slslam.config import (
     DYNAMIC_CELLS_TO_CORE,
     LINES_TO_CORE,
+    IMU_TO_CORE,
     LOOP_CLOSING_TO_CORE,
     TRACKING_TO_CORE,
     Config,
@@ -56,8 +57,16 @@ log = logging.getLogger(__name__)
 #: words after a loss), NEW_MAP (a new map started after a loss, anchored at the frozen pose).
 #: No estimate: RECENTLY_LOST (the pose is a prediction with a decaying velocity), LOST (the pose
 #: is frozen at the last prediction), NOT_INITIALIZED (no map yet).
-STATES = ("NOT_INITIALIZED", "OK", "LOST", "NEW_MAP", "RECENTLY_LOST", "RELOCALISED")
-TRACKED_STATES = ("OK", "NEW_MAP", "RELOCALISED")
+STATES = (
+    "NOT_INITIALIZED",
+    "OK",
+    "LOST",
+    "NEW_MAP",
+    "RECENTLY_LOST",
+    "RELOCALISED",
+    "INERTIAL",
+)
+TRACKED_STATES = ("OK", "NEW_MAP", "RELOCALISED", "INERTIAL")
 
 
 class _FieldsAsMapping:
@@ -292,11 +301,14 @@ def _core_options(
     for section, table in (
         (t, TRACKING_TO_CORE),
         (t.loop_closing, LOOP_CLOSING_TO_CORE),
+        (t.imu, IMU_TO_CORE),
         (config.features.dynamic_cells, DYNAMIC_CELLS_TO_CORE),
     ):
         for name, paths in table.items():
             for path in paths:
                 _set_core(options, path, getattr(section, name))
+    # The IMU is the body frame (EuRoC's convention: imu0's T_BS is the identity).
+    options.imu.T_body_cam = np.asarray(camera.T_body_cam, dtype=np.float64)
     if vocabulary is not None:
         options.vocabulary_path = str(vocabulary)
     try:
@@ -391,6 +403,10 @@ class Tracker:
             except (ValueError, RuntimeError) as exc:
                 raise InputError(path, str(exc)) from None
         self._results: list[TrackResult] = []
+        # IMU samples given (add_imu) and not yet handed to the core: each frame's core call
+        # first takes those up to its timestamp (so offline runs may give them all at once).
+        self._imu_pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._imu_last_t: float = -math.inf
         self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
         self._closed = False
         self._to_gray = GrayImageReader()  # 16-bit scale chosen on the first 16-bit frame
@@ -399,6 +415,46 @@ class Tracker:
         self.last_keypoints_uv: np.ndarray | None = None
 
     # -- per frame -----------------------------------------------------------------------------
+    def add_imu(self, t_s: np.ndarray, gyro_radps: np.ndarray, acc_mps2: np.ndarray) -> None:
+        """IMU samples for the bridge through short visual outages (state ``INERTIAL``, see
+        ``tracking.imu`` in configs/default.yaml): ``t_s`` (N,) seconds on the frames' clock,
+        increasing; ``gyro_radps`` and ``acc_mps2`` (N, 3) in the IMU (body) frame, angular rate
+        and specific force. Give them before the frames they precede (online) or all at once
+        before the first frame (offline); each frame uses those up to its timestamp. Bad samples
+        raise ``InputError``; with ``tracking.imu.enabled: false`` they are ignored."""
+        t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+        gyro = np.asarray(gyro_radps, dtype=np.float64)
+        acc = np.asarray(acc_mps2, dtype=np.float64)
+        n = len(t)
+        if gyro.shape != (n, 3) or acc.shape != (n, 3):
+            raise InputError(
+                "IMU samples",
+                f"{n} timestamps need gyro and acc of shape ({n}, 3), got {gyro.shape} and "
+                f"{acc.shape}",
+            )
+        if n == 0:
+            return
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(gyro)) and np.all(np.isfinite(acc))):
+            raise InputError("IMU samples", "a timestamp, rate or specific force is not finite")
+        if np.any(np.diff(t) <= 0) or t[0] <= self._imu_last_t:
+            raise InputError("IMU samples", "timestamps must increase (and follow the last given)")
+        self._imu_last_t = float(t[-1])
+        if self._imu_pending is not None:
+            t0, g0, a0 = self._imu_pending
+            t, gyro, acc = (np.concatenate(p) for p in ((t0, t), (g0, gyro), (a0, acc)))
+        self._imu_pending = (t, gyro, acc)
+
+    def _feed_imu(self, timestamp: float) -> None:
+        """Hands the core the pending IMU samples up to ``timestamp`` (consumer thread)."""
+        if self._imu_pending is None:
+            return
+        t, gyro, acc = self._imu_pending
+        n = int(np.searchsorted(t, timestamp, side="right"))
+        if n == 0:
+            return
+        self._core.add_imu(t[:n], np.ascontiguousarray(gyro[:n]), np.ascontiguousarray(acc[:n]))
+        self._imu_pending = (t[n:], gyro[n:], acc[n:]) if n < len(t) else None
+
     def _detect(self, image: np.ndarray) -> Keypoints:
         if self._weak_threshold is not None:
             keypoints = self.frontend.detect(image, threshold=self._weak_threshold)
@@ -544,6 +600,7 @@ class Tracker:
         index, where = frame.index, f"frame {frame.index}"
         left, right, kl, kr = frame.left, frame.right, frame.left_keypoints, frame.right_keypoints
         timestamp, inference_ms = frame.timestamp, frame.inference_ms
+        self._feed_imu(timestamp)
         start = time.perf_counter()
         out = self._core.track(
             index,

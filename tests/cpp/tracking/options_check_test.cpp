@@ -355,7 +355,13 @@ TEST(OptionsCheck, TrackingOptions) {
              "[]"),
        FIELD(relocalisation.min_inliers, "tracking.relocalisation.min_inliers", 0, 1e9, "(]"),
        FIELD(relocalisation.vocabulary_levels_up, "tracking.relocalisation.vocabulary_levels_up", 0,
-             32, "[]")},
+             32, "[]"),
+       FIELD(imu.window_s, "tracking.imu.window_s", 1, 1e4, "[]"),  // >= min_window_s
+       FIELD(imu.min_window_s, "tracking.imu.min_window_s", 0, 3, "(]"),
+       FIELD(imu.max_gap_s, "tracking.imu.max_gap_s", 0, 1e4, "[]"),
+       FIELD(imu.max_sample_gap_s, "tracking.imu.max_sample_gap_s", 0, 10, "(]"),
+       FIELD(imu.gravity_mps2, "tracking.imu.gravity_mps2", 0, 100, "(]"),
+       FIELD(imu.gravity_tolerance_mps2, "tracking.imu.gravity_tolerance_mps2", 0, 100, "(]")},
       construct, base);
 }
 
