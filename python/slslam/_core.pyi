@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'KeyframeDatabase', 'LbdOptions', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -986,6 +986,58 @@ class RelocalisationOptions:
     @vocabulary_levels_up.setter
     def vocabulary_levels_up(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class InertialBridgeOptions:
+    """
+    The IMU bridge through short visual outages (gravity, velocity and gyro bias fitted to the recent tracked poses).
+    """
+    def __init__(self) -> None:
+        ...
+    def check(self) -> None:
+        ...
+    @property
+    def T_body_cam(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        """
+        4x4 pose of the rectified left camera in the IMU (body) frame.
+        """
+    @T_body_cam.setter
+    def T_body_cam(self, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
+        ...
+    @property
+    def gravity_mps2(self) -> float:
+        ...
+    @gravity_mps2.setter
+    def gravity_mps2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gravity_tolerance_mps2(self) -> float:
+        ...
+    @gravity_tolerance_mps2.setter
+    def gravity_tolerance_mps2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_gap_s(self) -> float:
+        ...
+    @max_gap_s.setter
+    def max_gap_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_sample_gap_s(self) -> float:
+        ...
+    @max_sample_gap_s.setter
+    def max_sample_gap_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_window_s(self) -> float:
+        ...
+    @min_window_s.setter
+    def min_window_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def window_s(self) -> float:
+        ...
+    @window_s.setter
+    def window_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class PoseGraphOptions:
     """
     Essential-graph optimisation.
@@ -1126,6 +1178,7 @@ class TrackerOptions:
     """
     dynamic: DynamicCellOptions
     dynamic_cells: bool
+    imu: InertialBridgeOptions
     localise_only: bool
     loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions
@@ -1134,6 +1187,7 @@ class TrackerOptions:
     rig: StereoRig
     sequential: bool
     stereo: StereoMatchOptions
+    use_imu: bool
     use_lines: bool
     vocabulary_path: str
     def __init__(self) -> None:
@@ -1343,6 +1397,10 @@ class TrackerCore:
     """
     def __init__(self, options: TrackerOptions, lines: LineExtractorOptions = ...) -> None:
         ...
+    def add_imu(self, t_s: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], gyro: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], acc: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> None:
+        """
+        IMU samples (body frame) for the bridge through visual outages, before the frames they precede.
+        """
     def flush(self) -> None:
         ...
     def load_map(self, path: str) -> None:
