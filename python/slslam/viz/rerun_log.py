@@ -23,8 +23,8 @@ the frame index, and ``time``, seconds since the first frame):
 ``counts/<name>``                  inlier points, inlier lines, keypoints as plots
 =================================  ===========================================================
 
-State colours: OK green, RELOCALISED blue, NEW_MAP purple, RECENTLY_LOST orange, LOST red,
-NOT_INITIALIZED grey. Per-feature inlier flags are not exported by the C++ tracker yet, so a
+State colours: OK green, RELOCALISED blue, NEW_MAP purple, INERTIAL cyan, RECENTLY_LOST orange,
+LOST red, NOT_INITIALIZED grey. Per-feature inlier flags are not exported by the C++ tracker yet, so a
 feature takes its frame's colour.
 """
 
@@ -44,11 +44,12 @@ STATE_COLOURS: dict[str, tuple[int, int, int]] = {
     "OK": (40, 200, 40),
     "RELOCALISED": (30, 120, 255),
     "NEW_MAP": (170, 60, 255),
+    "INERTIAL": (0, 200, 200),
     "RECENTLY_LOST": (255, 165, 0),
     "LOST": (230, 30, 30),
     "NOT_INITIALIZED": (150, 150, 150),
 }
-TRACKED = ("OK", "RELOCALISED", "NEW_MAP")
+TRACKED = ("OK", "RELOCALISED", "NEW_MAP", "INERTIAL")
 COUNT_PLOTS = ("keypoints", "inlier_points", "inlier_lines")
 def _has_display() -> bool:
     """Whether a spawned viewer can open a window: on Linux an X11 or Wayland display is set."""
