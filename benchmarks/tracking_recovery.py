@@ -11,8 +11,9 @@ turn on the spot at t = 10 s (junction_spin, when the simulator offers ``spin_at
 Configurations: ORB + lines with the defaults (orb_lines); the same with the low-texture fallback
 off, i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points only (orb).
 
-Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP),
-relocalisations, new maps after a loss, frames and seconds without an estimate, maps, ATE RMSE
+Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
+INERTIAL), relocalisations, new maps after a loss, frames the IMU bridged (the simulator writes
+imu0/, used by default; ``--set tracking.imu.enabled=false`` for camera only), frames and seconds without an estimate, maps, ATE RMSE
 over every estimated frame (evo, SE3 alignment of the whole run) in metres and as a share of the
 path driven, median keypoints per frame (whole run and over the frames whose inliers were lowest,
 the hard stretch), keyframes and median time per frame. Writes tracking_recovery.md and .json in
@@ -91,6 +92,7 @@ def summarise(out: Path, metrics: dict) -> dict:
         "frames": metrics["frames"],
         "posed_after_init": metrics.get("posed_ratio_after_init"),
         "relocalisations": metrics.get("relocalisations"),
+        "inertial_frames": metrics.get("inertial_frames"),
         "new_maps_after_loss": metrics.get("new_maps_after_loss"),
         "lost_frames": metrics.get("lost_frames"),
         "lost_s": metrics.get("lost_s"),
@@ -110,17 +112,18 @@ def summarise(out: Path, metrics: dict) -> dict:
 def table(results: dict) -> str:
     head = (
         "| sequence | configuration | frames | posed after init | relocalisations | new maps "
-        "| lost frames | maps | ATE RMSE [m] | ATE % of path | keypoints (hard stretch) "
-        "| keyframes | ms/frame |"
+        "| IMU-bridged frames | lost frames | maps | ATE RMSE [m] | ATE % of path "
+        "| keypoints (hard stretch) | keyframes | ms/frame |"
     )
-    lines = [head, "|" + "---|" * 13]
+    lines = [head, "|" + "---|" * 14]
     for seq, runs in results.items():
         for cfg, r in runs.items():
             ate = "-" if r["ate_rmse_m"] is None else f"{r['ate_rmse_m']:.4f}"
             pct = "-" if r["ate_percent_of_path"] is None else f"{r['ate_percent_of_path']:.2f}"
             lines.append(
                 f"| {seq} | {CONFIGS[cfg][0]} | {r['frames']} | {r['posed_after_init']:.3f} "
-                f"| {r['relocalisations']} | {r['new_maps_after_loss']} | {r['lost_frames']} "
+                f"| {r['relocalisations']} | {r['new_maps_after_loss']} "
+                f"| {r['inertial_frames']} | {r['lost_frames']} "
                 f"| {r['maps']} | {ate} | {pct} | {r['keypoints_median']:.0f} "
                 f"({r['keypoints_hard_stretch']:.0f}) | {r['keyframes']} "
                 f"| {r['median_total_ms']:.1f} |"
