@@ -86,6 +86,8 @@ void BindFeatures(py::module_& m) {
       .def_readwrite("threshold", &DynamicCellOptions::threshold, "l: invalid below this")
       .def_readwrite("min_matches", &DynamicCellOptions::min_matches,
                      "matches a cell needs in a frame to count as evidence")
+      .def_readwrite("sigma_median_ratio", &DynamicCellOptions::sigma_median_ratio,
+                     "G's width is at least this many times the frame's median match residual")
       .def("check", &DynamicCellOptions::Check);
   py::class_<DynamicCellFilter>(m, "DynamicCellFilter",
                                 "Per-cell motion-consistency weights; drops moving objects.")

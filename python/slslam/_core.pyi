@@ -238,6 +238,14 @@ class DynamicCellOptions:
     def min_matches(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
+    def sigma_median_ratio(self) -> float:
+        """
+        G's width is at least this many times the frame's median match residual
+        """
+    @sigma_median_ratio.setter
+    def sigma_median_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def sigma_px(self) -> float:
         """
         Gaussian width of G(d) [px]

@@ -180,7 +180,9 @@ LINES_TO_CORE: dict[str, tuple[str, ...]] = {
 }
 DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
     name: (f"dynamic.{name}",)
-    for name in ("cell_size_px", "sigma_px", "alpha", "threshold", "min_matches")
+    for name in (
+        "cell_size_px", "sigma_px", "alpha", "threshold", "min_matches", "sigma_median_ratio"
+    )
 }
 GRID_TO_CORE: dict[str, tuple[str, ...]] = {
     "cell_size_px": ("cell_size_px",),
@@ -254,6 +256,9 @@ class DynamicCellConfig:
     threshold: float = _dynamic_cells("threshold", "[0, 1]")
     # matches a cell needs in a frame to count as evidence (fewer: the cell counts as static)
     min_matches: int = _dynamic_cells("min_matches", "[1, 1000000]")
+    # G's width is at least this many times the frame's median match residual, for a front end
+    # that repeats less precisely than ORB (XFeat: 3, configs/xfeat.yaml); 0: sigma_px alone
+    sigma_median_ratio: float = _dynamic_cells("sigma_median_ratio", "[0, 1000]")
 
 
 @dataclass(frozen=True)

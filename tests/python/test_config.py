@@ -126,6 +126,26 @@ def test_dynamic_cell_settings_reach_the_tracker():
     assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)
 
 
+def test_xfeat_preset_selects_xfeat_and_widens_the_dynamic_cell_filter():
+    """configs/xfeat.yaml: XFeat with the filter's width following the frame's residuals; every
+    other key at its default."""
+    from slslam.datasets.euroc import RectifiedStereoCamera
+    from slslam.tracking.tracker import _core_options
+
+    config = load_config(DEFAULT_YAML.parent / "xfeat.yaml")
+    assert config.features.point_frontend == "xfeat"
+    assert config.features.dynamic_cells.sigma_median_ratio == 3.0
+    assert _core.DynamicCellOptions().sigma_median_ratio == 0.0  # the paper's fixed width
+    camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
+    assert _core_options(camera, config).dynamic.sigma_median_ratio == 3.0
+    rest = dataclasses.replace(
+        config.features,
+        point_frontend=Config().features.point_frontend,
+        dynamic_cells=Config().features.dynamic_cells,
+    )
+    assert dataclasses.replace(config, features=rest) == Config()
+
+
 def test_every_mirrored_default_equals_the_cpp_default():
     """One source of defaults: each config key that goes to the C++ tracker options
     (``TRACKING_TO_CORE`` and its siblings, the table ``_core_options`` applies) has the C++

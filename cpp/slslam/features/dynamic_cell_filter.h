@@ -4,6 +4,7 @@
 // Per cell g at frame t, over its m matched keypoints: d = median ||p_i - p'_i|| (the paper: the
 // mean; the median ignores a few mismatches in repetitive texture), where p_i is
 // the keypoint and p'_i its position predicted by the camera motion; w~ = exp(-d^2 / (2 sigma^2));
+// sigma = max(sigma_px, sigma_median_ratio * the median of every match's distance in the frame);
 // w_t = alpha * w~ + (1 - alpha) * w_{t-1}; a cell with w_t < threshold is invalid and so are its
 // 8 neighbours. A cell without matches (fewer than min_matches) counts as agreeing (w~ = 1), so it
 // recovers once the mover has left it (the paper leaves this case open). Every cell starts at w
@@ -31,6 +32,10 @@ struct DynamicCellOptions {
   /// matches a cell needs in a frame to count as evidence; fewer count as none (G = 1): one
   /// keypoint's localisation noise (2-4 px at coarse ORB octaves) must not drop 9 cells [-]
   int min_matches = 2;
+  /// G's width is at least this many times the median residual of all the frame's matches, so
+  /// a front end that repeats less precisely (XFeat: 3, configs/xfeat.yaml) does not flag static
+  /// cells; 0: sigma_px alone, the paper's (ORB's dark sequences tracked better with it) [-]
+  double sigma_median_ratio = 0.0;
 
   void Check() const;
 };

@@ -1,5 +1,9 @@
 #include "slslam/features/dynamic_cell_filter.h"
 
+#include <cmath>
+#include <utility>
+#include <vector>
+
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
@@ -100,7 +104,9 @@ TEST(DynamicCellFilter, ConstantVelocityPredictionWithAWrongMotionFlagsStaticCel
   const Scene scene = MakeScene();
   const PixelArray observed = Project(scene.current_world, CameraMotion());
   const PixelArray constant_velocity = Project(scene.previous, Eigen::Isometry3d::Identity());
-  DynamicCellFilter filter(752, 480);
+  DynamicCellOptions options;
+  options.sigma_median_ratio = 0.0;  // the paper's fixed width (the default)
+  DynamicCellFilter filter(752, 480, options);
   filter.Update(observed, constant_velocity);
   int invalid = 0;
   for (bool v : filter.valid()) invalid += !v;
@@ -111,6 +117,7 @@ TEST(DynamicCellFilter, TemporalSmoothingNeedsRepeatedEvidence) {
   DynamicCellOptions options;
   options.alpha = 0.3;  // a single bad frame moves the weight only by 30 %
   options.min_matches = 1;
+  options.sigma_median_ratio = 0.0;  // the default: a fixed width
   DynamicCellFilter filter(64, 64, options);
   PixelArray observed(1, 2), predicted(1, 2);
   observed << 10, 10;
@@ -132,6 +139,7 @@ TEST(DynamicCellFilter, ACellWithoutMatchesRecovers) {
   // motion and the weight climbs back (alpha 0.7: 0.7 + 0.3 w per frame) until the cell is valid.
   DynamicCellOptions options;
   options.min_matches = 1;
+  options.sigma_median_ratio = 0.0;  // the default: a fixed width
   DynamicCellFilter filter(64, 64, options);
   PixelArray observed(1, 2), predicted(1, 2);
   observed << 10, 10;
@@ -145,7 +153,9 @@ TEST(DynamicCellFilter, ACellWithoutMatchesRecovers) {
 }
 
 TEST(DynamicCellFilter, OneMatchIsNoEvidenceAndAMedianIgnoresAMismatch) {
-  DynamicCellFilter filter(64, 64);  // min_matches 2
+  DynamicCellOptions options;  // min_matches 2
+  options.sigma_median_ratio = 0.0;  // the default: a fixed width
+  DynamicCellFilter filter(64, 64, options);
   PixelArray one(1, 2), one_predicted(1, 2);
   one << 10, 10;
   one_predicted << 40, 10;  // 30 px off, but alone in its cell
@@ -162,6 +172,57 @@ TEST(DynamicCellFilter, OneMatchIsNoEvidenceAndAMedianIgnoresAMismatch) {
   filter.Update(three, three_predicted);
   filter.Update(three, three_predicted);
   EXPECT_FALSE(filter.valid()[0]);
+}
+
+TEST(DynamicCellFilter, NoisyMatchesWidenTheGaussianAndTheMoverStillStandsOut) {
+  // A front end whose keypoints repeat less precisely (XFeat on the simulated loop: a median
+  // frame-to-frame residual of about 2 px, ORB's 1 px): static matches off by 1-4 px at random,
+  // and one cell's matches (a mover) all 15 px off. The fixed width (sigma 3 px) flags static
+  // cells; sigma_median_ratio 3 widens G to about 3x the frame's median and flags the mover only.
+  cv::RNG rng(5);
+  const int width = 768, height = 480;  // whole 32 px cells
+  const int cells_x = width / 32, cells_y = height / 32;
+  const int mover = 7 * cells_x + 11;  // the cell at (11, 7)
+  std::vector<Eigen::Vector2f> obs, pred;
+  for (int c = 0; c < cells_x * cells_y; ++c) {
+    const float u0 = static_cast<float>(c % cells_x) * 32.0f;
+    const float v0 = static_cast<float>(c / cells_x) * 32.0f;
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::Vector2f p(u0 + rng.uniform(2.0f, 30.0f), v0 + rng.uniform(2.0f, 30.0f));
+      const float d = c == mover ? 15.0f : rng.uniform(1.0f, 4.0f);
+      const float angle = rng.uniform(0.0f, 6.2831853f);
+      obs.push_back(p);
+      pred.push_back(p + d * Eigen::Vector2f(std::cos(angle), std::sin(angle)));
+    }
+  }
+  PixelArray observed(obs.size(), 2), predicted(pred.size(), 2);
+  for (size_t i = 0; i < obs.size(); ++i) {
+    observed.row(i) = obs[i].transpose();
+    predicted.row(i) = pred[i].transpose();
+  }
+  auto invalid_cells = [&](double ratio) {
+    DynamicCellOptions options;
+    options.sigma_median_ratio = ratio;
+    DynamicCellFilter filter(width, height, options);
+    for (int frame = 0; frame < 3; ++frame) filter.Update(observed, predicted);
+    std::vector<int> invalid;
+    for (size_t c = 0; c < filter.valid().size(); ++c) {
+      if (!filter.valid()[c]) invalid.push_back(static_cast<int>(c));
+    }
+    return std::make_pair(invalid, filter.weights()[mover]);
+  };
+  const auto [fixed, fixed_mover_weight] = invalid_cells(0.0);
+  EXPECT_GT(fixed.size(), 9u);  // static cells flagged besides the mover and its neighbours
+  const auto [widened, mover_weight] = invalid_cells(3.0);
+  EXPECT_LT(mover_weight, 0.5);
+  ASSERT_EQ(widened.size(), 9u);  // the mover and its 8 neighbours, nothing else
+  for (int c : widened) {
+    EXPECT_LE(std::abs(c % cells_x - 11), 1);
+    EXPECT_LE(std::abs(c / cells_x - 7), 1);
+  }
+  DynamicCellOptions bad;
+  bad.sigma_median_ratio = -1.0;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
 }
 
 }  // namespace
