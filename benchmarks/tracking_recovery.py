@@ -13,11 +13,12 @@ off, i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points 
 
 Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
 INERTIAL), relocalisations, new maps after a loss, frames the IMU bridged (the simulator writes
-imu0/, used by default; ``--set tracking.imu.enabled=false`` for camera only), frames and seconds without an estimate, maps, ATE RMSE
-over every estimated frame (evo, SE3 alignment of the whole run) in metres and as a share of the
-path driven, median keypoints per frame (whole run and over the frames whose inliers were lowest,
-the hard stretch), keyframes and median time per frame. Writes tracking_recovery.md and .json in
---out and each run's files in <out>/<sequence>/<configuration>/.
+imu0/, used by default; ``--set tracking.imu.enabled=false`` for camera only), frames and
+seconds without an estimate, maps, ATE RMSE over every estimated frame (evo, SE3 alignment of
+the whole run) in metres and as a share of the path driven, median keypoints per frame (whole
+run and over the frames whose inliers were lowest, the hard stretch), keyframes and median time
+per frame. Writes tracking_recovery.md and .json in --out and each run's files in
+<out>/<sequence>/<configuration>/.
 """
 
 from __future__ import annotations

@@ -567,6 +567,36 @@ def models_export_command(
         console.print(f"  {key}: {value}", highlight=False, markup=False)
 
 
+@models_app.command("quantize")
+def models_quantize_command(
+    model: Annotated[str, typer.Argument(help="The network to quantise: xfeat.")],
+    out: Annotated[Path, typer.Option(help="Output ONNX file (8-bit).")],
+    images: Annotated[
+        list[Path] | None,
+        typer.Option(
+            help="Calibration images (PNG/JPG) or folders searched for them; default: frames the "
+            "simulator renders (as the shipped xfeat_int8.onnx)."
+        ),
+    ] = None,
+) -> None:
+    """Quantise the shipped XFeat to 8-bit integers (onnxruntime static quantisation, activation
+    ranges from calibration images), as third_party/xfeat/xfeat_int8.onnx was made."""
+    if model != "xfeat":
+        raise typer.BadParameter(f"MODEL must be xfeat, got {model!r}")
+    from slslam.features.xfeat_quantize import quantize_xfeat
+
+    calibration = None
+    if images:
+        from slslam.place import find_images, read_images
+
+        calibration = read_images(find_images(images))
+    facts = quantize_xfeat(out, calibration)
+    console = Console()
+    console.print(f"wrote {out}", highlight=False)
+    for key, value in facts.items():
+        console.print(f"  {key}: {value}", highlight=False, markup=False)
+
+
 vocab_app = typer.Typer(
     help="Bag-of-words vocabularies for place recognition: train one on images, describe one.",
     no_args_is_help=True,

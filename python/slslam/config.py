@@ -181,7 +181,12 @@ LINES_TO_CORE: dict[str, tuple[str, ...]] = {
 DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
     name: (f"dynamic.{name}",)
     for name in (
-        "cell_size_px", "sigma_px", "alpha", "threshold", "min_matches", "sigma_median_ratio"
+        "cell_size_px",
+        "sigma_px",
+        "alpha",
+        "threshold",
+        "min_matches",
+        "sigma_median_ratio",
     )
 }
 GRID_TO_CORE: dict[str, tuple[str, ...]] = {

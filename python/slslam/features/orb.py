@@ -10,7 +10,6 @@ from slslam import _core
 from slslam._cpp_defaults import as_written
 from slslam.features.keypoints import Keypoints, check_gray_image
 
-
 _CORE_ORB = _core.OrbOptions()
 
 

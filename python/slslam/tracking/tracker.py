@@ -36,11 +36,10 @@ from typing import Any
 import numpy as np
 
 from slslam import _core
-from slslam._cpp_defaults import core_attribute
 from slslam.config import (
     DYNAMIC_CELLS_TO_CORE,
-    LINES_TO_CORE,
     IMU_TO_CORE,
+    LINES_TO_CORE,
     LOOP_CLOSING_TO_CORE,
     TRACKING_TO_CORE,
     Config,
@@ -650,8 +649,9 @@ class Tracker:
         return list(self._results)
 
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
-        """(timestamps (N,), poses T_world_cam (N, 4, 4), states) for every frame so far; the poses of
-        frames whose state is not in ``TRACKED_STATES`` are predictions, not estimates."""
+        """(timestamps (N,), poses T_world_cam (N, 4, 4), states) for every frame so far; the
+        poses of frames whose state is not in ``TRACKED_STATES`` are predictions, not
+        estimates."""
         stamps = np.array([r.timestamp for r in self._results])
         poses = np.array([r.T_world_cam for r in self._results]).reshape(-1, 4, 4)
         return stamps, poses, [r.state for r in self._results]

@@ -24,8 +24,8 @@ the frame index, and ``time``, seconds since the first frame):
 =================================  ===========================================================
 
 State colours: OK green, RELOCALISED blue, NEW_MAP purple, INERTIAL cyan, RECENTLY_LOST orange,
-LOST red, NOT_INITIALIZED grey. Per-feature inlier flags are not exported by the C++ tracker yet, so a
-feature takes its frame's colour.
+LOST red, NOT_INITIALIZED grey. Per-feature inlier flags are not exported by the C++ tracker yet,
+so a feature takes its frame's colour.
 """
 
 from __future__ import annotations
@@ -51,6 +51,8 @@ STATE_COLOURS: dict[str, tuple[int, int, int]] = {
 }
 TRACKED = ("OK", "RELOCALISED", "NEW_MAP", "INERTIAL")
 COUNT_PLOTS = ("keypoints", "inlier_points", "inlier_lines")
+
+
 def _has_display() -> bool:
     """Whether a spawned viewer can open a window: on Linux an X11 or Wayland display is set."""
     if not sys.platform.startswith("linux"):
