@@ -141,6 +141,16 @@ void BindFeatures(py::module_& m) {
       },
       py::arg("uv"), py::arg("score"), py::arg("width"), py::arg("height"), py::arg("radius_px"),
       "Greedy NMS of integer (u, v) candidates (N x 2 int32): kept indices, strongest first.");
+  m.def(
+      "local_maxima",
+      [](const Eigen::Ref<const HeatMap>& heat, float threshold, int radius_px, int border_px) {
+        const HeatMap copy = heat;  // a numpy view may be strided; the map is small
+        py::gil_scoped_release release;
+        return LocalMaxima(copy, threshold, radius_px, border_px);
+      },
+      py::arg("heat"), py::arg("threshold"), py::arg("radius_px"), py::arg("border_px"),
+      "Max-filter NMS of a float32 heatmap (H x W): (u, v) int32 of the pixels above the "
+      "threshold that are the maximum of their (2r+1)^2 window (ties kept), row-major order.");
 }
 
 }  // namespace slslam::bindings

@@ -97,6 +97,36 @@ def test_any_size_is_padded_and_keypoints_stay_inside(xfeat):
     assert len(XFeat(XFeatOptions(max_keypoints=7)).detect(image)) == 7
 
 
+def _numpy_local_maxima(heat, threshold, radius, border):
+    """The definition, in numpy (the front end's first implementation)."""
+    v, u = np.nonzero(heat > threshold)
+    value = heat[v, u]
+    padded = np.pad(heat, radius)
+    is_peak = np.ones(len(v), dtype=bool)
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            if dy or dx:
+                is_peak &= padded[v + radius + dy, u + radius + dx] <= value
+    h, w = heat.shape
+    inside = (u >= border) & (v >= border) & (u < w - border) & (v < h - border)
+    keep = is_peak & inside
+    return np.column_stack([u[keep], v[keep]])
+
+
+def test_local_maxima_in_cpp_equal_the_numpy_definition_on_a_real_heatmap(xfeat):
+    from slslam.features.superpoint import heatmap_from_logits
+    from slslam.features.xfeat import local_maxima
+
+    image = _euroc_image()
+    h, w = image.shape
+    heat = heatmap_from_logits(xfeat.infer(image)["keypoint_logits"])[:h, :w]
+    for threshold, radius, border in ((0.05, 2, 0), (0.01, 2, 0), (0.05, 4, 8), (0.05, 0, 0)):
+        got = local_maxima(heat, threshold, radius, border)
+        want = _numpy_local_maxima(heat, threshold, radius, border)
+        assert len(want) > 100
+        np.testing.assert_array_equal(got, want)
+
+
 def test_sampling_follows_grid_sample():
     hc, wc = 6, 9
     ys, xs = np.mgrid[0:hc, 0:wc].astype(np.float64)

@@ -18,4 +18,12 @@ using PixelIndexArray = Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>;
 std::vector<int> SuppressNonMaxima(const PixelIndexArray& uv, const Eigen::VectorXf& score,
                                    int width, int height, int radius_px);
 
+using HeatMap = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Max-filter NMS of a dense heatmap (XFeat's reference: a (2r+1) x (2r+1) max-pool): the
+// pixels above `threshold` that are >= every pixel of the window around them (ties all kept;
+// outside the map counts as 0, never above a value that passed the threshold), at least
+// `border_px` inside the map. Returns (u, v) in row-major order (v, then u), as numpy's nonzero.
+PixelIndexArray LocalMaxima(const HeatMap& heat, float threshold, int radius_px, int border_px);
+
 }  // namespace slslam

@@ -184,19 +184,12 @@ def pad_to_multiple(image: np.ndarray) -> np.ndarray:
 def local_maxima(heat: np.ndarray, threshold: float, radius: int, border: int) -> np.ndarray:
     """(N, 2) integer (u, v) of pixels above ``threshold`` that are the maximum of their
     (2r+1)^2 window (ties all kept, as the reference's max-pool), at least ``border`` px inside
-    the image. Only the pixels above the threshold are compared with their window."""
-    v, u = np.nonzero(heat > threshold)
-    value = heat[v, u]
-    padded = np.pad(heat, radius)  # zeros: never above a value that passed the threshold
-    is_peak = np.ones(len(v), dtype=bool)
-    for dy in range(-radius, radius + 1):
-        for dx in range(-radius, radius + 1):
-            if dy or dx:
-                is_peak &= padded[v + radius + dy, u + radius + dx] <= value
-    h, w = heat.shape
-    inside = (u >= border) & (v >= border) & (u < w - border) & (v < h - border)
-    keep = is_peak & inside
-    return np.column_stack([u[keep], v[keep]])
+    the image, in row-major order. In C++ (``_core.local_maxima``): the numpy version (24 shifted
+    comparisons over every candidate) took 10-20 ms an image, a fifth of XFeat's time with int8."""
+    from slslam import _core
+
+    heat = np.ascontiguousarray(heat, dtype=np.float32)
+    return np.asarray(_core.local_maxima(heat, float(threshold), int(radius), int(border)))
 
 
 def _linear_taps(t: np.ndarray) -> tuple[tuple[int, ...], np.ndarray]:

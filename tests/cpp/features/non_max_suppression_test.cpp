@@ -1,11 +1,47 @@
 #include "slslam/features/non_max_suppression.h"
 
+#include <algorithm>
 #include <stdexcept>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 namespace slslam {
 namespace {
+
+TEST(LocalMaxima, EqualsABruteForceMaxFilterWithTiesAndBorder) {
+  // Random values on a coarse set of levels (many ties), compared with the definition.
+  HeatMap heat(37, 53);
+  unsigned state = 7;
+  for (Eigen::Index i = 0; i < heat.size(); ++i) {
+    state = state * 1103515245u + 12345u;
+    heat.data()[i] = static_cast<float>((state >> 16) % 8) / 8.0f;
+  }
+  for (int radius : {0, 1, 2, 4}) {
+    for (int border : {0, 3}) {
+      const PixelIndexArray got = LocalMaxima(heat, 0.3f, radius, border);
+      std::vector<int> want;
+      for (int v = border; v < heat.rows() - border; ++v) {
+        for (int u = border; u < heat.cols() - border; ++u) {
+          if (!(heat(v, u) > 0.3f)) continue;
+          bool peak = true;
+          for (int y = v - radius; y <= v + radius; ++y) {
+            for (int x = u - radius; x <= u + radius; ++x) {
+              const bool inside = y >= 0 && x >= 0 && y < heat.rows() && x < heat.cols();
+              if (inside && heat(y, x) > heat(v, u)) peak = false;
+            }
+          }
+          if (peak) want.insert(want.end(), {u, v});
+        }
+      }
+      ASSERT_EQ(got.rows() * 2, static_cast<Eigen::Index>(want.size()));
+      EXPECT_TRUE(std::equal(want.begin(), want.end(), got.data())) << radius << " " << border;
+      if (radius == 0 && border == 0) EXPECT_GT(got.rows(), heat.size() / 2);
+    }
+  }
+  EXPECT_EQ(LocalMaxima(heat, 1.0f, 2, 0).rows(), 0);  // nothing above the threshold
+  EXPECT_THROW(LocalMaxima(heat, 0.3f, -1, 0), std::invalid_argument);
+}
 
 TEST(SuppressNonMaxima, KeepsThePeakOfAClusterAndSeparatePeaks) {
   PixelIndexArray uv(5, 2);
