@@ -135,6 +135,8 @@ def test_xfeat_preset_selects_xfeat_and_widens_the_dynamic_cell_filter():
     config = load_config(DEFAULT_YAML.parent / "xfeat.yaml")
     assert config.features.point_frontend == "xfeat"
     assert config.features.dynamic_cells.sigma_median_ratio == 3.0
+    assert config.features.xfeat.precision == "int8"
+    assert config.features.xfeat.intra_op_threads == 1
     assert _core.DynamicCellOptions().sigma_median_ratio == 0.0  # the paper's fixed width
     camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
     assert _core_options(camera, config).dynamic.sigma_median_ratio == 3.0
@@ -142,6 +144,7 @@ def test_xfeat_preset_selects_xfeat_and_widens_the_dynamic_cell_filter():
         config.features,
         point_frontend=Config().features.point_frontend,
         dynamic_cells=Config().features.dynamic_cells,
+        xfeat=Config().features.xfeat,
     )
     assert dataclasses.replace(config, features=rest) == Config()
 
