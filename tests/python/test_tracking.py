@@ -226,8 +226,7 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
         features = dataclasses.replace(base.features, low_texture_fallback=fallback)
         with Tracker(camera, dataclasses.replace(base, features=features)) as tracker:
             results = [
-                tracker.track(left, right, t)
-                for (left, right), t in zip(pairs, times, strict=True)
+                tracker.track(left, right, t) for (left, right), t in zip(pairs, times, strict=True)
             ]
             return results, tracker.map().maps
 
