@@ -6,6 +6,7 @@
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/features/dynamic_cell_filter.h"
 #include "slslam/features/grid_limit.h"
+#include "slslam/features/dense_sampling.h"
 #include "slslam/features/non_max_suppression.h"
 #include "slslam/features/orb_extractor.h"
 
@@ -141,6 +142,19 @@ void BindFeatures(py::module_& m) {
       },
       py::arg("uv"), py::arg("score"), py::arg("width"), py::arg("height"), py::arg("radius_px"),
       "Greedy NMS of integer (u, v) candidates (N x 2 int32): kept indices, strongest first.");
+  m.def(
+      "sample_dense_map",
+      [](const Eigen::Ref<const DenseSamples>& map, int map_height, int map_width,
+         const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv, int input_height,
+         int input_width, bool cubic) {
+        const DenseSamples copy = map;
+        py::gil_scoped_release release;
+        return SampleDenseMap(copy, map_height, map_width, uv, input_height, input_width, cubic);
+      },
+      py::arg("map"), py::arg("map_height"), py::arg("map_width"), py::arg("uv"),
+      py::arg("input_height"), py::arg("input_width"), py::arg("cubic"),
+      "Samples of a C x (Hc Wc) float32 map at input pixels uv (N x 2), as grid_sample "
+      "(align_corners=False, zero padding), bilinear or bicubic: N x C.");
   m.def(
       "local_maxima",
       [](const Eigen::Ref<const HeatMap>& heat, float threshold, int radius_px, int border_px) {

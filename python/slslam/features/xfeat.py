@@ -43,7 +43,6 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from scipy.sparse import csr_matrix
 
 from slslam.features.keypoints import Keypoints, check_gray_image
 from slslam.features.superpoint import (
@@ -63,8 +62,6 @@ OUTPUT_CHANNELS = {
     "keypoint_logits": CELL * CELL + 1,
     "reliability": 1,
 }
-#: PyTorch's bicubic grid_sample kernel parameter (Keys' cubic convolution).
-CUBIC_A = -0.75
 #: The ONNX file installed with slslam (CMake copies third_party/xfeat into slslam/data/xfeat).
 SHIPPED_MODEL = Path(__file__).resolve().parent.parent / "data" / "xfeat" / "xfeat.onnx"
 #: The same network quantised to 8 bits (``slslam models quantize xfeat``), shipped beside it.
@@ -192,45 +189,20 @@ def local_maxima(heat: np.ndarray, threshold: float, radius: int, border: int) -
     return np.asarray(_core.local_maxima(heat, float(threshold), int(radius), int(border)))
 
 
-def _linear_taps(t: np.ndarray) -> tuple[tuple[int, ...], np.ndarray]:
-    return (0, 1), np.stack([1.0 - t, t], axis=1)
-
-
-def _cubic_taps(t: np.ndarray) -> tuple[tuple[int, ...], np.ndarray]:
-    """Keys' cubic convolution weights of the taps at floor(x) - 1 .. floor(x) + 2."""
-    a = CUBIC_A
-
-    def near(x):  # |x| <= 1
-        return ((a + 2.0) * x - (a + 3.0)) * x * x + 1.0
-
-    def far(x):  # 1 < |x| < 2
-        return ((a * x - 5.0 * a) * x + 8.0 * a) * x - 4.0 * a
-
-    return (-1, 0, 1, 2), np.stack([far(t + 1.0), near(t), near(1.0 - t), far(2.0 - t)], axis=1)
-
-
 def sample_map(
     coarse: np.ndarray, uv: np.ndarray, input_hw: tuple[int, int], cubic: bool
 ) -> np.ndarray:
-    """(N, C) samples of a (C, Hc, Wc) map at pixels uv (N, 2) of the network input (H, W), as
-    the reference's ``grid_sample`` (align_corners=False, zero padding): bilinear or bicubic.
-    The taps and weights form a sparse (N, Hc Wc) matrix applied to the map in one product."""
+    """(N, C) float32 samples of a (C, Hc, Wc) map at pixels uv (N, 2) of the network input
+    (H, W), as the reference's ``grid_sample`` (align_corners=False, zero padding): bilinear or
+    bicubic (PyTorch's kernel, A = -0.75). In C++ (``_core.sample_dense_map``): the scipy sparse
+    product it replaces took 3-8 ms an image."""
+    from slslam import _core
+
     c, hc, wc = coarse.shape
+    flat = np.ascontiguousarray(coarse.reshape(c, hc * wc), dtype=np.float32)
+    points = np.ascontiguousarray(uv, dtype=np.float32).reshape(-1, 2)
     h, w = input_hw
-    x = uv[:, 0].astype(np.float64) * wc / (w - 1) - 0.5
-    y = uv[:, 1].astype(np.float64) * hc / (h - 1) - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    offsets, wx = (_cubic_taps if cubic else _linear_taps)(x - x0)
-    _, wy = (_cubic_taps if cubic else _linear_taps)(y - y0)
-    offsets = np.asarray(offsets)
-    xi = x0.astype(np.int64)[:, None, None] + offsets[None, None, :]  # (N, 1, taps)
-    yi = y0.astype(np.int64)[:, None, None] + offsets[None, :, None]  # (N, taps, 1)
-    weight = wy[:, :, None] * wx[:, None, :]
-    inside = (xi >= 0) & (xi < wc) & (yi >= 0) & (yi < hc)  # zero padding: outer taps dropped
-    rows = np.broadcast_to(np.arange(len(uv))[:, None, None], inside.shape)[inside]
-    cols = np.broadcast_to(yi * wc + xi, inside.shape)[inside]
-    taps = csr_matrix((weight[inside], (rows, cols)), shape=(len(uv), hc * wc))
-    return taps @ np.ascontiguousarray(coarse.reshape(c, -1).T)
+    return np.asarray(_core.sample_dense_map(flat, hc, wc, points, h, w, bool(cubic)))
 
 
 class XFeat:

@@ -1,0 +1,70 @@
+#include "slslam/features/dense_sampling.h"
+
+#include <cmath>
+#include <vector>
+
+#include "slslam/core/check.h"
+
+namespace slslam {
+namespace {
+
+constexpr double kCubicA = -0.75;  // PyTorch's bicubic kernel
+
+// Weights of the taps at floor(x) + offset, offset in [first, first + count).
+int Taps(double t, bool cubic, double* w) {
+  if (!cubic) {
+    w[0] = 1.0 - t;
+    w[1] = t;
+    return 0;
+  }
+  const auto near = [](double x) { return ((kCubicA + 2.0) * x - (kCubicA + 3.0)) * x * x + 1.0; };
+  const auto far = [](double x) {
+    return ((kCubicA * x - 5.0 * kCubicA) * x + 8.0 * kCubicA) * x - 4.0 * kCubicA;
+  };
+  w[0] = far(t + 1.0);
+  w[1] = near(t);
+  w[2] = near(1.0 - t);
+  w[3] = far(2.0 - t);
+  return -1;
+}
+
+}  // namespace
+
+DenseSamples SampleDenseMap(const DenseSamples& map, int map_height, int map_width,
+                            const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv,
+                            int input_height, int input_width, bool cubic) {
+  SLSLAM_CHECK(map_height > 0 && map_width > 0 &&
+                   map.cols() == static_cast<Eigen::Index>(map_height) * map_width,
+               "a map of ", map.cols(), " values per channel is not ", map_height, " x ",
+               map_width);
+  SLSLAM_CHECK(input_height > 1 && input_width > 1, "input size must exceed 1 x 1, got ",
+               input_height, " x ", input_width);
+  const int channels = static_cast<int>(map.rows());
+  const int taps = cubic ? 4 : 2;
+  DenseSamples out(uv.rows(), channels);
+  std::vector<double> acc(channels);
+  for (Eigen::Index i = 0; i < uv.rows(); ++i) {
+    const double x = static_cast<double>(uv(i, 0)) * map_width / (input_width - 1) - 0.5;
+    const double y = static_cast<double>(uv(i, 1)) * map_height / (input_height - 1) - 0.5;
+    const double x0 = std::floor(x), y0 = std::floor(y);
+    double wx[4], wy[4];
+    const int first = Taps(x - x0, cubic, wx);
+    Taps(y - y0, cubic, wy);
+    std::fill(acc.begin(), acc.end(), 0.0);
+    for (int b = 0; b < taps; ++b) {
+      const int yi = static_cast<int>(y0) + first + b;
+      if (yi < 0 || yi >= map_height) continue;
+      for (int a = 0; a < taps; ++a) {
+        const int xi = static_cast<int>(x0) + first + a;
+        if (xi < 0 || xi >= map_width) continue;
+        const double w = wy[b] * wx[a];
+        const Eigen::Index at = static_cast<Eigen::Index>(yi) * map_width + xi;
+        for (int c = 0; c < channels; ++c) acc[c] += w * map(c, at);
+      }
+    }
+    for (int c = 0; c < channels; ++c) out(i, c) = static_cast<float>(acc[c]);
+  }
+  return out;
+}
+
+}  // namespace slslam
