@@ -44,6 +44,7 @@ from typing import Literal
 
 import numpy as np
 
+from slslam import _core
 from slslam.features.keypoints import Keypoints, check_gray_image
 from slslam.features.superpoint import (
     ModelError,
@@ -183,8 +184,6 @@ def local_maxima(heat: np.ndarray, threshold: float, radius: int, border: int) -
     (2r+1)^2 window (ties all kept, as the reference's max-pool), at least ``border`` px inside
     the image, in row-major order. In C++ (``_core.local_maxima``): the numpy version (24 shifted
     comparisons over every candidate) took 10-20 ms an image, a fifth of XFeat's time with int8."""
-    from slslam import _core
-
     heat = np.ascontiguousarray(heat, dtype=np.float32)
     return np.asarray(_core.local_maxima(heat, float(threshold), int(radius), int(border)))
 
@@ -196,8 +195,6 @@ def sample_map(
     (H, W), as the reference's ``grid_sample`` (align_corners=False, zero padding): bilinear or
     bicubic (PyTorch's kernel, A = -0.75). In C++ (``_core.sample_dense_map``): the scipy sparse
     product it replaces took 3-8 ms an image."""
-    from slslam import _core
-
     c, hc, wc = coarse.shape
     flat = np.ascontiguousarray(coarse.reshape(c, hc * wc), dtype=np.float32)
     points = np.ascontiguousarray(uv, dtype=np.float32).reshape(-1, 2)
