@@ -328,6 +328,16 @@ class ImuConfig:
     # a fitted gravity further off than this is a bad fit: no bridge [m/s^2]
     gravity_tolerance_mps2: float = _imu("gravity_tolerance_mps2", "(0, 100]")
 
+    def relations_error(self, where: str) -> str | None:
+        """The C++ check between two keys (InertialBridgeOptions::Check), as a message naming
+        both, or None."""
+        if self.min_window_s > self.window_s:
+            return (
+                f"'{where}.min_window_s' ({self.min_window_s}) must not exceed "
+                f"'{where}.window_s' ({self.window_s})"
+            )
+        return None
+
 
 @dataclass(frozen=True)
 class TrackingConfig:
@@ -510,8 +520,9 @@ def _numeric_kind(hint: Any) -> type | None:
 
 def check_config(config: Any, source: Path | None = None, where: str = "config") -> None:
     """Check every numeric option of ``config`` (a Config or any of its sections) against its
-    range: finite, inside the interval, an integer where one is meant. Raises ConfigError naming
-    the key. Also catches values set in code (``dataclasses.replace``) before they reach C++."""
+    range: finite, inside the interval, an integer where one is meant; and the relations between
+    keys of a section that declares them (``relations_error``). Raises ConfigError naming the key.
+    Also catches values set in code (``dataclasses.replace``) before they reach C++."""
     hints = typing.get_type_hints(type(config))
     for f in dataclasses.fields(config):
         value, key = getattr(config, f.name), f"{where}.{f.name}"
@@ -538,6 +549,10 @@ def check_config(config: Any, source: Path | None = None, where: str = "config")
                 if kind is float
                 else f"'{key}' must be an integer in {allowed}, got {short_repr(value)}",
             )
+    relations = getattr(config, "relations_error", None)
+    message = relations(where) if relations is not None else None
+    if message:
+        raise ConfigError(source, message)
 
 
 def config_from_dict(data: dict | None, source: Path | None = None) -> Config:

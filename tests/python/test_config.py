@@ -245,3 +245,16 @@ def test_cpp_float_defaults_read_as_written():
     assert as_written(0.1) == 0.1  # a double stays as it is
     assert as_written(1.0 / 3.0) == 1.0 / 3.0
     assert as_written(7) == 7 and as_written("lsd") == "lsd" and as_written(True) is True
+
+
+def test_imu_windows_are_checked_against_each_other(tmp_path):
+    """tracking.imu.min_window_s may not exceed window_s (C++ checks it too): a YAML file that
+    breaks it gets one error naming the file and both keys, before anything reaches C++."""
+    path = tmp_path / "imu.yaml"
+    path.write_text("tracking:\n  imu:\n    window_s: 2.0\n    min_window_s: 2.5\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    message = str(info.value)
+    assert "imu.yaml" in message and "min_window_s" in message and "window_s' (2.0)" in message
+    path.write_text("tracking:\n  imu:\n    window_s: 2.0\n    min_window_s: 2.0\n")
+    assert load_config(path).tracking.imu.min_window_s == 2.0

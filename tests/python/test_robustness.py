@@ -82,6 +82,24 @@ def write_config(path: Path, key: str, value) -> Path:
     return path
 
 
+#: Keys checked against another (min_window_s <= window_s): a valid value of one is written with
+#: the other at a value the relation allows, so the table tests each key's own range.
+RELATED = {
+    "tracking.imu.window_s": ("min_window_s", min),
+    "tracking.imu.min_window_s": ("window_s", max),
+}
+
+
+def write_valid_config(path: Path, key: str, value) -> Path:
+    tree = nested(key, value)
+    if key in RELATED:
+        other, pick = RELATED[key]
+        imu = tree["tracking"]["imu"]
+        imu[other] = pick(value, getattr(Config().tracking.imu, other))
+    path.write_text(yaml.safe_dump(tree))
+    return path
+
+
 def assert_one_line_error(exc: BaseException, path: Path | None, key: str | None = None):
     message = str(exc)
     assert "\n" not in message, message
@@ -128,7 +146,7 @@ def test_table_of_bad_numbers_for_every_option(tmp_path, key, kind, declared):
             and value in declared
         )
         if valid:
-            loaded = load_config(path)
+            loaded = load_config(write_valid_config(tmp_path / "c.yaml", key, value))
             for part in key.split("."):
                 loaded = getattr(loaded, part)
             assert loaded == value
@@ -185,15 +203,20 @@ def test_accepted_values_pass_the_cpp_checks(index, fraction):
     span = min(declared.high, 1e5) - declared.low
     value = declared.low + fraction * span
     value = round(value) if kind is int else value
-    if value not in declared:
-        value = declared.high if fraction > 0.5 else declared.low + (1 if kind is int else 1e-6)
+    if value not in declared:  # an open end: step inside it
+        step = 1 if kind is int else 1e-6 * max(span, 1.0)
+        value = declared.high - step if fraction > 0.5 else declared.low + step
     config = load_config(None)
     section, name = key.rsplit(".", 1)
     parts = section.split(".")
     objs = [config]
     for part in parts:
         objs.append(getattr(objs[-1], part))
-    new = dataclasses.replace(objs[-1], **{name: value})
+    changes = {name: value}
+    if key in RELATED:  # the other key at a value the relation allows
+        other, pick = RELATED[key]
+        changes[other] = pick(value, getattr(objs[-1], other))
+    new = dataclasses.replace(objs[-1], **changes)
     for part, parent in zip(reversed(parts), reversed(objs[:-1]), strict=True):
         new = dataclasses.replace(parent, **{part: new})
     check_config(new)
