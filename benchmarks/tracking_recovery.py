@@ -8,8 +8,9 @@ Sequences (seed 0, no LiDAR, simulated once into --data-dir): the loop at light 
 (loop_l100) and at 0.15 with dust (loop_l015_dust); the junction at 0.15 with dust, exposure
 flicker and a 1 s headlamp blackout (junction_hard); the junction at light 0.5 with a 360 degree
 turn on the spot at t = 10 s (junction_spin, when the simulator offers ``spin_at_s``).
-Configurations: ORB + lines with the defaults (orb_lines); the same with the low-texture fallback
-off, i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points only (orb).
+Configurations: ORB + lines with the defaults (orb_lines); XFeat + lines from configs/xfeat.yaml
+(xfeat_lines); ORB + lines with the low-texture fallback off, i.e. plain OpenCV ORB detection as
+before it (orb_lines_plain); ORB points only (orb).
 
 Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
 INERTIAL), relocalisations, new maps after a loss, frames the IMU bridged (the simulator writes
@@ -53,7 +54,10 @@ CONFIGS = {  # name: (label, low-texture fallback, lines)
     "orb_lines": ("ORB + lines", True, True),
     "orb_lines_plain": ("ORB + lines, plain ORB detection", False, True),
     "orb": ("ORB points", True, False),
+    "xfeat_lines": ("XFeat + lines (configs/xfeat.yaml)", True, True),
 }
+#: XFeat's preset, under the command line's --set (xfeat_lines).
+XFEAT_PRESET = Path(__file__).resolve().parents[1] / "configs" / "xfeat.yaml"
 ESTIMATED = ("OK", "RELOCALISED", "NEW_MAP")
 
 
@@ -73,9 +77,16 @@ def simulate(name: str, frames: int, data_dir: Path) -> Path | None:
 
 def config_for(name: str, overrides: dict | None = None) -> Config:
     _, fallback, lines = CONFIGS[name]
+    frontend = "xfeat" if name.startswith("xfeat") else "orb"
+    if frontend == "xfeat":
+        import yaml
+
+        from realtime import _merged
+
+        overrides = _merged(yaml.safe_load(XFEAT_PRESET.read_text()), overrides or {})
     base = config_from_dict(overrides) if overrides else Config()
     features = dataclasses.replace(
-        base.features, point_frontend="orb", low_texture_fallback=fallback
+        base.features, point_frontend=frontend, low_texture_fallback=fallback
     )
     tracking = dataclasses.replace(base.tracking, use_lines=lines)
     return dataclasses.replace(base, features=features, tracking=tracking)
