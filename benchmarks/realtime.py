@@ -52,7 +52,7 @@ from slslam.sim import SimOptions, Simulator
 from slslam.tracking import Tracker
 from slslam.tracking.run import tracked_trajectory
 
-from common import RESULTS_DIR, parse_overrides, write_results
+from common import RESULTS_DIR, parse_overrides, with_xfeat_preset, write_results
 
 SHARED_SUPERPOINT = (
     Path(__file__).resolve().parents[1].parent
@@ -97,24 +97,10 @@ def simulate(light: float, frames: int, data_dir: Path) -> Path:
     return out
 
 
-#: XFeat's preset (the settings it tracks best with), under the command line's --set.
-XFEAT_PRESET = Path(__file__).resolve().parents[1] / "configs" / "xfeat.yaml"
-
-
-def _merged(base: dict, top: dict) -> dict:
-    out = dict(base)
-    for key, value in top.items():
-        both = isinstance(value, dict) and isinstance(out.get(key), dict)
-        out[key] = _merged(out[key], value) if both else value
-    return out
-
-
 def config_for(name: str, overrides: dict, model: str | None) -> Config:
     _, frontend, lines = CONFIGS[name]
     if frontend == "xfeat":
-        import yaml
-
-        overrides = _merged(yaml.safe_load(XFEAT_PRESET.read_text()), overrides)
+        overrides = with_xfeat_preset(overrides)
     base = config_from_dict(overrides) if overrides else Config()
     superpoint = dataclasses.replace(base.features.superpoint, model_path=model)
     features = dataclasses.replace(base.features, point_frontend=frontend, superpoint=superpoint)

@@ -36,7 +36,7 @@ from slslam.config import Config, config_from_dict
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import run_sequence
 
-from common import RESULTS_DIR, parse_overrides, write_results
+from common import RESULTS_DIR, parse_overrides, with_xfeat_preset, write_results
 
 SEQUENCES = {
     "loop_l100": {"preset": "loop", "light": 1.0},
@@ -56,8 +56,6 @@ CONFIGS = {  # name: (label, low-texture fallback, lines)
     "orb": ("ORB points", True, False),
     "xfeat_lines": ("XFeat + lines (configs/xfeat.yaml)", True, True),
 }
-#: XFeat's preset, under the command line's --set (xfeat_lines).
-XFEAT_PRESET = Path(__file__).resolve().parents[1] / "configs" / "xfeat.yaml"
 ESTIMATED = ("OK", "RELOCALISED", "NEW_MAP")
 
 
@@ -79,11 +77,7 @@ def config_for(name: str, overrides: dict | None = None) -> Config:
     _, fallback, lines = CONFIGS[name]
     frontend = "xfeat" if name.startswith("xfeat") else "orb"
     if frontend == "xfeat":
-        import yaml
-
-        from realtime import _merged
-
-        overrides = _merged(yaml.safe_load(XFEAT_PRESET.read_text()), overrides or {})
+        overrides = with_xfeat_preset(overrides)
     base = config_from_dict(overrides) if overrides else Config()
     features = dataclasses.replace(
         base.features, point_frontend=frontend, low_texture_fallback=fallback
