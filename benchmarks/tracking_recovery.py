@@ -50,11 +50,11 @@ SEQUENCES = {
     },
     "junction_spin": {"preset": "junction", "light": 0.5, "spin_at_s": 10.0},
 }
-CONFIGS = {  # name: (label, low-texture fallback, lines)
-    "orb_lines": ("ORB + lines", True, True),
-    "orb_lines_plain": ("ORB + lines, plain ORB detection", False, True),
-    "orb": ("ORB points", True, False),
-    "xfeat_lines": ("XFeat + lines (configs/xfeat.yaml)", True, True),
+CONFIGS = {  # name: (label, point front end, low-texture fallback, lines)
+    "orb_lines": ("ORB + lines", "orb", True, True),
+    "orb_lines_plain": ("ORB + lines, plain ORB detection", "orb", False, True),
+    "orb": ("ORB points", "orb", True, False),
+    "xfeat_lines": ("XFeat + lines (configs/xfeat.yaml)", "xfeat", True, True),
 }
 ESTIMATED = ("OK", "RELOCALISED", "NEW_MAP")
 
@@ -74,8 +74,7 @@ def simulate(name: str, frames: int, data_dir: Path) -> Path | None:
 
 
 def config_for(name: str, overrides: dict | None = None) -> Config:
-    _, fallback, lines = CONFIGS[name]
-    frontend = "xfeat" if name.startswith("xfeat") else "orb"
+    _, frontend, fallback, lines = CONFIGS[name]
     if frontend == "xfeat":
         overrides = with_xfeat_preset(overrides)
     base = config_from_dict(overrides) if overrides else Config()

@@ -145,11 +145,9 @@ void BindFeatures(py::module_& m) {
   m.def(
       "sample_dense_map",
       [](const Eigen::Ref<const DenseSamples>& map, int map_height, int map_width,
-         const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv, int input_height,
-         int input_width, bool cubic) {
-        const DenseSamples copy = map;
-        py::gil_scoped_release release;
-        return SampleDenseMap(copy, map_height, map_width, uv, input_height, input_width, cubic);
+         const PixelArray& uv, int input_height, int input_width, bool cubic) {
+        py::gil_scoped_release release;  // map refers to the caller's array, alive for the call
+        return SampleDenseMap(map, map_height, map_width, uv, input_height, input_width, cubic);
       },
       py::arg("map"), py::arg("map_height"), py::arg("map_width"), py::arg("uv"),
       py::arg("input_height"), py::arg("input_width"), py::arg("cubic"),
@@ -158,9 +156,8 @@ void BindFeatures(py::module_& m) {
   m.def(
       "local_maxima",
       [](const Eigen::Ref<const HeatMap>& heat, float threshold, int radius_px, int border_px) {
-        const HeatMap copy = heat;  // a numpy view may be strided; the map is small
-        py::gil_scoped_release release;
-        return LocalMaxima(copy, threshold, radius_px, border_px);
+        py::gil_scoped_release release;  // heat refers to the caller's array, alive for the call
+        return LocalMaxima(heat, threshold, radius_px, border_px);
       },
       py::arg("heat"), py::arg("threshold"), py::arg("radius_px"), py::arg("border_px"),
       "Max-filter NMS of a float32 heatmap (H x W): (u, v) int32 of the pixels above the "

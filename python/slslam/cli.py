@@ -560,7 +560,11 @@ def models_export_command(
         raise typer.BadParameter(f"MODEL must be xfeat, got {model!r}")
     from slslam.features.xfeat_export import export_xfeat
 
-    facts = export_xfeat(out)
+    _print_written(out, export_xfeat(out))
+
+
+def _print_written(out: Path, facts: dict[str, str]) -> None:
+    """The file a models command wrote and the facts its PROVENANCE.md records."""
     console = Console()
     console.print(f"wrote {out}", highlight=False)
     for key, value in facts.items():
@@ -590,11 +594,7 @@ def models_quantize_command(
         from slslam.place import find_images, read_images
 
         calibration = read_images(find_images(images))
-    facts = quantize_xfeat(out, calibration)
-    console = Console()
-    console.print(f"wrote {out}", highlight=False)
-    for key, value in facts.items():
-        console.print(f"  {key}: {value}", highlight=False, markup=False)
+    _print_written(out, quantize_xfeat(out, calibration))
 
 
 vocab_app = typer.Typer(

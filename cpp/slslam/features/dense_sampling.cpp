@@ -30,9 +30,9 @@ int Taps(double t, bool cubic, double* w) {
 
 }  // namespace
 
-DenseSamples SampleDenseMap(const DenseSamples& map, int map_height, int map_width,
-                            const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv,
-                            int input_height, int input_width, bool cubic) {
+DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_height,
+                            int map_width, const PixelArray& uv, int input_height,
+                            int input_width, bool cubic) {
   SLSLAM_CHECK(map_height > 0 && map_width > 0 &&
                    map.cols() == static_cast<Eigen::Index>(map_height) * map_width,
                "a map of ", map.cols(), " values per channel is not ", map_height, " x ",

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include "slslam/features/grid_limit.h"  // PixelArray
+
 namespace slslam {
 
 using DenseSamples = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -12,8 +14,8 @@ using DenseSamples = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen:
 // A pixel (u, v) of the H x W network input maps to x = u Wc / (W - 1) - 0.5,
 // y = v Hc / (H - 1) - 0.5 on the map; taps outside the map count as zero. Bilinear, or bicubic
 // with Keys' kernel (A = -0.75, PyTorch's). Returns N x C samples (sums in double).
-DenseSamples SampleDenseMap(const DenseSamples& map, int map_height, int map_width,
-                            const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv,
-                            int input_height, int input_width, bool cubic);
+DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_height,
+                            int map_width, const PixelArray& uv, int input_height,
+                            int input_width, bool cubic);
 
 }  // namespace slslam

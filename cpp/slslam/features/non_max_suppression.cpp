@@ -7,19 +7,20 @@
 
 namespace slslam {
 
-PixelIndexArray LocalMaxima(const HeatMap& heat, float threshold, int radius_px, int border_px) {
+PixelIndexArray LocalMaxima(const Eigen::Ref<const HeatMap>& heat, float threshold, int radius_px,
+                            int border_px) {
   SLSLAM_CHECK(radius_px >= 0 && border_px >= 0, "NMS radius and border must be >= 0, got ",
                radius_px, " and ", border_px);
   const int h = static_cast<int>(heat.rows()), w = static_cast<int>(heat.cols());
   std::vector<int> kept;  // u, v pairs
   for (int v = border_px; v < h - border_px; ++v) {
-    const float* row = heat.data() + static_cast<Eigen::Index>(v) * w;
+    const float* row = heat.data() + v * heat.outerStride();
     for (int u = border_px; u < w - border_px; ++u) {
       const float value = row[u];
       if (!(value > threshold)) continue;
       bool peak = true;
       for (int y = std::max(0, v - radius_px); peak && y <= std::min(h - 1, v + radius_px); ++y) {
-        const float* r = heat.data() + static_cast<Eigen::Index>(y) * w;
+        const float* r = heat.data() + y * heat.outerStride();
         for (int x = std::max(0, u - radius_px); x <= std::min(w - 1, u + radius_px); ++x) {
           if (!(r[x] <= value)) {  // as numpy: a NaN neighbour is no peak either
             peak = false;

@@ -24,6 +24,7 @@ using HeatMap = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowM
 // pixels above `threshold` that are >= every pixel of the window around them (ties all kept;
 // outside the map counts as 0, never above a value that passed the threshold), at least
 // `border_px` inside the map. Returns (u, v) in row-major order (v, then u), as numpy's nonzero.
-PixelIndexArray LocalMaxima(const HeatMap& heat, float threshold, int radius_px, int border_px);
+PixelIndexArray LocalMaxima(const Eigen::Ref<const HeatMap>& heat, float threshold, int radius_px,
+                            int border_px);
 
 }  // namespace slslam

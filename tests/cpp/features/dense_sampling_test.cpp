@@ -7,8 +7,6 @@
 namespace slslam {
 namespace {
 
-using Uv = Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>;
-
 TEST(SampleDenseMap, BilinearIsExactOnAPlaneAndPadsWithZeros) {
   const int hc = 6, wc = 9, h = 48, w = 72;
   DenseSamples map(2, hc * wc);
@@ -18,7 +16,7 @@ TEST(SampleDenseMap, BilinearIsExactOnAPlaneAndPadsWithZeros) {
       map(1, y * wc + x) = 1.0f;
     }
   }
-  Uv uv(2, 2);
+  PixelArray uv(2, 2);
   uv << 33.0f, 25.0f, 0.0f, 0.0f;
   const DenseSamples s = SampleDenseMap(map, hc, wc, uv, h, w, /*cubic=*/false);
   const double x = 33.0 * wc / (w - 1) - 0.5, y = 25.0 * hc / (h - 1) - 0.5;
@@ -31,7 +29,7 @@ TEST(SampleDenseMap, BilinearIsExactOnAPlaneAndPadsWithZeros) {
 
 TEST(SampleDenseMap, ChecksItsSizes) {
   const DenseSamples map(3, 20);
-  const Uv uv(1, 2);
+  const PixelArray uv(1, 2);
   EXPECT_THROW(SampleDenseMap(map, 4, 4, uv, 32, 32, false), std::invalid_argument);
   EXPECT_THROW(SampleDenseMap(map, 4, 5, uv, 1, 32, false), std::invalid_argument);
 }
