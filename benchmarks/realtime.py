@@ -1,6 +1,6 @@
 """Real time on this machine: speed and accuracy of the tracker per front end, in one run.
 
-    python benchmarks/realtime.py [--configs orb,orb_lines,xfeat,xfeat_lines,superpoint_lines]
+    python benchmarks/realtime.py [--configs orb,orb_lines,xfeat,xfeat_lines,superpoint_lines,...]
         [--lights 1.0,0.15] [--frames 300] [--data-dir /tmp/slslam_realtime] [--out DIR]
         [--set features.xfeat.detection_threshold=0.02 ...]
 
@@ -19,7 +19,10 @@ settings (local mapping inline, so both passes give the same poses; the script c
   (process CPU time / wall time: 2.0 is both cores busy) and the per-stage medians (the stage
   columns come from this pass with --no-sequential, which skips the sequential one).
 
-XFeat configurations start from configs/xfeat.yaml (its preset), with --set on top.
+XFeat configurations start from configs/xfeat.yaml (its preset), with --set on top. Besides the
+default five, ``*_row`` configurations run the front end on the left image only with the row
+search on the right (``tracking.stereo_row_search``) and ``xfeat_lines_both`` the XFeat preset
+with the network on both images (descriptor stereo matching), for side-by-side ratios.
 
 Accuracy: ATE RMSE of the frames with an estimated pose (evo, SE3 alignment) against the
 simulator's ground truth, the tracked ratio and the keyframes. Learned configurations are
@@ -52,7 +55,7 @@ from slslam.sim import SimOptions, Simulator
 from slslam.tracking import Tracker
 from slslam.tracking.run import tracked_trajectory
 
-from common import RESULTS_DIR, parse_overrides, with_xfeat_preset, write_results
+from common import RESULTS_DIR, merged, parse_overrides, with_xfeat_preset, write_results
 
 SHARED_SUPERPOINT = (
     Path(__file__).resolve().parents[1].parent
@@ -61,13 +64,27 @@ SHARED_SUPERPOINT = (
     / "superpoint_v1"
     / "superpoint_v1.onnx"
 )
-CONFIGS = {  # name: (label, point front end, lines)
-    "orb": ("ORB points", "orb", False),
-    "orb_lines": ("ORB + lines", "orb", True),
-    "xfeat": ("XFeat points", "xfeat", False),
-    "xfeat_lines": ("XFeat + lines", "xfeat", True),
-    "superpoint_lines": ("SuperPoint + lines", "superpoint", True),
+ROW_SEARCH = {"tracking": {"stereo_row_search": True}}
+BOTH_IMAGES = {"tracking": {"stereo_row_search": False}}
+CONFIGS = {  # name: (label, point front end, lines, settings under --set)
+    "orb": ("ORB points", "orb", False, {}),
+    "orb_lines": ("ORB + lines", "orb", True, {}),
+    "orb_row": ("ORB points, left + row search", "orb", False, ROW_SEARCH),
+    "orb_lines_row": ("ORB + lines, left + row search", "orb", True, ROW_SEARCH),
+    "xfeat": ("XFeat points", "xfeat", False, {}),
+    "xfeat_lines": ("XFeat + lines", "xfeat", True, {}),
+    # the preset before the row search: the network on both images, descriptor stereo matching
+    "xfeat_lines_both": ("XFeat + lines, network on both images", "xfeat", True, BOTH_IMAGES),
+    "superpoint_lines": ("SuperPoint + lines", "superpoint", True, {}),
+    "superpoint_lines_row": (
+        "SuperPoint + lines, left + row search",
+        "superpoint",
+        True,
+        ROW_SEARCH,
+    ),
 }
+#: The configurations run unless --configs says otherwise.
+DEFAULT_CONFIGS = ("orb", "orb_lines", "xfeat", "xfeat_lines", "superpoint_lines")
 STAGES = (
     "inference",
     "line_extraction",
@@ -98,7 +115,8 @@ def simulate(light: float, frames: int, data_dir: Path) -> Path:
 
 
 def config_for(name: str, overrides: dict, model: str | None) -> Config:
-    _, frontend, lines = CONFIGS[name]
+    _, frontend, lines, settings = CONFIGS[name]
+    overrides = merged(settings, overrides)
     if frontend == "xfeat":
         overrides = with_xfeat_preset(overrides)
     base = config_from_dict(overrides) if overrides else Config()
@@ -241,7 +259,11 @@ def table(runs: list[dict]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--configs", default=",".join(CONFIGS))
+    parser.add_argument(
+        "--configs",
+        default=",".join(DEFAULT_CONFIGS),
+        help=f"comma-separated, of: {', '.join(CONFIGS)}",
+    )
     parser.add_argument("--lights", default="1.0,0.15")
     parser.add_argument("--frames", type=int, default=300)
     parser.add_argument("--data-dir", type=Path, default=Path("/tmp/slslam_realtime"))
@@ -266,10 +288,13 @@ def main(argv: list[str] | None = None) -> int:
     overrides = parse_overrides(args.set)
     model = superpoint_model()
     notes = []
-    if "superpoint_lines" in configs and model is None:
-        configs.remove("superpoint_lines")
-        notes.append(f"SuperPoint + lines skipped: no weights ({ENV_MODEL} or {SHARED_SUPERPOINT})")
-        print(notes[-1])
+    for name in [c for c in configs if CONFIGS[c][1] == "superpoint"]:
+        if model is None:
+            configs.remove(name)
+            notes.append(
+                f"{CONFIGS[name][0]} skipped: no weights ({ENV_MODEL} or {SHARED_SUPERPOINT})"
+            )
+            print(notes[-1])
     runs = []
     for light in lights:
         data = simulate(light, args.frames, args.data_dir)

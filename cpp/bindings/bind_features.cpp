@@ -26,6 +26,7 @@ void BindFeatures(py::module_& m) {
       .def_readwrite("min_fast_threshold", &OrbOptions::min_fast_threshold)
       .def_readwrite("cell_size_px", &OrbOptions::cell_size_px)
       .def_readwrite("denoise_above_noise", &OrbOptions::denoise_above_noise)
+      .def_readwrite("describe_smoothed", &OrbOptions::describe_smoothed)
       .def("check", &OrbOptions::Check);
 
   py::class_<MatchOptions>(m, "MatchOptions", "Brute-force matcher options.")

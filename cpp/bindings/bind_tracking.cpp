@@ -51,7 +51,8 @@ class TrackerSession {
  public:
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
       : tracker_(WithLineDescriptor(options, lines.descriptor)),
-        frontend_({options.rig, options.stereo, lines, options.use_lines}) {}
+        frontend_({options.rig, options.stereo, lines, options.use_lines,
+                   options.right_lines_on_keyframes, options.denoise_above_noise}) {}
 
   FrameOutput Track(int index, double timestamp, const py::array& left_image,
                     const py::array& right_image, const PixelArray& left_uv,
@@ -67,7 +68,11 @@ class TrackerSession {
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
       auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out);
       out.lines = frame->NumLines();
-      static_cast<TrackResult&>(out) = tracker_.Track(frame);
+      // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
+      const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
+        frontend_.CompleteStereoLines(right, f);
+      };
+      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete);
     }
     return out;
   }
@@ -258,6 +263,13 @@ void BindTracking(py::module_& m) {
       .def_readwrite("max_depth_baselines", &StereoMatchOptions::max_depth_baselines)
       .def_readwrite("subpixel_window", &StereoMatchOptions::subpixel_window)
       .def_readwrite("subpixel_search", &StereoMatchOptions::subpixel_search)
+      .def_readwrite("row_search", &StereoMatchOptions::row_search)
+      .def_readwrite("row_search_window", &StereoMatchOptions::row_search_window)
+      .def_readwrite("row_search_ratio", &StereoMatchOptions::row_search_ratio)
+      .def_readwrite("row_search_max_cost", &StereoMatchOptions::row_search_max_cost)
+      .def_readwrite("row_search_min_texture", &StereoMatchOptions::row_search_min_texture)
+      .def_readwrite("row_search_denoise_above_noise",
+                     &StereoMatchOptions::row_search_denoise_above_noise)
       .def("check", &StereoMatchOptions::Check);
 
   py::class_<RelocalisationOptions>(m, "RelocalisationOptions",
@@ -332,6 +344,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("pose", &TrackerOptions::pose)
       .def_readwrite("mapping", &TrackerOptions::mapping)
       .def_readwrite("use_lines", &TrackerOptions::use_lines)
+      .def_readwrite("right_lines_on_keyframes", &TrackerOptions::right_lines_on_keyframes)
+      .def_readwrite("denoise_above_noise", &TrackerOptions::denoise_above_noise)
       .def_readwrite("sequential", &TrackerOptions::sequential)
       .def_readwrite("min_init_points", &TrackerOptions::min_init_points)
       .def_readwrite("min_inliers", &TrackerOptions::min_inliers)
@@ -389,6 +403,33 @@ void BindTracking(py::module_& m) {
       .def_readonly("matching_ms", &FrameOutput::matching_ms)
       .def_readonly("optimisation_ms", &FrameOutput::optimisation_ms)
       .def_readonly("mapping_ms", &FrameOutput::mapping_ms);
+
+  m.def(
+      "match_stereo_points",
+      [](const py::array& left_image, const py::array& right_image, const PixelArray& left_uv,
+         const py::array& left_descriptors, const PixelArray& right_uv,
+         const py::array& right_descriptors, const StereoRig& rig,
+         const StereoMatchOptions& options) {
+        const cv::Mat left = WrapGray(left_image, "left image");
+        const cv::Mat right = WrapGray(right_image, "right image");
+        const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
+        const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
+        StereoFrame frame;
+        {
+          py::gil_scoped_release release;
+          frame = MakeStereoFrame(0, 0.0, kl, kr, nullptr, nullptr, rig, options);
+          if (options.row_search) MatchStereoByRowSearch(left, right, rig, options, &frame);
+          RefineStereoSubpixel(left, right, rig, options, &frame);
+        }
+        return py::make_tuple(Eigen::VectorXd::Map(frame.u_right.data(), frame.u_right.size()),
+                              Eigen::VectorXd::Map(frame.depth.data(), frame.depth.size()));
+      },
+      py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
+      py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
+      py::arg("rig"), py::arg("options") = StereoMatchOptions{},
+      "The tracker's stereo matching of keypoints (descriptors along the row band, then the row "
+      "search with options.row_search, then subpixel refinement): (u_right, depth) per left "
+      "keypoint, -1 where unmatched.");
 
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -100,6 +100,7 @@ class OrbOptions:
     ORB extractor options (per-cell adaptive FAST, OpenCV descriptors).
     """
     adaptive: bool
+    describe_smoothed: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:
@@ -886,6 +887,7 @@ class StereoMatchOptions:
     """
     Stereo keypoint matching.
     """
+    row_search: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:
@@ -925,6 +927,36 @@ class StereoMatchOptions:
         ...
     @ratio.setter
     def ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def row_search_denoise_above_noise(self) -> float:
+        ...
+    @row_search_denoise_above_noise.setter
+    def row_search_denoise_above_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def row_search_max_cost(self) -> float:
+        ...
+    @row_search_max_cost.setter
+    def row_search_max_cost(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def row_search_min_texture(self) -> float:
+        ...
+    @row_search_min_texture.setter
+    def row_search_min_texture(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def row_search_ratio(self) -> float:
+        ...
+    @row_search_ratio.setter
+    def row_search_ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def row_search_window(self) -> int:
+        ...
+    @row_search_window.setter
+    def row_search_window(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
     def subpixel_search(self) -> int:
@@ -1193,6 +1225,7 @@ class TrackerOptions:
     pose: PoseOptimizerOptions
     relocalisation: RelocalisationOptions
     rig: StereoRig
+    right_lines_on_keyframes: bool
     sequential: bool
     stereo: StereoMatchOptions
     use_imu: bool
@@ -1207,6 +1240,12 @@ class TrackerOptions:
         ...
     @close_depth_baselines.setter
     def close_depth_baselines(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def denoise_above_noise(self) -> float:
+        ...
+    @denoise_above_noise.setter
+    def denoise_above_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def keyframe_max_frames(self) -> int:
@@ -2315,6 +2354,10 @@ def match_scan_to_points(source: typing.Annotated[numpy.typing.ArrayLike, numpy.
     """
 def match_stereo_lines(left: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_left: numpy.ndarray, right: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_right: numpy.ndarray, options: StereoLineOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
     ...
+def match_stereo_points(left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, rig: StereoRig, options: StereoMatchOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"]]:
+    """
+    The tracker's stereo matching of keypoints (descriptors along the row band, then the row search with options.row_search, then subpixel refinement): (u_right, depth) per left keypoint, -1 where unmatched.
+    """
 def optimize_lidar_pose_graph(T_world_keyframe: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], a: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], b: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], T_a_b: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], information: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[6, 6]"]], loop: collections.abc.Sequence[bool], options: LidarPoseGraphOptions = ...) -> list[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]]:
     """
     Optimise keyframe poses (list of 4x4) under relative-pose edges a -> b (T_a_b, 6x6 information on translation then rotation, loop flag for the Cauchy loss); the first keyframe is held. Returns the poses.

@@ -144,6 +144,9 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     )
 } | {
     "max_depth_baselines": ("stereo.max_depth_baselines",),
+    "stereo_row_search": ("stereo.row_search",),
+    "right_lines_on_keyframes": ("right_lines_on_keyframes",),
+    "denoise_above_noise": ("denoise_above_noise",),
     "local_keyframes": ("mapping.local_keyframes",),
     "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
     "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
@@ -385,6 +388,19 @@ class TrackingConfig:
     line_angle_weight: float = _tracking("line_angle_weight", "[0, 1e6]")
     # stereo depths beyond this many baselines are unused
     max_depth_baselines: float = _tracking("max_depth_baselines", "[1, 1e6]")
+    # stereo points without right-image keypoints: the point front end runs on the left image
+    # only and each keypoint's patch is searched along its row of the right image (half the
+    # network's work for a learned front end); false: keypoints on both images, matched by
+    # descriptor along the row band
+    stereo_row_search: bool = _tracking("stereo_row_search")
+    # line segments of the right image only for frames that become keyframes or start a map, the
+    # only ones whose stereo lines are used (tracking matches the left image's lines to the map);
+    # false: both images every frame
+    right_lines_on_keyframes: bool = _tracking("right_lines_on_keyframes")
+    # images noisier than this (Immerkaer's estimate, gray levels) reach line detection, line
+    # descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px, as ORB's detection
+    # image (0: never)
+    denoise_above_noise: float = _tracking("denoise_above_noise", "[0, 255]")
     # keypoint measurement sigma [px]
     point_sigma_px: float = _tracking("point_sigma_px", "[0.01, 1000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px

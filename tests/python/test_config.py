@@ -126,7 +126,7 @@ def test_dynamic_cell_settings_reach_the_tracker():
     assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)
 
 
-def test_xfeat_preset_selects_xfeat_and_widens_the_dynamic_cell_filter():
+def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_filter():
     """configs/xfeat.yaml: XFeat with the filter's width following the frame's residuals; every
     other key at its default."""
     from slslam.datasets.euroc import RectifiedStereoCamera
@@ -140,13 +140,17 @@ def test_xfeat_preset_selects_xfeat_and_widens_the_dynamic_cell_filter():
     assert _core.DynamicCellOptions().sigma_median_ratio == 0.0  # the paper's fixed width
     camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
     assert _core_options(camera, config).dynamic.sigma_median_ratio == 3.0
+    # the network on the left image only, the row search on the right
+    assert config.tracking.stereo_row_search and not Config().tracking.stereo_row_search
+    assert _core_options(camera, config).stereo.row_search
     rest = dataclasses.replace(
         config.features,
         point_frontend=Config().features.point_frontend,
         dynamic_cells=Config().features.dynamic_cells,
         xfeat=Config().features.xfeat,
     )
-    assert dataclasses.replace(config, features=rest) == Config()
+    tracking = dataclasses.replace(config.tracking, stereo_row_search=False)
+    assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
 
 
 def test_every_mirrored_default_equals_the_cpp_default():

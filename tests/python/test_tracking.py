@@ -199,7 +199,9 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
     junction's bare stretch (frames 380-459 of the 600-frame run: light 0.15, dust, flicker;
     15-50 weighted inliers a frame there in the full run), rendered directly. With the per-cell
     fallback a map starts on the first frame and holds (measured: 3 RECENTLY_LOST frames, 0.22 m
-    off after 3.2 m from a cold start here); with plain ORB detection no map ever starts."""
+    off after 3.2 m from a cold start here); with plain ORB detection maps start and are lost
+    (measured: 21 % of the frames tracked, two maps; before the pair was smoothed for stereo
+    matching, tracking.denoise_above_noise, none started)."""
     from slslam.datasets.euroc import RectifiedStereoCamera
 
     options = SimOptions(
@@ -244,7 +246,8 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
     assert travelled > 2.5
     assert error[tracked].max() < 0.1 * travelled, error[tracked].max()
     plain, plain_maps = run(False)
-    assert plain_maps == 0 and not any(r.tracked for r in plain)
+    plain_tracked = np.mean([r.tracked for r in plain])
+    assert plain_tracked < 0.5 and "LOST" in [r.state for r in plain], plain_tracked
 
 
 def _relative_position_error(result_a, result_b, gt_by_time) -> tuple[float, float]:
@@ -377,3 +380,101 @@ def test_bad_imu_samples_are_clear_errors(sim_loop):
         tracker.add_imu(np.arange(3.0), z, z)
         with pytest.raises(InputError, match=r"IMU samples.*increase"):
             tracker.add_imu(np.array([2.0]), np.zeros((1, 3)), np.zeros((1, 3)))
+
+
+
+def _row_search_disparities(left, right, uv, descriptors, camera, denoise: float = 6.0):
+    """(disparity per keypoint or NaN) of the core's stereo matching with the row search."""
+    rig = _core.StereoRig(
+        _core.PinholeCamera(camera.fx, camera.fx, camera.cx, camera.cy, camera.width, camera.height),
+        camera.baseline_m,
+    )
+    options = _core.StereoMatchOptions()
+    options.row_search = True
+    options.row_search_denoise_above_noise = denoise
+    u_right, _ = _core.match_stereo_points(
+        left, right, uv, descriptors, uv[:0], descriptors[:0], rig, options
+    )
+    u_right = np.asarray(u_right)
+    return np.where(u_right >= 0, uv[:, 0] - u_right, np.nan)
+
+
+@pytest.mark.parametrize("light", [1.0, 0.15])
+def test_row_search_disparities_agree_with_the_rendered_depth(light):
+    """The row search (no right-image keypoints) against the simulator's depth map. Measured on
+    XFeat keypoints of this loop: 0.8 % more than 3 px off at full light (descriptor matching
+    5.6 %); in the dark the smoothed search matched about 550 of 2,500 keypoints, the raw one 16."""
+    from slslam.features.orb import Orb, OrbOptions
+
+    sim = Simulator(SimOptions(preset="loop", frames=20, light=light, lidar=False))
+    left, right, depth = sim.render_stereo(10)
+    camera = sim.camera
+    keypoints = Orb(OrbOptions(max_keypoints=1500)).detect(left)
+    uv = np.ascontiguousarray(keypoints.uv, dtype=np.float32)
+    disparity = _row_search_disparities(left, right, uv, keypoints.descriptors, camera)
+    matched = np.isfinite(disparity)
+    pixel = np.round(uv[matched]).astype(int)
+    truth = camera.fx * camera.baseline_m / depth[pixel[:, 1], pixel[:, 0]]
+    error = np.abs(disparity[matched] - truth)
+    assert matched.mean() > (0.4 if light == 1.0 else 0.15), matched.mean()
+    # (keypoints on depth edges read the depth of the other side: a few percent)
+    assert np.median(error) < (0.3 if light == 1.0 else 0.6), np.median(error)
+    assert np.mean(error > 3.0) < (0.03 if light == 1.0 else 0.15), np.mean(error > 3.0)
+    if light < 1.0:  # the noisy pair is searched smoothed: without it far fewer matches
+        raw = _row_search_disparities(left, right, uv, keypoints.descriptors, camera, denoise=0.0)
+        assert np.isfinite(raw).sum() < 0.5 * matched.sum()
+
+
+def test_row_search_runs_the_front_end_on_the_left_image_only(sim_loop):
+    """tracking.stereo_row_search: one detection per frame (the left image), every frame
+    tracked, and the trajectory as accurate as with keypoints on both images."""
+    from slslam.config import make_point_frontend
+    from slslam.eval.report import evaluate
+    from slslam.tracking.run import tracked_trajectory
+
+    sequence = EurocSequence(sim_loop)
+    base = config("orb", lines=True)
+    row = dataclasses.replace(
+        base, tracking=dataclasses.replace(base.tracking, stereo_row_search=True)
+    )
+
+    class Counting:
+        def __init__(self, frontend):
+            self.frontend, self.options, self.calls = frontend, frontend.options, 0
+
+        def detect(self, image):
+            self.calls += 1
+            return self.frontend.detect(image)
+
+    frontend = Counting(make_point_frontend(row.features))
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+    with Tracker(sequence.camera, row, frontend=frontend) as tracker:
+        results = list(tracker.track_stream(frames))
+    assert frontend.calls == len(frames)
+    assert all(r.tracked for r in results[1:])
+    gt = sequence.groundtruth(frame="rectified")
+    ate = evaluate(tracked_trajectory(results), gt, align="se3", rpe_delta=None, plot=False)
+    # ORB + lines with keypoints on both images: 1.3 cm over these 3 m
+    assert ate.summary()["ape"]["rmse"] < 0.03
+
+
+def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
+    """tracking.right_lines_on_keyframes: the right image's lines are extracted only for frames
+    that become keyframes (or start a map), the only ones whose stereo lines are used, so the
+    poses and the map are the same as with lines on both images every frame."""
+    sequence = EurocSequence(sim_loop)
+    lines = config("orb", lines=True)
+    assert lines.tracking.right_lines_on_keyframes  # the default
+    both = dataclasses.replace(
+        lines, tracking=dataclasses.replace(lines.tracking, right_lines_on_keyframes=False)
+    )
+    runs = []
+    for cfg in (both, lines):
+        with Tracker(sequence.camera, cfg) as tracker:
+            results = [tracker.track(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+            runs.append((tracker.trajectory()[1], tracker.map(), results))
+    (poses_a, map_a, results_a), (poses_b, map_b, results_b) = runs
+    assert np.array_equal(poses_a, poses_b)
+    assert np.array_equal(map_a.lines, map_b.lines) and len(map_a.lines) > 20
+    assert [r.counts.keyframe for r in results_a] == [r.counts.keyframe for r in results_b]
+    assert sum(r.counts.keyframe for r in results_b) < 0.8 * len(results_b)  # work was skipped

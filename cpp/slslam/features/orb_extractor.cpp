@@ -242,6 +242,17 @@ std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
   return angles;
 }
 
+cv::Mat SmoothIfNoisy(const cv::Mat& image, double above_noise) {
+  if (above_noise <= 0.0) return image;
+  const double noise = EstimateNoiseSigma(image);
+  if (noise <= above_noise) return image;
+  const double sigma = std::clamp(noise / 7.0, 0.5, 2.5);
+  // (a buffer of its own: into a header copy of `image` GaussianBlur would write in place)
+  cv::Mat smoothed;
+  cv::GaussianBlur(image, smoothed, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
+  return smoothed;
+}
+
 Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
   options.Check();
   Require(!image.empty() && image.type() == CV_8UC1, "ORB needs a non-empty 8-bit gray image");
@@ -249,14 +260,7 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
 
   const std::vector<int> budget = LevelBudgets(options);
   // Detection image: smoothed when the frame is noisy (dark, high gain).
-  cv::Mat detect_image = image;
-  if (options.denoise_above_noise > 0.0) {
-    const double noise = EstimateNoiseSigma(image);
-    if (noise > options.denoise_above_noise) {
-      const double sigma = std::clamp(noise / 7.0, 0.5, 2.5);
-      cv::GaussianBlur(image, detect_image, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
-    }
-  }
+  const cv::Mat detect_image = SmoothIfNoisy(image, options.denoise_above_noise);
   // FAST needs 3 px around a corner; the descriptor patch is handled by OpenCV's padded levels.
   const int border = std::max(options.edge_threshold, 3);
   std::vector<cv::KeyPoint> all;
@@ -288,7 +292,8 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
   if (!all.empty()) {
     // With provided keypoints OpenCV keeps their angle and octave and only computes descriptors
     // (it may drop keypoints too close to the border, so the returned list is used).
-    MakeOrb(options)->detectAndCompute(image, cv::noArray(), all, descriptors,
+    const cv::Mat& describe = options.describe_smoothed ? detect_image : image;
+    MakeOrb(options)->detectAndCompute(describe, cv::noArray(), all, descriptors,
                                        /*useProvidedKeypoints=*/true);
   }
   return ToKeypoints(all, descriptors);

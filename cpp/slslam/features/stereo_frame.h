@@ -26,6 +26,10 @@ struct StereoFrame {
   /// per line: 3-D endpoints in the left camera frame [m] when the stereo pair triangulated it
   std::vector<std::array<Eigen::Vector3d, 2>> line_endpoints;
   std::vector<bool> line_has_depth;
+  /// the right image's lines are not matched yet (StereoFrontendOptions::
+  /// right_lines_on_keyframes): line_has_depth is all false until the tracker completes the
+  /// frame before it becomes a keyframe or starts a map
+  bool stereo_lines_pending = false;
 
   int NumKeypoints() const { return keypoints.size(); }
   int NumLines() const { return static_cast<int>(lines.size()); }

@@ -4,6 +4,7 @@
 #include <future>
 
 #include "slslam/core/check.h"
+#include "slslam/features/orb_extractor.h"
 
 namespace slslam {
 
@@ -17,6 +18,7 @@ double Ms(std::chrono::steady_clock::time_point since) {
 }  // namespace
 
 void StereoFrontendOptions::Check() const {
+  CheckInRange("tracking.denoise_above_noise", denoise_above_noise, 0.0, 255.0);
   rig.Check();
   stereo.Check();
   lines.Check();
@@ -26,35 +28,58 @@ StereoFrontend::StereoFrontend(const StereoFrontendOptions& options) : options_(
   options_.Check();
 }
 
-std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp, const cv::Mat& left,
-                                                   const cv::Mat& right,
+std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
+                                                   const cv::Mat& left_image,
+                                                   const cv::Mat& right_image,
                                                    const Keypoints& left_keypoints,
                                                    const Keypoints& right_keypoints,
                                                    StereoFrontendTiming* timing) const {
   const PinholeCamera& cam = options_.rig.camera;
-  SLSLAM_CHECK(left.cols == cam.width && left.rows == cam.height, "left image is ", left.cols, "x",
-               left.rows, ", calibration says ", cam.width, "x", cam.height);
-  Require(right.size() == left.size(), "left and right images differ in size");
+  SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
+               left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
+               cam.height);
+  Require(right_image.size() == left_image.size(), "left and right images differ in size");
   auto start = std::chrono::steady_clock::now();
+  const cv::Mat left = SmoothIfNoisy(left_image, options_.denoise_above_noise);
+  const cv::Mat right = SmoothIfNoisy(right_image, options_.denoise_above_noise);
   LineFeatures left_lines, right_lines;
-  if (options_.use_lines) {
+  const bool right_now = options_.use_lines && !options_.right_lines_on_keyframes;
+  if (right_now) {
     // LSD is single-threaded: the two images on two threads.
     auto right_future =
         std::async(std::launch::async, [&] { return ExtractLines(right, options_.lines); });
     left_lines = ExtractLines(left, options_.lines);
     right_lines = right_future.get();
+  } else if (options_.use_lines) {
+    left_lines = ExtractLines(left, options_.lines);
   }
   const double line_ms = Ms(start);
   start = std::chrono::steady_clock::now();
   auto frame = std::make_shared<StereoFrame>(MakeStereoFrame(
       index, timestamp, left_keypoints, right_keypoints, options_.use_lines ? &left_lines : nullptr,
-      options_.use_lines ? &right_lines : nullptr, options_.rig, options_.stereo));
+      right_now ? &right_lines : nullptr, options_.rig, options_.stereo));
+  frame->stereo_lines_pending = options_.use_lines && !right_now;
+  if (options_.stereo.row_search) {
+    MatchStereoByRowSearch(left, right, options_.rig, options_.stereo, frame.get());
+  }
   RefineStereoSubpixel(left, right, options_.rig, options_.stereo, frame.get());
   if (timing != nullptr) {
     timing->line_extraction_ms = line_ms;
     timing->stereo_matching_ms = Ms(start);
   }
   return frame;
+}
+
+void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const {
+  Require(frame != nullptr, "CompleteStereoLines needs a frame");
+  if (!frame->stereo_lines_pending) return;
+  const PinholeCamera& cam = options_.rig.camera;
+  SLSLAM_CHECK(right.cols == cam.width && right.rows == cam.height, "right image is ", right.cols,
+               "x", right.rows, ", calibration says ", cam.width, "x", cam.height);
+  const cv::Mat smoothed = SmoothIfNoisy(right, options_.denoise_above_noise);  // as in Build
+  MatchStereoLinesInto(ExtractLines(smoothed, options_.lines), options_.rig, options_.stereo,
+                       frame);
+  frame->stereo_lines_pending = false;
 }
 
 }  // namespace slslam

@@ -21,12 +21,22 @@ struct StereoFrontendOptions {
   StereoMatchOptions stereo;
   LineExtractorOptions lines;
   bool use_lines = true;  ///< false: point features only (no line extraction)
+  /// Lines of the right image only for frames that become keyframes or start a map (the only
+  /// ones whose stereo lines are used): Build extracts the left image's and marks the frame
+  /// (stereo_lines_pending); CompleteStereoLines adds the right image's when the tracker asks.
+  bool right_lines_on_keyframes = true;
+  /// Dark frames are noisy: an image noisier than this (Immerkaer's estimate) is smoothed,
+  /// sigma = noise / 7 px, before line detection, line descriptors, the row search and the
+  /// subpixel refinement, as ORB smooths its detection image. Measured on the dark dusty loop
+  /// (ORB + lines, 600 frames): 0.13 m ATE smoothed against 0.27 m raw. 0: never
+  /// [gray levels]
+  double denoise_above_noise = 6.0;
 
   void Check() const;
 };
 
 struct StereoFrontendTiming {
-  double line_extraction_ms = 0.0;  ///< both images, wall time
+  double line_extraction_ms = 0.0;  ///< both images (left only: right_lines_on_keyframes), wall
   double stereo_matching_ms = 0.0;  ///< keypoints and lines, subpixel refinement included
 };
 
@@ -40,6 +50,10 @@ class StereoFrontend {
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
                                      StereoFrontendTiming* timing = nullptr) const;
+
+  // The stereo lines of a frame Build left pending: the right image's segments, matched and
+  // triangulated (for Tracker::Track's completer). Does nothing when none are pending.
+  void CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const;
 
   const StereoFrontendOptions& options() const { return options_; }
 

@@ -22,6 +22,20 @@ struct StereoMatchOptions {
   float max_depth_baselines = 60.0f;  ///< depths beyond this many baselines count as unknown [-]
   int subpixel_window = 5;  ///< half size of the SAD patch for subpixel disparity [px]; 0: off
   int subpixel_search = 5;  ///< columns searched on each side of the descriptor match [px]
+  /// Points: no right-image keypoints; each left keypoint's patch is searched along its row of
+  /// the right image over the disparity range (MatchStereoByRowSearch). Lets a learned front end
+  /// run its network on the left image only.
+  bool row_search = false;
+  int row_search_window = 3;  ///< half size of the SAD patch of the row search [px]
+  /// best cost / lowest other local minimum of the cost along the row must be below this [-]
+  float row_search_ratio = 0.8f;
+  /// best cost / the left patch's own absolute deviation from its mean must be below this [-]
+  float row_search_max_cost = 0.5f;
+  /// patches whose mean absolute deviation is below this are not searched [gray levels]
+  float row_search_min_texture = 2.0f;
+  /// noisier left images (Immerkaer's estimate, as orb.denoise_above_noise) are searched
+  /// Gaussian-smoothed, each by its own estimate, sigma = noise / 7 px; 0: never [gray levels]
+  double row_search_denoise_above_noise = 6.0;
   StereoLineOptions lines;
 
   void Check() const;
@@ -33,6 +47,26 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
                             const Keypoints& right, const LineFeatures* left_lines,
                             const LineFeatures* right_lines, const StereoRig& rig,
                             const StereoMatchOptions& options = {});
+
+// Stereo matching and triangulation of the frame's (left) line segments with the right image's:
+// fills line_endpoints and line_has_depth (MakeStereoFrame's line step, also run on its own when
+// the right image's lines are extracted later, for keyframes only).
+void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
+                          const StereoMatchOptions& options, StereoFrame* frame);
+
+// Stereo matching of the left keypoints without right-image keypoints (options.row_search): for
+// each keypoint the (2w+1)^2 patch around it (w = row_search_window), minus its mean, is compared
+// by the sum of absolute differences with every right patch of its row whose disparity lies in
+// [min_disparity_px, max_disparity_px], each minus its own mean (as RefineStereoSubpixel). A
+// match needs texture in the left patch, a best cost small against the patch's own deviation
+// (row_search_max_cost), a clear lowest minimum (row_search_ratio against the lowest other local
+// minimum: repeated structure along the row is refused) and a minimum inside the range. A noisy
+// pair (dark frames) is searched smoothed (row_search_denoise_above_noise). The
+// integer column is stored; RefineStereoSubpixel refines it as a descriptor match. Keypoints with
+// a match already keep it. About 49 x (disparity range) absolute differences per keypoint, in
+// contiguous float rows the compiler vectorises.
+void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                            const StereoMatchOptions& options, StereoFrame* frame);
 
 // Refines the right-image column of every stereo-matched keypoint to subpixel precision (as
 // ORB-SLAM's ComputeStereoMatches): the (2w+1)^2 patch around the left keypoint is slid along the

@@ -174,10 +174,24 @@ void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
   have_pose_ = true;
 }
 
-bool Tracker::StartMap(const std::shared_ptr<const StereoFrame>& frame,
-                       const Rigid3d& cam_from_world) {
+std::shared_ptr<const StereoFrame> Tracker::WithStereoLines(
+    std::shared_ptr<const StereoFrame> frame) const {
+  if (!frame->stereo_lines_pending || complete_stereo_lines_ == nullptr ||
+      !*complete_stereo_lines_) {
+    return frame;
+  }
+  auto full = std::make_shared<StereoFrame>(*frame);
+  (*complete_stereo_lines_)(full.get());
+  full->stereo_lines_pending = false;
+  return full;
+}
+
+bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world) {
   int stereo_points = 0, stereo_lines = 0;
   for (double d : frame->depth) stereo_points += d > 0.0;
+  // (too few points already: the right image's lines cannot start a map)
+  if (stereo_points < std::min(options_.min_init_points, 15)) return false;
+  if (options_.use_lines) frame = WithStereoLines(std::move(frame));
   if (options_.use_lines) {
     for (bool has : frame->line_has_depth) stereo_lines += has;
   }
@@ -321,8 +335,15 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
          ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
 }
 
-TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
+TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
+                           const StereoLineCompleter& complete_stereo_lines) {
   Require(frame != nullptr, "Track needs a frame");
+  // The completer is valid for this call only.
+  struct CompleterScope {
+    const StereoLineCompleter*& slot;
+    ~CompleterScope() { slot = nullptr; }
+  } scope{complete_stereo_lines_};
+  complete_stereo_lines_ = &complete_stereo_lines;
   TrackResult result;
   if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
     const cv::Mat& d = frame->keypoints.descriptors;
@@ -491,6 +512,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame) {
     }
     if (make_keyframe && !options_.localise_only) {
       const auto start = Clock::now();
+      if (options_.use_lines) frame = WithStereoLines(std::move(frame));
       InsertKeyFrame(frame, tracking.pose.cam_from_world, point_match, line_match, valid);
       result.keyframe = true;
       result.mapping_ms = Ms(start);

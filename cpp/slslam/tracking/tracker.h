@@ -12,6 +12,7 @@
 // make a keyframe and to start a map, so lines carry the low-texture stretches.
 #pragma once
 
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <mutex>
@@ -82,6 +83,14 @@ struct TrackerOptions {
   PoseOptimizerOptions pose;
   LocalMapperOptions mapping;
   bool use_lines = true;               ///< lines in tracking and mapping
+  /// the right image's lines only for frames that become keyframes or start a map
+  /// (StereoFrontendOptions::right_lines_on_keyframes; the tracker completes those frames):
+  /// the same poses and map, about half the line work on the frames between keyframes
+  bool right_lines_on_keyframes = true;
+  /// images noisier than this (Immerkaer's estimate, as orb.denoise_above_noise) reach line
+  /// detection, line descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px
+  /// (StereoFrontendOptions::denoise_above_noise); 0: never [gray levels]
+  double denoise_above_noise = 6.0;
   bool sequential = true;              ///< local mapping inline (reproducible) or on its own thread
   int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
@@ -182,7 +191,13 @@ class Tracker {
   Tracker(const Tracker&) = delete;
   Tracker& operator=(const Tracker&) = delete;
 
-  TrackResult Track(std::shared_ptr<const StereoFrame> frame);
+  // Fills in the stereo lines of a frame built without them (StereoFrame::stereo_lines_pending);
+  // called on a copy of the frame, during Track, when it is about to become a keyframe or to
+  // start a map: the only places the right image's lines are used.
+  using StereoLineCompleter = std::function<void(StereoFrame*)>;
+
+  TrackResult Track(std::shared_ptr<const StereoFrame> frame,
+                    const StereoLineCompleter& complete_stereo_lines = {});
   // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
   // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
   // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
@@ -224,7 +239,10 @@ class Tracker {
   double Weighted(int points, int lines) const {
     return points + options_.line_inlier_weight * lines;
   }
-  bool StartMap(const std::shared_ptr<const StereoFrame>& frame, const Rigid3d& cam_from_world);
+  bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
+  // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
+  // was given a completer.
+  std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
   // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
                       const std::vector<int>& point_matches,
@@ -347,6 +365,8 @@ class Tracker {
   std::unique_ptr<LoopCloser> loop_closer_;
   int seen_epoch_ = -1;  ///< the active map's correction epoch the last pose is expressed in
   TrackingStats stats_;
+  /// the completer given to the Track call in progress (null outside Track, or none given)
+  const StereoLineCompleter* complete_stereo_lines_ = nullptr;
 };
 
 }  // namespace slslam

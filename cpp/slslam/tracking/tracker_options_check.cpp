@@ -26,6 +26,12 @@ void StereoMatchOptions::Check() const {
   CheckAboveInRange("tracking.max_depth_baselines", max_depth_baselines, 0.0f, 1e6f);
   CheckInRange("stereo.subpixel_window", subpixel_window, 0, 100);
   CheckInRange("stereo.subpixel_search", subpixel_search, 1, 1000);
+  CheckInRange("stereo.row_search_window", row_search_window, 1, 50);
+  CheckAboveInRange("stereo.row_search_ratio", row_search_ratio, 0.0f, 1.0f);
+  CheckAboveInRange("stereo.row_search_max_cost", row_search_max_cost, 0.0f, 100.0f);
+  CheckInRange("stereo.row_search_min_texture", row_search_min_texture, 0.0f, 255.0f);
+  CheckInRange("stereo.row_search_denoise_above_noise", row_search_denoise_above_noise, 0.0,
+               255.0);
   lines.Check();
 }
 
@@ -52,6 +58,7 @@ void TrackerOptions::Check() const {
   loop_closing.Check();
   if (use_imu) imu.Check();
   CheckInRange("tracking.min_init_points", min_init_points, 3, limits::kMaxKeypoints);
+  CheckInRange("tracking.denoise_above_noise", denoise_above_noise, 0.0, 255.0);
   CheckInRange("tracking.min_inliers", min_inliers, 3, limits::kMaxKeypoints);
   // doubled on a retry and scaled by lost_search_scale: still far inside int
   CheckAboveInRange("tracking.search_radius_px", search_radius_px, 0.0f,

@@ -85,6 +85,9 @@ class XFeatOptions:
     max_keypoints: int | None = 4096  # keep the strongest N (None: all)
     providers: str | tuple[str, ...] = "auto"  # onnxruntime providers; auto: CUDA if present
     intra_op_threads: int = 0  # onnxruntime threads (0: its default, all cores)
+    # keypoints to subpixel positions: a Gaussian (parabola through the log heatmap) fitted to
+    # the maximum and its two neighbours along each axis (the reference keeps whole pixels)
+    subpixel: bool = False
     # Dark frames are noisy (gain): above this estimated noise (Immerkaer's estimator, as ORB's
     # denoise_above_noise) the network sees a Gaussian-smoothed image, sigma = noise / 7 px
     # [gray levels]; 0: never smooth
@@ -188,6 +191,30 @@ def local_maxima(heat: np.ndarray, threshold: float, radius: int, border: int) -
     return np.asarray(_core.local_maxima(heat, float(threshold), int(radius), int(border)))
 
 
+def refine_subpixel(heat: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """(N, 2) float32 subpixel positions of the integer maxima ``uv`` of ``heat``: per axis the
+    vertex of the parabola through the log heatmap at the maximum and its two neighbours (a
+    Gaussian peak), within half a pixel; maxima on the image's edge keep their pixel."""
+    h, w = heat.shape
+    out = uv.astype(np.float32)
+    if len(uv) == 0:
+        return out
+    u, v = uv[:, 0], uv[:, 1]
+    log = lambda a: np.log(np.maximum(a, 1e-12))  # noqa: E731
+    for axis, (size, du, dv) in enumerate(((w, 1, 0), (h, 0, 1))):
+        pos = uv[:, axis]
+        inside = (pos > 0) & (pos < size - 1)
+        ui, vi = u[inside], v[inside]
+        c = log(heat[vi, ui])
+        lo = log(heat[vi - dv, ui - du])
+        hi = log(heat[vi + dv, ui + du])
+        curvature = lo - 2.0 * c + hi
+        with np.errstate(divide="ignore", invalid="ignore"):
+            offset = np.where(curvature < 0.0, 0.5 * (lo - hi) / curvature, 0.0)
+        out[inside, axis] += np.clip(offset, -0.5, 0.5).astype(np.float32)
+    return out
+
+
 def sample_map(
     coarse: np.ndarray, uv: np.ndarray, input_hw: tuple[int, int], cubic: bool
 ) -> np.ndarray:
@@ -237,7 +264,8 @@ class XFeat:
         rank = scores * reliability
         order = np.argsort(-rank, kind="stable")[: o.max_keypoints]
         order = order[rank[order] > 0]
-        uv, scores = uv[order].astype(np.float32), scores[order].astype(np.float32)
+        uv, scores = uv[order], scores[order].astype(np.float32)
+        uv = refine_subpixel(heat, uv) if o.subpixel else uv.astype(np.float32)
         descriptors = sample_map(net["descriptors"], uv, input_hw, cubic=True)
         norm = np.linalg.norm(descriptors, axis=1, keepdims=True)
         descriptors = (descriptors / np.maximum(norm, 1e-12)).astype(np.float32)

@@ -107,11 +107,13 @@ class StageTimings(_FieldsAsMapping):
     core); in the pipeline (``track_stream``) stages of neighbouring frames overlap."""
 
     inference: float = 0.0  #: point front end (network or ORB) on both images
-    line_extraction: float = 0.0  #: line detection and descriptors on both images
+    line_extraction: float = 0.0  #: line detection and descriptors (left image; both images
+    #: with ``tracking.right_lines_on_keyframes: false``)
     stereo_matching: float = 0.0  #: left-right point and line matching
     matching: float = 0.0  #: local-map projection and guided matching
     optimisation: float = 0.0  #: motion-only bundle adjustment
-    mapping: float = 0.0  #: keyframe insertion (+ local mapping in sequential mode)
+    mapping: float = 0.0  #: keyframe insertion (the right image's lines for it, + local
+    #: mapping in sequential mode)
     relocalisation: float = 0.0  #: BoW query, PnP and local-map tracking while lost
     total: float = 0.0  #: the frame's own work
 
@@ -565,8 +567,8 @@ class Tracker:
         timestamp: float,
         previous: float | None,
     ) -> _Prepared:
-        """Checks one frame and runs the point front end on both images (thread-safe: no state
-        of the tracker is written)."""
+        """Checks one frame and runs the point front end on both images, or on the left one with
+        ``tracking.stereo_row_search`` (thread-safe: no state of the tracker is written)."""
         where = f"frame {index}"
         try:
             left = check_gray_image(self._to_gray.convert(left, "left image"))
@@ -587,10 +589,15 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
-        # The right image on a helper thread meanwhile (ORB and onnxruntime release the GIL).
-        right_keypoints = self._right_side.submit(self._detect, right)
-        kl = self._detect(left)
-        kr = right_keypoints.result()
+        if self.config.tracking.stereo_row_search:
+            # Left only: the core searches each keypoint's patch along its right-image row.
+            kl = self._detect(left)
+            kr = kl.select(np.zeros(0, dtype=np.int64))
+        else:
+            # The right image on a helper thread meanwhile (ORB and onnxruntime release the GIL).
+            right_keypoints = self._right_side.submit(self._detect, right)
+            kl = self._detect(left)
+            kr = right_keypoints.result()
         inference_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(index, float(timestamp), left, right, kl, kr, inference_ms)
 

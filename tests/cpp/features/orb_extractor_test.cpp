@@ -147,6 +147,22 @@ TEST(OrbExtractor, SmoothingNoisyDarkFramesMakesKeypointsRepeatable) {
   EXPECT_GT(with, without + 0.15) << "without smoothing " << without << ", with " << with;
 }
 
+TEST(OrbExtractor, SmoothingLeavesTheCallersImageAsItWas) {
+  // The smoothed detection image is a buffer of its own: the frame's image goes on to lines and
+  // stereo matching unchanged (it was once blurred in place).
+  const cv::Mat scene = Texture(752, 480, 40, 25, 3);
+  cv::Mat noise(480, 752, CV_32F), noisy;
+  cv::RNG rng(3);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 9.0);
+  scene.convertTo(noisy, CV_32F);
+  noisy += noise;
+  noisy.convertTo(noisy, CV_8U);
+  ASSERT_GT(EstimateNoiseSigma(noisy), OrbOptions{}.denoise_above_noise);
+  const cv::Mat before = noisy.clone();
+  EXPECT_GT(ExtractOrb(noisy).size(), 0);
+  EXPECT_EQ(cv::norm(noisy, before, cv::NORM_INF), 0.0);
+}
+
 TEST(OrbExtractor, BadOptionsThrow) {
   OrbOptions options;
   options.min_fast_threshold = 30;  // above fast_threshold
