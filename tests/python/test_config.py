@@ -149,7 +149,13 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
         dynamic_cells=Config().features.dynamic_cells,
         xfeat=Config().features.xfeat,
     )
-    tracking = dataclasses.replace(config.tracking, stereo_row_search=False)
+    # and keyframes at most every 6 frames while tracking is strong
+    assert config.tracking.keyframe_min_frames == 6
+    tracking = dataclasses.replace(
+        config.tracking,
+        stereo_row_search=False,
+        keyframe_min_frames=Config().tracking.keyframe_min_frames,
+    )
     assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
 
 
