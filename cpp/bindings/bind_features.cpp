@@ -52,6 +52,21 @@ void BindFeatures(py::module_& m) {
       "32).");
 
   m.def(
+      "smooth_if_noisy",
+      [](const py::array& image, double above_noise) -> py::array {
+        const cv::Mat img = WrapGray(image, "image");
+        cv::Mat out;
+        {
+          py::gil_scoped_release release;
+          out = SmoothIfNoisy(img, above_noise);
+        }
+        return out.data == img.data ? image : ToNumpy(out);
+      },
+      py::arg("image"), py::arg("above_noise"),
+      "The uint8 image smoothed by a Gaussian of sigma = noise / 7 px when its estimated noise "
+      "(Immerkaer) exceeds above_noise (> 0): a new array; otherwise the image itself.");
+
+  m.def(
       "match_descriptors",
       [](const py::array& query, const py::array& train, const MatchOptions& options) {
         const cv::Mat q = WrapDescriptors(query), t = WrapDescriptors(train);

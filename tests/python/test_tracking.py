@@ -199,9 +199,9 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
     junction's bare stretch (frames 380-459 of the 600-frame run: light 0.15, dust, flicker;
     15-50 weighted inliers a frame there in the full run), rendered directly. With the per-cell
     fallback a map starts on the first frame and holds (measured: 3 RECENTLY_LOST frames, 0.22 m
-    off after 3.2 m from a cold start here); with plain ORB detection maps start and are lost
-    (measured: 21 % of the frames tracked, two maps; before the pair was smoothed for stereo
-    matching, tracking.denoise_above_noise, none started)."""
+    off after 3.2 m from a cold start here); with plain ORB detection most frames are not
+    tracked (measured: no map starts on the smoothed pair, tracking.denoise_above_noise; with the
+    pair smoothed for stereo matching only, maps started and were lost, 21 % tracked)."""
     from slslam.datasets.euroc import RectifiedStereoCamera
 
     options = SimOptions(
@@ -247,7 +247,7 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
     assert error[tracked].max() < 0.1 * travelled, error[tracked].max()
     plain, plain_maps = run(False)
     plain_tracked = np.mean([r.tracked for r in plain])
-    assert plain_tracked < 0.5 and "LOST" in [r.state for r in plain], plain_tracked
+    assert plain_tracked < 0.5, plain_tracked
 
 
 def _relative_position_error(result_a, result_b, gt_by_time) -> tuple[float, float]:

@@ -589,6 +589,14 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
+        # Noisy (dark) frames smoothed once, here on the front end's thread: the detector, the
+        # lines and the stereo matching all see the smoothed pair, and the core's own check
+        # (StereoFrontend, tracking.denoise_above_noise) then finds them quiet. The same pair as
+        # smoothing in the core, without a second blur on the core's thread.
+        above = self.config.tracking.denoise_above_noise
+        if above > 0.0:
+            left = _core.smooth_if_noisy(left, above)
+            right = _core.smooth_if_noisy(right, above)
         if self.config.tracking.stereo_row_search:
             # Left only: the core searches each keypoint's patch along its right-image row.
             kl = self._detect(left)
