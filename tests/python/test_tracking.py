@@ -478,3 +478,18 @@ def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     assert np.array_equal(map_a.lines, map_b.lines) and len(map_a.lines) > 20
     assert [r.counts.keyframe for r in results_a] == [r.counts.keyframe for r in results_b]
     assert sum(r.counts.keyframe for r in results_b) < 0.8 * len(results_b)  # work was skipped
+
+
+def test_smooth_if_noisy_returns_a_new_array_only_for_a_noisy_image():
+    """The front end's smoothing (tracking.denoise_above_noise): a quiet image is handed back as
+    it is; a noisy one is smoothed into a new array, the caller's left unchanged."""
+    rng = np.random.default_rng(3)
+    quiet = np.tile(np.linspace(40, 200, 160, dtype=np.float32), (120, 1)).astype(np.uint8)
+    assert _core.smooth_if_noisy(quiet, 6.0) is quiet
+    noisy = np.clip(quiet + rng.normal(0, 9, quiet.shape), 0, 255).astype(np.uint8)
+    before = noisy.copy()
+    smoothed = _core.smooth_if_noisy(noisy, 6.0)
+    assert smoothed is not noisy and np.array_equal(noisy, before)
+    residual = lambda image: float(np.std(image.astype(np.float32) - quiet))  # noqa: E731
+    assert residual(smoothed) < 0.5 * residual(noisy)
+    assert _core.smooth_if_noisy(noisy, 0.0) is noisy  # 0: never

@@ -456,6 +456,18 @@ class Tracker:
         self._core.add_imu(t[:n], np.ascontiguousarray(gyro[:n]), np.ascontiguousarray(acc[:n]))
         self._imu_pending = (t[n:], gyro[n:], acc[n:]) if n < len(t) else None
 
+    def _smooth(self, image: np.ndarray) -> np.ndarray:
+        """A noisy (dark) image smoothed (``tracking.denoise_above_noise``), else the image.
+        Done once here, on the front end's threads: the detector, the lines and the stereo
+        matching all see the smoothed pair, and the core's own check (StereoFrontend) then finds
+        it quiet, so the core's thread does not blur it again."""
+        above = self.config.tracking.denoise_above_noise
+        return _core.smooth_if_noisy(image, above) if above > 0.0 else image
+
+    def _smooth_and_detect(self, image: np.ndarray) -> tuple[np.ndarray, Keypoints]:
+        smoothed = self._smooth(image)
+        return smoothed, self._detect(smoothed)
+
     def _detect(self, image: np.ndarray) -> Keypoints:
         if self._weak_threshold is not None:
             keypoints = self.frontend.detect(image, threshold=self._weak_threshold)
@@ -589,23 +601,18 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
-        # Noisy (dark) frames smoothed once, here on the front end's thread: the detector, the
-        # lines and the stereo matching all see the smoothed pair, and the core's own check
-        # (StereoFrontend, tracking.denoise_above_noise) then finds them quiet. The same pair as
-        # smoothing in the core, without a second blur on the core's thread.
-        above = self.config.tracking.denoise_above_noise
-        if above > 0.0:
-            left = _core.smooth_if_noisy(left, above)
-            right = _core.smooth_if_noisy(right, above)
+        # The right image on a helper thread meanwhile (ORB, onnxruntime and the smoothing release
+        # the GIL).
         if self.config.tracking.stereo_row_search:
             # Left only: the core searches each keypoint's patch along its right-image row.
-            kl = self._detect(left)
+            right_side = self._right_side.submit(self._smooth, right)
+            left, kl = self._smooth_and_detect(left)
+            right = right_side.result()
             kr = kl.select(np.zeros(0, dtype=np.int64))
         else:
-            # The right image on a helper thread meanwhile (ORB and onnxruntime release the GIL).
-            right_keypoints = self._right_side.submit(self._detect, right)
-            kl = self._detect(left)
-            kr = right_keypoints.result()
+            right_side = self._right_side.submit(self._smooth_and_detect, right)
+            left, kl = self._smooth_and_detect(left)
+            right, kr = right_side.result()
         inference_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(index, float(timestamp), left, right, kl, kr, inference_ms)
 
