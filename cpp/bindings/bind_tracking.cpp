@@ -12,6 +12,7 @@
 #include "bindings/image_conversion.h"
 #include "slslam/core/check.h"
 #include "slslam/features/line_extractor.h"
+#include "slslam/features/orb_extractor.h"
 #include "slslam/tracking/stereo_frontend.h"
 #include "slslam/tracking/tracker.h"
 
@@ -268,8 +269,6 @@ void BindTracking(py::module_& m) {
       .def_readwrite("row_search_ratio", &StereoMatchOptions::row_search_ratio)
       .def_readwrite("row_search_max_cost", &StereoMatchOptions::row_search_max_cost)
       .def_readwrite("row_search_min_texture", &StereoMatchOptions::row_search_min_texture)
-      .def_readwrite("row_search_denoise_above_noise",
-                     &StereoMatchOptions::row_search_denoise_above_noise)
       .def("check", &StereoMatchOptions::Check);
 
   py::class_<RelocalisationOptions>(m, "RelocalisationOptions",
@@ -409,17 +408,19 @@ void BindTracking(py::module_& m) {
       [](const py::array& left_image, const py::array& right_image, const PixelArray& left_uv,
          const py::array& left_descriptors, const PixelArray& right_uv,
          const py::array& right_descriptors, const StereoRig& rig,
-         const StereoMatchOptions& options) {
-        const cv::Mat left = WrapGray(left_image, "left image");
-        const cv::Mat right = WrapGray(right_image, "right image");
+         const StereoMatchOptions& options, double denoise_above_noise) {
+        const cv::Mat left_image_mat = WrapGray(left_image, "left image");
+        const cv::Mat right_image_mat = WrapGray(right_image, "right image");
         const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
         const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
         StereoFrame frame;
         {
           py::gil_scoped_release release;
+          // the pair as StereoFrontend::Build matches it (tracking.denoise_above_noise)
+          const cv::Mat left = SmoothIfNoisy(left_image_mat, denoise_above_noise);
+          const cv::Mat right = SmoothIfNoisy(right_image_mat, denoise_above_noise);
           frame = MakeStereoFrame(0, 0.0, kl, kr, nullptr, nullptr, rig, options);
-          if (options.row_search) MatchStereoByRowSearch(left, right, rig, options, &frame);
-          RefineStereoSubpixel(left, right, rig, options, &frame);
+          SearchAndRefineStereoPoints(left, right, rig, options, &frame);
         }
         return py::make_tuple(Eigen::VectorXd::Map(frame.u_right.data(), frame.u_right.size()),
                               Eigen::VectorXd::Map(frame.depth.data(), frame.depth.size()));
@@ -427,8 +428,10 @@ void BindTracking(py::module_& m) {
       py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
       py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
       py::arg("rig"), py::arg("options") = StereoMatchOptions{},
-      "The tracker's stereo matching of keypoints (descriptors along the row band, then the row "
-      "search with options.row_search, then subpixel refinement): (u_right, depth) per left "
+      py::arg("denoise_above_noise") = TrackerOptions{}.denoise_above_noise,
+      "The tracker's stereo matching of keypoints on the pair smoothed as the tracker smooths it "
+      "(noisier than denoise_above_noise; 0: never): descriptors along the row band, then the row "
+      "search with options.row_search, then subpixel refinement. (u_right, depth) per left "
       "keypoint, -1 where unmatched.");
 
   py::class_<TrackerSession>(m, "TrackerCore",

@@ -929,12 +929,6 @@ class StereoMatchOptions:
     def ratio(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
-    def row_search_denoise_above_noise(self) -> float:
-        ...
-    @row_search_denoise_above_noise.setter
-    def row_search_denoise_above_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
-        ...
-    @property
     def row_search_max_cost(self) -> float:
         ...
     @row_search_max_cost.setter
@@ -2354,9 +2348,9 @@ def match_scan_to_points(source: typing.Annotated[numpy.typing.ArrayLike, numpy.
     """
 def match_stereo_lines(left: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_left: numpy.ndarray, right: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], lbd_right: numpy.ndarray, options: StereoLineOptions = ...) -> typing.Annotated[numpy.typing.NDArray[numpy.int32], "[m, 2]"]:
     ...
-def match_stereo_points(left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, rig: StereoRig, options: StereoMatchOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"]]:
+def match_stereo_points(left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, rig: StereoRig, options: StereoMatchOptions = ..., denoise_above_noise: typing.SupportsFloat | typing.SupportsIndex = 6.0) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]", "flags.writeable"]]:
     """
-    The tracker's stereo matching of keypoints (descriptors along the row band, then the row search with options.row_search, then subpixel refinement): (u_right, depth) per left keypoint, -1 where unmatched.
+    The tracker's stereo matching of keypoints on the pair smoothed as the tracker smooths it (noisier than denoise_above_noise; 0: never): descriptors along the row band, then the row search with options.row_search, then subpixel refinement. (u_right, depth) per left keypoint, -1 where unmatched.
     """
 def optimize_lidar_pose_graph(T_world_keyframe: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], a: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], b: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], T_a_b: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]], information: collections.abc.Sequence[typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[6, 6]"]], loop: collections.abc.Sequence[bool], options: LidarPoseGraphOptions = ...) -> list[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]]:
     """

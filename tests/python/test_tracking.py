@@ -391,9 +391,8 @@ def _row_search_disparities(left, right, uv, descriptors, camera, denoise: float
     )
     options = _core.StereoMatchOptions()
     options.row_search = True
-    options.row_search_denoise_above_noise = denoise
     u_right, _ = _core.match_stereo_points(
-        left, right, uv, descriptors, uv[:0], descriptors[:0], rig, options
+        left, right, uv, descriptors, uv[:0], descriptors[:0], rig, options, denoise
     )
     u_right = np.asarray(u_right)
     return np.where(u_right >= 0, uv[:, 0] - u_right, np.nan)

@@ -59,10 +59,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
       index, timestamp, left_keypoints, right_keypoints, options_.use_lines ? &left_lines : nullptr,
       right_now ? &right_lines : nullptr, options_.rig, options_.stereo));
   frame->stereo_lines_pending = options_.use_lines && !right_now;
-  if (options_.stereo.row_search) {
-    MatchStereoByRowSearch(left, right, options_.rig, options_.stereo, frame.get());
-  }
-  RefineStereoSubpixel(left, right, options_.rig, options_.stereo, frame.get());
+  SearchAndRefineStereoPoints(left, right, options_.rig, options_.stereo, frame.get());
   if (timing != nullptr) {
     timing->line_extraction_ms = line_ms;
     timing->stereo_matching_ms = Ms(start);

@@ -8,7 +8,6 @@
 
 #include "slslam/core/check.h"
 #include "slslam/features/descriptor_matcher.h"
-#include "slslam/features/orb_extractor.h"
 
 namespace slslam {
 
@@ -132,18 +131,11 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
   }
 }
 
-void MatchStereoByRowSearch(const cv::Mat& left_image, const cv::Mat& right_image,
-                            const StereoRig& rig, const StereoMatchOptions& options,
-                            StereoFrame* frame) {
+void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                            const StereoMatchOptions& options, StereoFrame* frame) {
   Require(frame != nullptr, "row search needs a frame");
-  Require(left_image.type() == CV_8UC1 && right_image.type() == CV_8UC1 &&
-              left_image.size() == right_image.size(),
+  Require(left.type() == CV_8UC1 && right.type() == CV_8UC1 && left.size() == right.size(),
           "row search needs two 8-bit gray images of one size");
-  // Dark frames: the patches' own noise would decide the match (measured at light 0.15: 16 of
-  // 2,500 keypoints matched unsmoothed, about 550 smoothed, with fewer wrong than the
-  // descriptors' matches). Already smoothed images (StereoFrontend) stay as they are.
-  const cv::Mat left = SmoothIfNoisy(left_image, options.row_search_denoise_above_noise);
-  const cv::Mat right = SmoothIfNoisy(right_image, options.row_search_denoise_above_noise);
   const int w = options.row_search_window;
   const int side = 2 * w + 1;
   const float area = static_cast<float>(side * side);
@@ -234,6 +226,12 @@ void MatchStereoByRowSearch(const cv::Mat& left_image, const cv::Mat& right_imag
     frame->u_right[i] = ur;
     frame->depth[i] = z;
   }
+}
+
+void SearchAndRefineStereoPoints(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                                 const StereoMatchOptions& options, StereoFrame* frame) {
+  if (options.row_search) MatchStereoByRowSearch(left, right, rig, options, frame);
+  RefineStereoSubpixel(left, right, rig, options, frame);
 }
 
 void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,

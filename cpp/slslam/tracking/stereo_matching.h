@@ -33,9 +33,6 @@ struct StereoMatchOptions {
   float row_search_max_cost = 0.5f;
   /// patches whose mean absolute deviation is below this are not searched [gray levels]
   float row_search_min_texture = 2.0f;
-  /// noisier left images (Immerkaer's estimate, as orb.denoise_above_noise) are searched
-  /// Gaussian-smoothed, each by its own estimate, sigma = noise / 7 px; 0: never [gray levels]
-  double row_search_denoise_above_noise = 6.0;
   StereoLineOptions lines;
 
   void Check() const;
@@ -60,13 +57,20 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
 // [min_disparity_px, max_disparity_px], each minus its own mean (as RefineStereoSubpixel). A
 // match needs texture in the left patch, a best cost small against the patch's own deviation
 // (row_search_max_cost), a clear lowest minimum (row_search_ratio against the lowest other local
-// minimum: repeated structure along the row is refused) and a minimum inside the range. A noisy
-// pair (dark frames) is searched smoothed (row_search_denoise_above_noise). The
-// integer column is stored; RefineStereoSubpixel refines it as a descriptor match. Keypoints with
+// minimum: repeated structure along the row is refused) and a minimum inside the range. Give it
+// a noisy (dark) pair smoothed (SmoothIfNoisy, as StereoFrontend does): on raw light-0.15 frames
+// the patches' own noise decides (16 of 2,500 keypoints matched, about 550 smoothed, with fewer
+// wrong than the descriptors' matches). The integer column is stored; RefineStereoSubpixel refines it as a descriptor match. Keypoints with
 // a match already keep it. About 49 x (disparity range) absolute differences per keypoint, in
 // contiguous float rows the compiler vectorises.
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                             const StereoMatchOptions& options, StereoFrame* frame);
+
+// The point steps after MakeStereoFrame's descriptor matching, on the pair the frame's lines saw:
+// the row search (options.row_search), then the subpixel refinement (StereoFrontend::Build and
+// the bindings' match_stereo_points share them).
+void SearchAndRefineStereoPoints(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
+                                 const StereoMatchOptions& options, StereoFrame* frame);
 
 // Refines the right-image column of every stereo-matched keypoint to subpixel precision (as
 // ORB-SLAM's ComputeStereoMatches): the (2w+1)^2 patch around the left keypoint is slid along the

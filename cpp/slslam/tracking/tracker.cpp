@@ -191,8 +191,8 @@ bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& 
   for (double d : frame->depth) stereo_points += d > 0.0;
   // (too few points already: the right image's lines cannot start a map)
   if (stereo_points < std::min(options_.min_init_points, 15)) return false;
-  if (options_.use_lines) frame = WithStereoLines(std::move(frame));
   if (options_.use_lines) {
+    frame = WithStereoLines(std::move(frame));
     for (bool has : frame->line_has_depth) stereo_lines += has;
   }
   // A map needs some points: lines alone leave the first keyframe's pose weakly constrained.

@@ -30,8 +30,6 @@ void StereoMatchOptions::Check() const {
   CheckAboveInRange("stereo.row_search_ratio", row_search_ratio, 0.0f, 1.0f);
   CheckAboveInRange("stereo.row_search_max_cost", row_search_max_cost, 0.0f, 100.0f);
   CheckInRange("stereo.row_search_min_texture", row_search_min_texture, 0.0f, 255.0f);
-  CheckInRange("stereo.row_search_denoise_above_noise", row_search_denoise_above_noise, 0.0,
-               255.0);
   lines.Check();
 }
 

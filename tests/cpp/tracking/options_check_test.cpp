@@ -347,8 +347,6 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(stereo.row_search_ratio, "stereo.row_search_ratio", 0, 1, "(]"),
        FIELD(stereo.row_search_max_cost, "stereo.row_search_max_cost", 0, 100, "(]"),
        FIELD(stereo.row_search_min_texture, "stereo.row_search_min_texture", 0, 255, "[]"),
-       FIELD(stereo.row_search_denoise_above_noise, "stereo.row_search_denoise_above_noise", 0,
-             255, "[]"),
        FIELD(denoise_above_noise, "tracking.denoise_above_noise", 0, 255, "[]"),
        FIELD(stereo.lines.min_row_overlap, "stereo_lines.min_row_overlap", 0, 1, "(]"),
        FIELD(relocalisation.candidates, "tracking.relocalisation.candidates", 1, 1000, "[]"),

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "slslam/features/orb_extractor.h"
+#include "slslam/tracking/stereo_frontend.h"
 #include "slslam/tracking/stereo_matching.h"
 
 namespace slslam {
@@ -150,6 +152,7 @@ TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
 }
 
 TEST(StereoFrameTest, RowSearchMatchesANoisyPairSmoothedAndLeavesTheImagesAsTheyWere) {
+  // (the pair smoothed as StereoFrontend::Build smooths it, tracking.denoise_above_noise)
   const StereoRig rig = Rig();
   StereoMatchOptions options;
   options.row_search = true;
@@ -165,10 +168,11 @@ TEST(StereoFrameTest, RowSearchMatchesANoisyPairSmoothedAndLeavesTheImagesAsThey
   }
   const cv::Mat left_before = left.clone(), right_before = right.clone();
   StereoFrame smoothed = UnmatchedGridFrame(12.0);
-  MatchStereoByRowSearch(left, right, rig, options, &smoothed);
+  const double above_noise = StereoFrontendOptions{}.denoise_above_noise;
+  MatchStereoByRowSearch(SmoothIfNoisy(left, above_noise), SmoothIfNoisy(right, above_noise), rig,
+                         options, &smoothed);
   EXPECT_EQ(cv::norm(left, left_before, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(right, right_before, cv::NORM_INF), 0.0);
-  options.row_search_denoise_above_noise = 0.0;
   StereoFrame raw = UnmatchedGridFrame(12.0);
   MatchStereoByRowSearch(left, right, rig, options, &raw);
   int with = 0, without = 0, wrong = 0;
