@@ -124,6 +124,7 @@ class TrackerSession {
     out["points_triangulated"] = s.points_triangulated;
     out["lines_triangulated"] = s.lines_triangulated;
     out["local_mapping_ms"] = s.total_ba_ms;
+    out["local_ba_interrupted"] = s.ba_interrupted;
     out["inertial_frames"] = t.inertial_frames;
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;

@@ -49,6 +49,18 @@ void LocalMapper::Flush() {
   }
 }
 
+bool LocalMapper::Idle() const {
+  if (sequential_) return true;
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return queue_.empty() && !busy_;
+}
+
+int LocalMapper::QueuedKeyFrames() const {
+  if (sequential_) return 0;
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return static_cast<int>(queue_.size());
+}
+
 LocalMappingStats LocalMapper::stats() const {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   return stats_;
@@ -113,8 +125,13 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
                           options_.point_sigma_px, options_.line_sigma_px);
   }
 
-  // The solve runs without the map lock: tracking goes on meanwhile.
-  const BundleAdjustmentReport report = SolveBundleAdjustment(rig_, &ba.problem(), options_.ba);
+  // The solve runs without the map lock: tracking goes on meanwhile. An interruption asked for
+  // before this point (while the keyframe waited in the queue) is dropped: this BA is the newer
+  // window already. (A request that lands between this store and the solve's first check stops
+  // it early: harmless, the next keyframe is on its way.)
+  interrupt_ba_.store(false);
+  const BundleAdjustmentReport report =
+      SolveBundleAdjustment(rig_, &ba.problem(), options_.ba, nullptr, &interrupt_ba_);
 
   MutexLock lock(map->mutex());
   // A global BA that finished meanwhile moved the map (threaded mode): this window's solution
@@ -185,6 +202,7 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
   stats_.points_triangulated += triangulated.points;
   stats_.lines_triangulated += triangulated.lines;
   stats_.total_ba_ms += ms;
+  stats_.ba_interrupted += report.interrupted ? 1 : 0;
 }
 
 }  // namespace slslam

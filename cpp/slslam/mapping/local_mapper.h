@@ -7,6 +7,7 @@
 // ORB-SLAM3.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -43,7 +44,8 @@ struct LocalMappingStats {
   int lines_culled = 0;
   int points_triangulated = 0;
   int lines_triangulated = 0;
-  double total_ba_ms = 0.0;
+  double total_ba_ms = 0.0;        ///< local mapping's time, all steps [ms]
+  int ba_interrupted = 0;          ///< local BAs stopped early by InterruptBA (threaded mode)
 };
 
 class LocalMapper {
@@ -60,6 +62,17 @@ class LocalMapper {
   // thread caught since the last Flush.
   void Flush();
   LocalMappingStats stats() const;
+  // Threaded mode (ORB-SLAM3's brake on keyframe insertion): true when no keyframe is queued or
+  // being processed; always true in sequential mode.
+  bool Idle() const;
+  // Keyframes waiting in the queue, not counting the one being processed (0 when sequential).
+  int QueuedKeyFrames() const;
+  // Threaded mode: the local BA running now (if any) stops after its current iteration and keeps
+  // the estimate it has reached (ORB-SLAM3's InterruptBA, when tracking inserts a keyframe while
+  // mapping is busy: the newer keyframe's window starts sooner). No effect in sequential mode.
+  void InterruptBA() {
+    if (!sequential_) interrupt_ba_.store(true);
+  }
   // Called (on the mapping thread, or inline in sequential mode) after each keyframe has been
   // processed, without any lock held: loop closing runs there, serialised with local mapping.
   void SetAfterKeyFrame(std::function<void(Map*, int)> hook) { after_keyframe_ = std::move(hook); }
@@ -78,6 +91,7 @@ class LocalMapper {
   bool busy_ = false;
   bool stop_ = false;
   std::exception_ptr error_;
+  std::atomic<bool> interrupt_ba_{false};
   std::function<void(Map*, int)> after_keyframe_;
   LocalMappingStats stats_;
   std::thread worker_;

@@ -16,16 +16,21 @@ namespace slslam {
 
 namespace {
 
-// Stops a solve once `abort` is set (checked after every iteration).
-class AbortCallback : public ceres::IterationCallback {
+// Stops a solve once `abort` is set (checked after every iteration), discarding it, or once
+// `interrupt` is set, keeping the last accepted iterate.
+class StopCallback : public ceres::IterationCallback {
  public:
-  explicit AbortCallback(const std::atomic<bool>* abort) : abort_(abort) {}
+  StopCallback(const std::atomic<bool>* abort, const std::atomic<bool>* interrupt)
+      : abort_(abort), interrupt_(interrupt) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-    return abort_ && abort_->load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+    if (abort_ && abort_->load()) return ceres::SOLVER_ABORT;
+    if (interrupt_ && interrupt_->load()) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    return ceres::SOLVER_CONTINUE;
   }
 
  private:
   const std::atomic<bool>* abort_;
+  const std::atomic<bool>* interrupt_;
 };
 
 struct Parameters {
@@ -81,7 +86,8 @@ void BundleAdjustmentOptions::Check() const {
 
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
                                              const BundleAdjustmentOptions& options,
-                                             const std::atomic<bool>* abort) {
+                                             const std::atomic<bool>* abort,
+                                             const std::atomic<bool>* interrupt) {
   rig.Check();
   options.Check();
   Require(problem != nullptr, "bundle adjustment needs a problem");
@@ -173,8 +179,8 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
         robust ? options.robust_iterations : options.refine_iterations;
     solver_options.num_threads = 1;
     solver_options.logging_type = ceres::SILENT;
-    AbortCallback abort_callback(abort);
-    if (abort) solver_options.callbacks.push_back(&abort_callback);
+    StopCallback stop_callback(abort, interrupt);
+    if (abort || interrupt) solver_options.callbacks.push_back(&stop_callback);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &solver_problem, &summary);
     if (abort && abort->load()) {
@@ -193,6 +199,12 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     for (size_t i = 0; i < ba.line_observations.size(); ++i) {
       report.line_outlier[i] =
           !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
+    }
+    // Interrupted (a callback ended it, the parameters hold the last accepted iterate): no
+    // further pass.
+    if (interrupt && interrupt->load()) {
+      report.interrupted = true;
+      break;
     }
   }
 

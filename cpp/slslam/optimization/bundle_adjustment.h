@@ -61,14 +61,19 @@ struct BundleAdjustmentReport {
   double initial_cost = 0.0;
   double final_cost = 0.0;
   bool solved = false;
+  bool interrupted = false;  ///< `interrupt` stopped it early (the estimate is still usable)
 };
 
 // Optimises the problem in place (poses that are not fixed, every point and line observed at
 // least once). Deterministic (single-threaded Ceres, Schur solver).
 // `abort`, when given, is polled between iterations: once true the solve stops and the report is
 // not solved (a background global BA that a newer correction made stale).
+// `interrupt`, when given, is polled between iterations too: once true the current pass ends at
+// its last accepted iterate, outliers are classified there and no further pass runs; the result
+// is solved and usable (ORB-SLAM's stop flag of local BA: a newer keyframe is waiting).
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
                                              const BundleAdjustmentOptions& options = {},
-                                             const std::atomic<bool>* abort = nullptr);
+                                             const std::atomic<bool>* abort = nullptr,
+                                             const std::atomic<bool>* interrupt = nullptr);
 
 }  // namespace slslam

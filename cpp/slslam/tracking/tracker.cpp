@@ -14,6 +14,12 @@ namespace slslam {
 using tracker_detail::Clock;
 using tracker_detail::Ms;
 
+namespace {
+// Threaded local mapping: keyframes that may wait for it (ORB-SLAM3's stereo limit). Past it
+// tracking goes on from the last keyframe until the queue shrinks.
+constexpr int kMaxQueuedKeyFrames = 3;
+}  // namespace
+
 const char* TrackingStateName(TrackingState state) {
   switch (state) {
     case TrackingState::kNotInitialized:
@@ -321,18 +327,29 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const bool past_gap =
       frames_since >= options_.keyframe_min_frames &&
       frame.timestamp - last_keyframe_time_s_ >= options_.keyframe_min_interval_s;
-  const bool c1 = frames_since >= options_.keyframe_max_frames || past_gap ||
-                  tracked < 0.25 * reference || need_close;
+  // c1 of ORB-SLAM3 without the gap (c1a and c1c), then with it (c1b).
+  const bool c1_without_gap = frames_since >= options_.keyframe_max_frames ||
+                              tracked < 0.25 * reference || need_close;
+  const bool c1 = c1_without_gap || past_gap;
   const bool c2 = (tracked < options_.keyframe_track_ratio * reference || need_close) &&
                   tracking.weighted_inliers > options_.min_inliers;
   // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
   const bool weak = tracking.weighted_inliers < options_.weak_keyframe_inliers &&
                     frames_since >= options_.weak_keyframe_frames;
-  // The minimum gap is a hard one while tracking is strong (sequential local mapping is always
-  // idle, so ORB-SLAM3's "mapping busy" brake never acts here).
+  // The minimum gap is a hard one while tracking is strong.
   const bool gap = frames_since >= 1 && past_gap;
-  return frames_since >= 1 &&
-         ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
+  const bool insert =
+      frames_since >= 1 &&
+      ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
+  // ORB-SLAM3's brake (threaded mode; sequential local mapping is always idle): while local
+  // mapping is busy the gap alone is no reason for a keyframe (c1b), and a keyframe that is due
+  // stops the running local BA early and queues, unless kMaxQueuedKeyFrames already wait.
+  if (!insert || mapper_->Idle()) return insert;
+  const bool due = (c1_without_gap && c2 && gap) || weak ||
+                   frames_since >= options_.keyframe_max_frames;
+  if (!due) return false;
+  mapper_->InterruptBA();
+  return mapper_->QueuedKeyFrames() < kMaxQueuedKeyFrames;
 }
 
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,

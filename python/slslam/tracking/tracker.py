@@ -203,6 +203,7 @@ class MapStats:
     points_culled: int = 0
     lines_culled: int = 0
     local_mapping_ms: float = 0.0  #: local mapping in all (triangulation, local BA, culling)
+    local_ba_interrupted: int = 0  #: local BAs a newer keyframe stopped early (threaded mapping)
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0

@@ -81,6 +81,60 @@ TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedK
   }
 }
 
+// Two stereo views of 20 points; the free pose and the points start perturbed.
+BaProblem TwoViewProblem(const StereoRig& rig, std::vector<Eigen::Vector3d>* truth = nullptr) {
+  BaProblem problem;
+  problem.poses.push_back({Rigid3d(), true});
+  problem.poses.push_back(
+      {Rigid3d(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.2, 0, 0)), false});
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Vector3d x(0.3 * (i % 5) - 0.6, 0.2 * (i / 5) - 0.3, 4.0 + 0.1 * i);
+    if (truth) truth->push_back(x);
+    problem.points.push_back(x + Eigen::Vector3d(0.05, -0.03, 0.1));
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector3d xc = problem.poses[k].cam_from_world * x;
+      BaPointObservation o;
+      o.pose = k;
+      o.point = i;
+      o.stereo = true;
+      const Eigen::Vector2d uv = rig.camera.Project(xc);
+      o.observed << uv.x(), uv.y(), uv.x() - rig.camera.fx * rig.baseline_m / xc.z();
+      problem.point_observations.push_back(o);
+    }
+  }
+  return problem;
+}
+
+TEST(MapBundleAdjustment, AnInterruptedSolveKeepsItsEstimateAndClassifiesOutliers) {
+  StereoRig rig;
+  rig.camera = {400, 400, 320, 240, 640, 480};
+  rig.baseline_m = 0.1;
+  std::vector<Eigen::Vector3d> truth;
+  BaProblem problem = TwoViewProblem(rig, &truth);
+  problem.point_observations[7].observed.x() += 40.0;  // a gross outlier
+
+  const std::atomic<bool> no{false};
+  BaProblem full = problem;
+  const BundleAdjustmentReport done = SolveBundleAdjustment(rig, &full, {}, nullptr, &no);
+  EXPECT_TRUE(done.solved);
+  EXPECT_FALSE(done.interrupted);
+  EXPECT_TRUE(done.point_outlier[7]);
+  EXPECT_LT((full.points[0] - truth[0]).norm(), 1e-3);
+
+  // Interrupted at once (a newer keyframe was already waiting): solved, not discarded, no second
+  // pass, the outlier still found, the estimate finite and no worse than the start.
+  const std::atomic<bool> yes{true};
+  BaProblem cut = problem;
+  const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &cut, {}, nullptr, &yes);
+  EXPECT_TRUE(report.solved);
+  EXPECT_TRUE(report.interrupted);
+  EXPECT_TRUE(report.point_outlier[7]);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    ASSERT_TRUE(cut.points[i].allFinite());
+    EXPECT_LE((cut.points[i] - truth[i]).norm(), (problem.points[i] - truth[i]).norm() + 1e-9);
+  }
+}
+
 TEST(MapBundleAdjustment, ASolveAskedToAbortReportsUnsolved) {
   StereoRig rig;
   rig.camera = {400, 400, 320, 240, 640, 480};
