@@ -1,6 +1,7 @@
 // slslam._core tracking: the stereo point-line tracker with local mapping. Python hands over the
 // images and the point features (SuperPoint runs in Python through onnxruntime, ORB in C++);
 // line extraction, stereo matching, tracking and mapping run here with the GIL released.
+#include <chrono>
 #include <memory>
 #include <mutex>
 
@@ -41,6 +42,12 @@ struct FrameOutput : TrackResult, StereoFrontendTiming {
   int lines = 0;
 };
 
+// A left image's lines extracted ahead (TrackerCore.extract_left_lines), opaque to Python.
+struct LeftLines {
+  LineFeatures features;
+  double extraction_ms = 0.0;
+};
+
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
 // The tracker's options with the line front end's descriptor kind (for map files).
 TrackerOptions WithLineDescriptor(TrackerOptions options, LineDescriptor descriptor) {
@@ -58,7 +65,8 @@ class TrackerSession {
   FrameOutput Track(int index, double timestamp, const py::array& left_image,
                     const py::array& right_image, const PixelArray& left_uv,
                     const py::array& left_descriptors, const PixelArray& right_uv,
-                    const py::array& right_descriptors) {
+                    const py::array& right_descriptors,
+                    const std::shared_ptr<LeftLines>& left_lines) {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
@@ -67,7 +75,9 @@ class TrackerSession {
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out);
+      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out,
+                                   left_lines ? &left_lines->features : nullptr);
+      if (left_lines) out.line_extraction_ms = left_lines->extraction_ms;
       out.lines = frame->NumLines();
       // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
@@ -75,6 +85,20 @@ class TrackerSession {
       };
       static_cast<TrackResult&>(out) = tracker_.Track(frame, complete);
     }
+    return out;
+  }
+
+  // The left image's lines, as Track would extract them, on the calling thread without the
+  // session's lock (beside the point front end, or beside Track of the previous frame).
+  std::shared_ptr<LeftLines> ExtractLeftLines(const py::array& left_image) const {
+    const cv::Mat left = WrapGray(left_image, "left image");
+    auto out = std::make_shared<LeftLines>();
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    out->features = frontend_.ExtractLeftLines(left);
+    out->extraction_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
     return out;
   }
 
@@ -435,6 +459,12 @@ void BindTracking(py::module_& m) {
       "search with options.row_search, then subpixel refinement. (u_right, depth) per left "
       "keypoint, -1 where unmatched.");
 
+  py::class_<LeftLines, std::shared_ptr<LeftLines>>(
+      m, "LeftLines", "A left image's lines extracted ahead (TrackerCore.extract_left_lines).")
+      .def_property_readonly("count",
+                             [](const LeftLines& l) { return l.features.segments.size(); })
+      .def_readonly("extraction_ms", &LeftLines::extraction_ms);
+
   py::class_<TrackerSession>(m, "TrackerCore",
                              "Stereo point-line tracker with local mapping (use slslam.Tracker).")
       .def(py::init([](const TrackerOptions& options, const LineExtractorOptions& lines) {
@@ -444,7 +474,13 @@ void BindTracking(py::module_& m) {
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           "Tracks one rectified stereo frame; returns its FrameOutput.")
+           py::arg("left_lines") = nullptr,
+           "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
+           "image's lines from extract_left_lines on this left image (None: extracted here).")
+      .def("extract_left_lines", &TrackerSession::ExtractLeftLines, py::arg("left_image"),
+           "The left image's lines as track extracts them (smoothed when noisy), without the "
+           "session's lock: for a thread beside the point front end. Needs use_lines and "
+           "right_lines_on_keyframes.")
       .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
            "IMU samples (body frame) for the bridge through visual outages, before the frames "
            "they precede.")

@@ -479,6 +479,42 @@ def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     assert sum(r.counts.keyframe for r in results_b) < 0.8 * len(results_b)  # work was skipped
 
 
+def test_left_lines_extracted_beside_the_front_end_are_the_ones_the_core_would_extract(sim_loop):
+    """The left image's lines run on a thread of their own beside the point front end
+    (``_core.TrackerCore.extract_left_lines``, handed to ``track``): on noisy frames (smoothed
+    first) the lines, poses and map are those of the core extracting them itself, and only the
+    work moves."""
+    sequence = EurocSequence(sim_loop)
+    rng = np.random.default_rng(5)
+    noisy = lambda image: np.clip(image + rng.normal(0, 9, image.shape), 0, 255).astype(  # noqa: E731
+        np.uint8
+    )
+    frames = [(noisy(f.left), noisy(f.right), f.t_ns * 1e-9) for f in sequence]
+    cfg = config("orb", lines=True)
+    runs = []
+    for ahead in (True, False):
+        with Tracker(sequence.camera, cfg) as tracker:
+            assert tracker._lines_side is not None  # the default moves them
+            if not ahead:
+                tracker._lines_side.shutdown()
+                tracker._lines_side = None
+            results = [tracker.track(*f) for f in frames[:40]]
+            runs.append((tracker.trajectory()[1], tracker.map(), results))
+    (poses_a, map_a, results_a), (poses_b, map_b, results_b) = runs
+    assert [r.counts.lines for r in results_a] == [r.counts.lines for r in results_b]
+    assert min(r.counts.lines for r in results_a) > 20
+    assert np.array_equal(poses_a, poses_b)
+    assert np.array_equal(map_a.lines, map_b.lines)
+    assert all(r.timings_ms.line_extraction > 0.0 for r in results_a)  # timed on its thread
+
+    # Without lines (or with the right image's lines every frame) the core refuses them.
+    no_lines = config("orb", lines=False)
+    with Tracker(sequence.camera, no_lines) as tracker:
+        assert tracker._lines_side is None
+        with pytest.raises(ValueError, match="use_lines"):
+            tracker._core.extract_left_lines(frames[0][0])
+
+
 def test_smooth_if_noisy_returns_a_new_array_only_for_a_noisy_image():
     """The front end's smoothing (tracking.denoise_above_noise): a quiet image is handed back as
     it is; a noisy one is smoothed into a new array, the caller's left unchanged."""

@@ -76,10 +76,12 @@ def test_results_are_typed_not_dicts(sequence):
     last = results[-1]
     assert last.tracked
     assert isinstance(last.timings_ms, StageTimings) and isinstance(last.counts, FrameCounts)
-    # Every field typed and filled from the core: the frame's own work includes its stages.
+    # Every field typed and filled from the core: the frame's own work includes its stages (the
+    # left image's lines run beside the point front end, so the longer of the two counts).
     t = last.timings_ms
     assert all(isinstance(v, float) for v in t.as_dict().values())
-    assert t.total >= t.inference + t.line_extraction + t.stereo_matching > 0
+    assert t.line_extraction > 0 and t.inference > 0
+    assert t.total >= max(t.inference, t.line_extraction) + t.stereo_matching + t.matching
     c = last.counts
     assert c.keypoints > 100 and c.inlier_points > 50 and c.map == 0 and c.lines > 0
     assert c.inlier_points <= c.matched_points

@@ -33,7 +33,8 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
                                                    const cv::Mat& right_image,
                                                    const Keypoints& left_keypoints,
                                                    const Keypoints& right_keypoints,
-                                                   StereoFrontendTiming* timing) const {
+                                                   StereoFrontendTiming* timing,
+                                                   const LineFeatures* given_left_lines) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
@@ -44,7 +45,11 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
   const cv::Mat right = SmoothIfNoisy(right_image, options_.denoise_above_noise);
   LineFeatures left_lines, right_lines;
   const bool right_now = options_.use_lines && !options_.right_lines_on_keyframes;
-  if (right_now) {
+  Require(given_left_lines == nullptr || (options_.use_lines && !right_now),
+          "left-image lines are handed to Build only with use_lines and right_lines_on_keyframes");
+  if (given_left_lines != nullptr) {
+    left_lines = *given_left_lines;
+  } else if (right_now) {
     // LSD is single-threaded: the two images on two threads.
     auto right_future =
         std::async(std::launch::async, [&] { return ExtractLines(right, options_.lines); });
@@ -65,6 +70,16 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
     timing->stereo_matching_ms = Ms(start);
   }
   return frame;
+}
+
+LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image) const {
+  const PinholeCamera& cam = options_.rig.camera;
+  SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
+               left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
+               cam.height);
+  Require(options_.use_lines && options_.right_lines_on_keyframes,
+          "ExtractLeftLines needs use_lines and right_lines_on_keyframes");
+  return ExtractLines(SmoothIfNoisy(left_image, options_.denoise_above_noise), options_.lines);
 }
 
 void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const {

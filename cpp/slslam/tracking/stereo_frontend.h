@@ -46,10 +46,18 @@ class StereoFrontend {
 
   // The frame for rectified 8-bit images of the rig's size and their keypoints (same descriptor
   // type on both sides). Throws std::invalid_argument on images of another size.
+  // `left_lines`, when given, are the left image's lines from ExtractLeftLines on this image
+  // (extracted beside the point front end on another thread); else Build extracts them.
   std::shared_ptr<StereoFrame> Build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
-                                     StereoFrontendTiming* timing = nullptr) const;
+                                     StereoFrontendTiming* timing = nullptr,
+                                     const LineFeatures* left_lines = nullptr) const;
+
+  // The left image's lines exactly as Build extracts them (smoothed when noisy), for a caller
+  // that runs them beside the point front end. Requires right_lines_on_keyframes (with it off,
+  // Build extracts both images' lines side by side) and use_lines. Thread-safe (const).
+  LineFeatures ExtractLeftLines(const cv::Mat& left) const;
 
   // The stereo lines of a frame Build left pending: the right image's segments, matched and
   // triangulated (for Tracker::Track's completer). Does nothing when none are pending.

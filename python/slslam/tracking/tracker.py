@@ -107,15 +107,15 @@ class StageTimings(_FieldsAsMapping):
     core); in the pipeline (``track_stream``) stages of neighbouring frames overlap."""
 
     inference: float = 0.0  #: point front end (network or ORB) on both images
-    line_extraction: float = 0.0  #: line detection and descriptors (left image; both images
-    #: with ``tracking.right_lines_on_keyframes: false``)
+    line_extraction: float = 0.0  #: line detection and descriptors (left image, on a thread
+    #: beside ``inference``; both images in the core with ``right_lines_on_keyframes: false``)
     stereo_matching: float = 0.0  #: left-right point and line matching
     matching: float = 0.0  #: local-map projection and guided matching
     optimisation: float = 0.0  #: motion-only bundle adjustment
     mapping: float = 0.0  #: keyframe insertion (the right image's lines for it, + local
     #: mapping in sequential mode)
     relocalisation: float = 0.0  #: BoW query, PnP and local-map tracking while lost
-    total: float = 0.0  #: the frame's own work
+    total: float = 0.0  #: the frame's own work (wall: the front end's steps side by side)
 
 
 @dataclass(frozen=True)
@@ -176,7 +176,9 @@ class _Prepared:
     right: np.ndarray
     left_keypoints: Keypoints
     right_keypoints: Keypoints
-    inference_ms: float
+    inference_ms: float  #: point front end, both images (wall)
+    left_lines: Any  #: _core.LeftLines extracted beside it, or None (the core extracts them)
+    front_ms: float  #: the whole front-end step (wall): points and lines side by side
 
 
 _END = object()  # the pipeline's worker has read every frame
@@ -410,6 +412,16 @@ class Tracker:
         self._imu_pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._imu_last_t: float = -math.inf
         self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
+        # The left image's lines beside the point front end (a thread of their own: LSD + LBD
+        # cost about what ORB of both images costs, and XFeat's network half of it); with the
+        # right image's lines every frame (right_lines_on_keyframes false) the core extracts
+        # both side by side instead.
+        tracking = self.config.tracking
+        self._lines_side = (
+            ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-lines")
+            if tracking.use_lines and tracking.right_lines_on_keyframes
+            else None
+        )
         self._closed = False
         self._to_gray = GrayImageReader()  # 16-bit scale chosen on the first 16-bit frame
         #: The rectified left image and its keypoints (N, 2) of the latest result (viewers).
@@ -602,8 +614,13 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
-        # The right image on a helper thread meanwhile (ORB, onnxruntime and the smoothing release
-        # the GIL).
+        # The left image's lines and the right image on helper threads meanwhile (LSD, ORB,
+        # onnxruntime and the smoothing release the GIL).
+        lines = (
+            self._lines_side.submit(self._core.extract_left_lines, left)
+            if self._lines_side is not None
+            else None
+        )
         if self.config.tracking.stereo_row_search:
             # Left only: the core searches each keypoint's patch along its right-image row.
             right_side = self._right_side.submit(self._smooth, right)
@@ -615,7 +632,11 @@ class Tracker:
             left, kl = self._smooth_and_detect(left)
             right, kr = right_side.result()
         inference_ms = (time.perf_counter() - start) * 1e3
-        return _Prepared(index, float(timestamp), left, right, kl, kr, inference_ms)
+        left_lines = lines.result() if lines is not None else None
+        front_ms = (time.perf_counter() - start) * 1e3
+        return _Prepared(
+            index, float(timestamp), left, right, kl, kr, inference_ms, left_lines, front_ms
+        )
 
     def _track_prepared(self, frame: _Prepared) -> TrackResult:
         """The core's part of one frame (GIL released inside): lines, stereo, tracking."""
@@ -633,6 +654,7 @@ class Tracker:
             np.ascontiguousarray(kl.descriptors),
             np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kr.descriptors),
+            frame.left_lines,
         )
         T_world_cam = np.linalg.inv(out.cam_from_world)
         if not np.all(np.isfinite(T_world_cam)):  # never hand out a NaN pose
@@ -646,7 +668,7 @@ class Tracker:
             mapping=out.mapping_ms,
             relocalisation=out.relocalisation_ms,
             # The frame's own work: front end plus core (in the pipeline the two overlap others).
-            total=inference_ms + (time.perf_counter() - start) * 1e3,
+            total=frame.front_ms + (time.perf_counter() - start) * 1e3,
         )
         counts = FrameCounts(
             keypoints=len(kl),
@@ -733,6 +755,8 @@ class Tracker:
         """Finishes local mapping. The results and the map stay readable."""
         if not self._closed:
             self._right_side.shutdown()
+            if self._lines_side is not None:
+                self._lines_side.shutdown()
             self._core.flush()
             self._closed = True
 
