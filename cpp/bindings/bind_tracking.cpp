@@ -371,6 +371,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("right_lines_on_keyframes", &TrackerOptions::right_lines_on_keyframes)
       .def_readwrite("denoise_above_noise", &TrackerOptions::denoise_above_noise)
       .def_readwrite("sequential", &TrackerOptions::sequential)
+      .def_readwrite("mapping_brake", &TrackerOptions::mapping_brake)
       .def_readwrite("min_init_points", &TrackerOptions::min_init_points)
       .def_readwrite("min_inliers", &TrackerOptions::min_inliers)
       .def_readwrite("search_radius_px", &TrackerOptions::search_radius_px)

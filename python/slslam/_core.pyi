@@ -1216,6 +1216,7 @@ class TrackerOptions:
     localise_only: bool
     loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions
+    mapping_brake: bool
     pose: PoseOptimizerOptions
     relocalisation: RelocalisationOptions
     rig: StereoRig

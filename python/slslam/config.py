@@ -118,6 +118,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     for name in (
         "use_lines",
         "sequential",
+        "mapping_brake",
         "min_init_points",
         "min_inliers",
         "search_radius_px",
@@ -349,6 +350,9 @@ class TrackingConfig:
     use_lines: bool = _tracking("use_lines")  # line features in tracking and mapping
     # local mapping inline: exactly reproducible; false: own thread
     sequential: bool = _tracking("sequential")
+    # threaded mode only: ORB-SLAM3's brake on keyframes while local mapping is busy (more
+    # frames/s, worse ATE on the hard dark sequences: off)
+    mapping_brake: bool = _tracking("mapping_brake")
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
     # stereo points a frame needs to start a map

@@ -341,10 +341,10 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const bool insert =
       frames_since >= 1 &&
       ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
-  // ORB-SLAM3's brake (threaded mode; sequential local mapping is always idle): while local
-  // mapping is busy the gap alone is no reason for a keyframe (c1b), and a keyframe that is due
-  // stops the running local BA early and queues, unless kMaxQueuedKeyFrames already wait.
-  if (!insert || mapper_->Idle()) return insert;
+  // ORB-SLAM3's brake (mapping_brake, threaded mode; sequential local mapping is always idle):
+  // while local mapping is busy the gap alone is no reason for a keyframe (c1b), and a keyframe
+  // that is due stops the running local BA early and queues, unless kMaxQueuedKeyFrames wait.
+  if (!options_.mapping_brake || !insert || mapper_->Idle()) return insert;
   const bool due = (c1_without_gap && c2 && gap) || weak ||
                    frames_since >= options_.keyframe_max_frames;
   if (!due) return false;

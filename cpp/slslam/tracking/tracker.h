@@ -92,6 +92,11 @@ struct TrackerOptions {
   /// (StereoFrontendOptions::denoise_above_noise); 0: never [gray levels]
   double denoise_above_noise = 6.0;
   bool sequential = true;              ///< local mapping inline (reproducible) or on its own thread
+  /// Threaded mode only: ORB-SLAM3's brake on keyframes. While local mapping is busy the minimum
+  /// gap alone asks for no keyframe, and a keyframe that is due interrupts the running local BA
+  /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/README.md,
+  /// 2026-11-26): 5-20 % more frames/s, but worse ATE on the hard dark sequences, so off.
+  bool mapping_brake = false;
   int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
   float search_radius_px = 15.0f;      ///< guided matching window [px]; doubled on a retry
