@@ -19,6 +19,7 @@ from slslam import _core
 from slslam.config import Config, load_config
 from slslam.datasets import EurocSequence
 from slslam.errors import DatasetError, InputError
+from slslam.features.orb import Orb
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import MapStats, Tracker, run_sequence
 
@@ -513,6 +514,48 @@ def test_left_lines_extracted_beside_the_front_end_are_the_ones_the_core_would_e
         assert tracker._lines_side is None
         with pytest.raises(ValueError, match="use_lines"):
             tracker._core.extract_left_lines(frames[0][0])
+
+
+@pytest.mark.parametrize("smoothed_input", [True, False])
+def test_a_front_end_sees_the_smoothed_pair_unless_it_asks_for_the_raw_one(
+    sim_loop, smoothed_input
+):
+    """Noisy frames are smoothed for lines and stereo matching; the point front end gets that
+    copy (ORB, XFeat) or, with ``smoothed_input = False`` (SuperPoint, which drifted less on the
+    raw dark images), the image as it came."""
+    sequence = EurocSequence(sim_loop)
+    rng = np.random.default_rng(11)
+    frames = [
+        (
+            np.clip(f.left + rng.normal(0, 9, f.left.shape), 0, 255).astype(np.uint8),
+            np.clip(f.right + rng.normal(0, 9, f.right.shape), 0, 255).astype(np.uint8),
+            f.t_ns * 1e-9,
+        )
+        for f in (sequence[i] for i in range(3))
+    ]
+
+    class Recording:
+        def __init__(self):
+            self.orb, self.seen = Orb(), []
+
+        def detect(self, image):
+            self.seen.append(image)
+            return self.orb.detect(image)
+
+    frontend = Recording()
+    frontend.smoothed_input = smoothed_input
+    with Tracker(sequence.camera, config("orb", lines=False), frontend=frontend) as tracker:
+        for left, right, t in frames:
+            tracker.track(left, right, t)
+    given = [image for f in frames for image in f[:2]]
+    assert len(frontend.seen) == len(given)
+    for seen in frontend.seen:
+        raw = any(np.array_equal(seen, image) for image in given)
+        assert raw is (not smoothed_input)
+        smoothed = any(
+            np.array_equal(seen, _core.smooth_if_noisy(image, 6.0)) for image in given
+        )
+        assert smoothed is smoothed_input
 
 
 def test_smooth_if_noisy_returns_a_new_array_only_for_a_noisy_image():

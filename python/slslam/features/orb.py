@@ -27,6 +27,10 @@ class OrbOptions:
 class Orb:
     """``detect(image)`` returns :class:`Keypoints` with uint8 (N, 32) descriptors."""
 
+    #: The tracker hands ORB the pair it smoothed when noisy (``tracking.denoise_above_noise``):
+    #: ORB would smooth a noisy image itself the same way, so this saves that second blur.
+    smoothed_input = True
+
     def __init__(self, options: OrbOptions = OrbOptions(), adaptive: bool = True):
         """``adaptive``: per-cell FAST threshold fallback (20 -> 7 in cells without a corner at
         the normal threshold, as ORB-SLAM); False: OpenCV's plain ORB detection."""

@@ -234,6 +234,10 @@ def sample_map(
 class XFeat:
     """XFeat on onnxruntime. ``detect(image)`` returns :class:`Keypoints` (64-d float)."""
 
+    #: The tracker hands the network the pair it smoothed for lines and stereo matching when
+    #: noisy (``tracking.denoise_above_noise``); on the raw dark images XFeat never initialised.
+    smoothed_input = True
+
     def __init__(self, options: XFeatOptions = XFeatOptions()):
         options.check()
         self.options = options

@@ -379,6 +379,9 @@ class Tracker:
             frontend if frontend is not None else make_point_frontend(self.config.features)
         )
         self.frontend_name = type(self.frontend).__name__
+        # Whether the point front end sees the pair smoothed for the core (a front end without
+        # the attribute does, as ORB and XFeat).
+        self._detect_smoothed = bool(getattr(self.frontend, "smoothed_input", True))
         grid = self.config.features.grid
         self._grid = _core.GridLimitOptions()
         self._grid.cell_size_px = grid.cell_size_px
@@ -471,15 +474,19 @@ class Tracker:
 
     def _smooth(self, image: np.ndarray) -> np.ndarray:
         """A noisy (dark) image smoothed (``tracking.denoise_above_noise``), else the image.
-        Done once here, on the front end's threads: the detector, the lines and the stereo
-        matching all see the smoothed pair, and the core's own check (StereoFrontend) then finds
-        it quiet, so the core's thread does not blur it again."""
+        Done once here, on the front end's threads: the detector (unless its ``smoothed_input``
+        is False), the lines and the stereo matching all see the smoothed pair, and the core's
+        own check (StereoFrontend) then finds it quiet, so the core's thread does not blur it
+        again."""
         above = self.config.tracking.denoise_above_noise
         return _core.smooth_if_noisy(image, above) if above > 0.0 else image
 
     def _smooth_and_detect(self, image: np.ndarray) -> tuple[np.ndarray, Keypoints]:
+        """The image as the core gets it (smoothed when noisy) and its keypoints, detected on
+        that image or, for a front end whose ``smoothed_input`` is False (SuperPoint), on the
+        image as it came."""
         smoothed = self._smooth(image)
-        return smoothed, self._detect(smoothed)
+        return smoothed, self._detect(smoothed if self._detect_smoothed else image)
 
     def _detect(self, image: np.ndarray) -> Keypoints:
         if self._weak_threshold is not None:
