@@ -177,7 +177,7 @@ class _Prepared:
     left_keypoints: Keypoints
     right_keypoints: Keypoints
     inference_ms: float  #: point front end, both images (wall)
-    left_lines: Any  #: _core.LeftLines extracted beside it, or None (the core extracts them)
+    left_lines: _core.LeftLines | None  #: extracted beside it; None: the core extracts them
     front_ms: float  #: the whole front-end step (wall): points and lines side by side
 
 
