@@ -1,5 +1,6 @@
 #include "slslam/optimization/bundle_adjustment.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -185,6 +186,18 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     ceres::Solve(solver_options, &solver_problem, &summary);
     if (abort && abort->load()) {
       report.solved = false;
+      return report;
+    }
+    // Interrupted before the first pass took a step: the estimate is the start, whose outliers
+    // say nothing yet (ORB-SLAM's local BA returns untouched when its stop flag is already set).
+    // (summary.iterations[0] is the start itself; Ceres counts it among the successful steps)
+    const bool moved =
+        summary.iterations.size() > 1 &&
+        std::any_of(summary.iterations.begin() + 1, summary.iterations.end(),
+                    [](const ceres::IterationSummary& it) { return it.step_is_successful; });
+    if (pass == 0 && interrupt && interrupt->load() && !moved) {
+      report.solved = false;
+      report.interrupted = true;
       return report;
     }
     if (pass == 0) report.initial_cost = summary.initial_cost;

@@ -70,7 +70,8 @@ struct BundleAdjustmentReport {
 // not solved (a background global BA that a newer correction made stale).
 // `interrupt`, when given, is polled between iterations too: once true the current pass ends at
 // its last accepted iterate, outliers are classified there and no further pass runs; the result
-// is solved and usable (ORB-SLAM's stop flag of local BA: a newer keyframe is waiting).
+// is solved and usable (ORB-SLAM's stop flag of local BA: a newer keyframe is waiting). Set
+// before the first pass took a step, the report is interrupted and not solved: nothing moved.
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
                                              const BundleAdjustmentOptions& options = {},
                                              const std::atomic<bool>* abort = nullptr,

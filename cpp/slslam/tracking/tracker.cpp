@@ -294,9 +294,10 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
     l->found += 1;
     (*line_match)[tracking.segments[i]] = tracking.line_ids[i];
   }
-  // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, with local mapping idle: it is
-  // in sequential mode, and in threaded mode the queue absorbs the keyframe). Reference: the
-  // reference keyframe's map points seen by at least min_obs keyframes.
+  // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, as with local mapping idle: it is
+  // in sequential mode, and in threaded mode the queue absorbs the keyframe, unless mapping_brake
+  // holds it back, below). Reference: the reference keyframe's map points seen by at least
+  // min_obs keyframes.
   const int frames_since = frame.index - last_keyframe_frame_;
   int reference = 0;
   if (auto kf = map.keyframe(last_keyframe_)) {

@@ -474,10 +474,11 @@ class Tracker:
 
     def _smooth(self, image: np.ndarray) -> np.ndarray:
         """A noisy (dark) image smoothed (``tracking.denoise_above_noise``), else the image.
-        Done once here, on the front end's threads: the detector (unless its ``smoothed_input``
-        is False), the lines and the stereo matching all see the smoothed pair, and the core's
-        own check (StereoFrontend) then finds it quiet, so the core's thread does not blur it
-        again."""
+        Done here, on the front end's threads: the detector (unless its ``smoothed_input`` is
+        False) and the stereo matching see the smoothed pair, and the core's own check
+        (StereoFrontend) then finds it quiet, so the core's thread does not blur it again. The
+        left image's lines thread smooths its own copy of a noisy left image the same way (about
+        1 ms of CPU on a dark frame, beside the network)."""
         above = self.config.tracking.denoise_above_noise
         return _core.smooth_if_noisy(image, above) if above > 0.0 else image
 
@@ -639,14 +640,18 @@ class Tracker:
             left, kl = self._smooth_and_detect(left)
             right, kr = right_side.result()
         inference_ms = (time.perf_counter() - start) * 1e3
-        left_lines = lines.result() if lines is not None else None
+        try:
+            left_lines = lines.result() if lines is not None else None
+        except (ValueError, RuntimeError) as exc:  # named with its frame, as the core's errors
+            raise RuntimeError(f"{where}: line extraction: {exc}") from exc
         front_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(
             index, float(timestamp), left, right, kl, kr, inference_ms, left_lines, front_ms
         )
 
     def _track_prepared(self, frame: _Prepared) -> TrackResult:
-        """The core's part of one frame (GIL released inside): lines, stereo, tracking."""
+        """The core's part of one frame (GIL released inside): stereo, tracking (and the left
+        image's lines when no lines thread extracted them)."""
         index, where = frame.index, f"frame {frame.index}"
         left, right, kl, kr = frame.left, frame.right, frame.left_keypoints, frame.right_keypoints
         timestamp, inference_ms = frame.timestamp, frame.inference_ms
