@@ -480,17 +480,26 @@ def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     assert sum(r.counts.keyframe for r in results_b) < 0.8 * len(results_b)  # work was skipped
 
 
+def noisy_frames(sequence: EurocSequence, count: int, seed: int) -> list:
+    """The first ``count`` frames as (left, right, t) with white noise of sigma 9 gray levels
+    (noisier than tracking.denoise_above_noise's 6: the tracker smooths them)."""
+    rng = np.random.default_rng(seed)
+
+    def noisy(image: np.ndarray) -> np.ndarray:
+        return np.clip(image + rng.normal(0, 9, image.shape), 0, 255).astype(np.uint8)
+
+    return [
+        (noisy(f.left), noisy(f.right), f.t_ns * 1e-9) for f in (sequence[i] for i in range(count))
+    ]
+
+
 def test_left_lines_extracted_beside_the_front_end_are_the_ones_the_core_would_extract(sim_loop):
     """The left image's lines run on a thread of their own beside the point front end
     (``_core.TrackerCore.extract_left_lines``, handed to ``track``): on noisy frames (smoothed
     first) the lines, poses and map are those of the core extracting them itself, and only the
     work moves."""
     sequence = EurocSequence(sim_loop)
-    rng = np.random.default_rng(5)
-    noisy = lambda image: np.clip(image + rng.normal(0, 9, image.shape), 0, 255).astype(  # noqa: E731
-        np.uint8
-    )
-    frames = [(noisy(f.left), noisy(f.right), f.t_ns * 1e-9) for f in sequence]
+    frames = noisy_frames(sequence, 40, seed=5)
     cfg = config("orb", lines=True)
     runs = []
     for ahead in (True, False):
@@ -499,7 +508,7 @@ def test_left_lines_extracted_beside_the_front_end_are_the_ones_the_core_would_e
             if not ahead:
                 tracker._lines_side.shutdown()
                 tracker._lines_side = None
-            results = [tracker.track(*f) for f in frames[:40]]
+            results = [tracker.track(*f) for f in frames]
             runs.append((tracker.trajectory()[1], tracker.map(), results))
     (poses_a, map_a, results_a), (poses_b, map_b, results_b) = runs
     assert [r.counts.lines for r in results_a] == [r.counts.lines for r in results_b]
@@ -524,15 +533,7 @@ def test_a_front_end_sees_the_smoothed_pair_unless_it_asks_for_the_raw_one(
     copy (ORB, XFeat) or, with ``smoothed_input = False`` (SuperPoint, which drifted less on the
     raw dark images), the image as it came."""
     sequence = EurocSequence(sim_loop)
-    rng = np.random.default_rng(11)
-    frames = [
-        (
-            np.clip(f.left + rng.normal(0, 9, f.left.shape), 0, 255).astype(np.uint8),
-            np.clip(f.right + rng.normal(0, 9, f.right.shape), 0, 255).astype(np.uint8),
-            f.t_ns * 1e-9,
-        )
-        for f in (sequence[i] for i in range(3))
-    ]
+    frames = noisy_frames(sequence, 3, seed=11)
 
     class Recording:
         def __init__(self):

@@ -54,10 +54,9 @@ class StereoFrontend {
                                      StereoFrontendTiming* timing = nullptr,
                                      const LineFeatures* left_lines = nullptr) const;
 
-  // The left image's lines as Build extracts them (smoothed when noisy), for a caller that runs
-  // them beside the point front end. Given the raw image while Build gets the copy the caller
-  // smoothed with the same threshold (as slslam.Tracker does), the two are the same lines: one
-  // blur leaves the image quiet, so Build's check smooths it no further. Requires right_lines_on_keyframes (with it off,
+  // The left image's lines exactly as Build extracts them from the same image (smoothed when
+  // noisy), for a caller that runs them beside the point front end (slslam.Tracker hands both
+  // the copy it already smoothed, which the check then finds quiet). Requires right_lines_on_keyframes (with it off,
   // Build extracts both images' lines side by side) and use_lines. Thread-safe (const).
   LineFeatures ExtractLeftLines(const cv::Mat& left) const;
 

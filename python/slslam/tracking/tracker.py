@@ -474,11 +474,9 @@ class Tracker:
 
     def _smooth(self, image: np.ndarray) -> np.ndarray:
         """A noisy (dark) image smoothed (``tracking.denoise_above_noise``), else the image.
-        Done here, on the front end's threads: the detector (unless its ``smoothed_input`` is
-        False) and the stereo matching see the smoothed pair, and the core's own check
-        (StereoFrontend) then finds it quiet, so the core's thread does not blur it again. The
-        left image's lines thread smooths its own copy of a noisy left image the same way (about
-        1 ms of CPU on a dark frame, beside the network)."""
+        Done once here, on the front end's threads: the detector (unless its ``smoothed_input``
+        is False), the lines and the stereo matching all see the smoothed pair, and the core's
+        own check (StereoFrontend) then finds it quiet, so no thread blurs it again."""
         above = self.config.tracking.denoise_above_noise
         return _core.smooth_if_noisy(image, above) if above > 0.0 else image
 
@@ -622,22 +620,25 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         start = time.perf_counter()
-        # The left image's lines and the right image on helper threads meanwhile (LSD, ORB,
-        # onnxruntime and the smoothing release the GIL).
+        # The right image and the left image's lines on helper threads meanwhile (LSD, ORB,
+        # onnxruntime and the smoothing release the GIL). The left image is smoothed first, once,
+        # for its lines, its detection and the core.
+        row_search = self.config.tracking.stereo_row_search
+        # (row search: left only, the core searches each keypoint's patch along its right row)
+        right_side = self._right_side.submit(
+            self._smooth if row_search else self._smooth_and_detect, right
+        )
+        raw_left, left = left, self._smooth(left)
         lines = (
             self._lines_side.submit(self._core.extract_left_lines, left)
             if self._lines_side is not None
             else None
         )
-        if self.config.tracking.stereo_row_search:
-            # Left only: the core searches each keypoint's patch along its right-image row.
-            right_side = self._right_side.submit(self._smooth, right)
-            left, kl = self._smooth_and_detect(left)
+        kl = self._detect(left if self._detect_smoothed else raw_left)
+        if row_search:
             right = right_side.result()
             kr = kl.select(np.zeros(0, dtype=np.int64))
         else:
-            right_side = self._right_side.submit(self._smooth_and_detect, right)
-            left, kl = self._smooth_and_detect(left)
             right, kr = right_side.result()
         inference_ms = (time.perf_counter() - start) * 1e3
         try:

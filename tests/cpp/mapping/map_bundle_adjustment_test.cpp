@@ -81,6 +81,13 @@ TEST(MapBundleAdjustment, WhatJoinedTheMapDuringTheSolveFollowsItsNearestSolvedK
   }
 }
 
+StereoRig TestRig() {
+  StereoRig rig;
+  rig.camera = {400, 400, 320, 240, 640, 480};
+  rig.baseline_m = 0.1;
+  return rig;
+}
+
 // Two stereo views of 20 points; the free pose and the points start perturbed.
 BaProblem TwoViewProblem(const StereoRig& rig, std::vector<Eigen::Vector3d>* truth = nullptr) {
   BaProblem problem;
@@ -106,9 +113,7 @@ BaProblem TwoViewProblem(const StereoRig& rig, std::vector<Eigen::Vector3d>* tru
 }
 
 TEST(MapBundleAdjustment, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
-  StereoRig rig;
-  rig.camera = {400, 400, 320, 240, 640, 480};
-  rig.baseline_m = 0.1;
+  const StereoRig rig = TestRig();
   std::vector<Eigen::Vector3d> truth;
   BaProblem problem = TwoViewProblem(rig, &truth);
   problem.point_observations[7].observed.x() += 40.0;  // a gross outlier
@@ -136,27 +141,8 @@ TEST(MapBundleAdjustment, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
 }
 
 TEST(MapBundleAdjustment, ASolveAskedToAbortReportsUnsolved) {
-  StereoRig rig;
-  rig.camera = {400, 400, 320, 240, 640, 480};
-  rig.baseline_m = 0.1;
-  BaProblem problem;
-  problem.poses.push_back({Rigid3d(), true});
-  problem.poses.push_back(
-      {Rigid3d(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.2, 0, 0)), false});
-  for (int i = 0; i < 20; ++i) {
-    const Eigen::Vector3d x(0.3 * (i % 5) - 0.6, 0.2 * (i / 5) - 0.3, 4.0 + 0.1 * i);
-    problem.points.push_back(x + Eigen::Vector3d(0.05, -0.03, 0.1));
-    for (int k = 0; k < 2; ++k) {
-      const Eigen::Vector3d xc = problem.poses[k].cam_from_world * x;
-      BaPointObservation o;
-      o.pose = k;
-      o.point = i;
-      o.stereo = true;
-      const Eigen::Vector2d uv = rig.camera.Project(xc);
-      o.observed << uv.x(), uv.y(), uv.x() - rig.camera.fx * rig.baseline_m / xc.z();
-      problem.point_observations.push_back(o);
-    }
-  }
+  const StereoRig rig = TestRig();
+  const BaProblem problem = TwoViewProblem(rig);
   BaProblem copy = problem;
   EXPECT_TRUE(SolveBundleAdjustment(rig, &copy).solved);
   const std::atomic<bool> abort{true};
