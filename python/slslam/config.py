@@ -146,6 +146,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
 } | {
     "max_depth_baselines": ("stereo.max_depth_baselines",),
     "stereo_row_search": ("stereo.row_search",),
+    "row_search_window_px": ("stereo.row_search_window",),
+    "subpixel_window_px": ("stereo.subpixel_window",),
     "right_lines_on_keyframes": ("right_lines_on_keyframes",),
     "denoise_above_noise": ("denoise_above_noise",),
     "local_keyframes": ("mapping.local_keyframes",),
@@ -397,6 +399,10 @@ class TrackingConfig:
     # network's work for a learned front end); false: keypoints on both images, matched by
     # descriptor along the row band
     stereo_row_search: bool = _tracking("stereo_row_search")
+    # half size of the row search's patch [px]
+    row_search_window_px: int = _tracking("row_search_window_px", "[1, 50]")
+    # half size of the patch that refines stereo disparities to subpixel precision [px]; 0: off
+    subpixel_window_px: int = _tracking("subpixel_window_px", "[0, 100]")
     # line segments of the right image only for frames that become keyframes or start a map, the
     # only ones whose stereo lines are used (tracking matches the left image's lines to the map);
     # false: both images every frame

@@ -9,6 +9,15 @@
 #include "slslam/core/check.h"
 #include "slslam/features/descriptor_matcher.h"
 
+// Not under a sanitizer: the loader runs the clones' resolver before the sanitizer's runtime is
+// up (see place/descriptor_space.cpp).
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(SLSLAM_SANITIZED)
+#define SLSLAM_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define SLSLAM_AVX2_CLONES
+#endif
+
 namespace slslam {
 
 namespace {
@@ -131,6 +140,28 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
   }
 }
 
+namespace {
+
+// cost[k] += sum over the patch of |(L - mean_L) - (R - mean_R[k])|, the row search's inner loop
+// (side^2 x count per keypoint: with the 15 x 15 patch the largest part of stereo matching).
+// Contiguous in k, so it vectorises; compiled twice, and the loader picks the AVX2 version where
+// the CPU has it (slslam is built without -march so wheels run anywhere). Each cost[k] is summed
+// in the same order in both versions, so they give the same floats.
+SLSLAM_AVX2_CLONES void AccumulateRowSearchCosts(const float* patch, int side, const float* strip,
+                                                 int width, const float* mean_right, int count,
+                                                 float* cost) {
+  for (int dy = 0; dy < side; ++dy) {
+    const float* row = strip + static_cast<size_t>(dy) * width;
+    for (int dx = 0; dx < side; ++dx) {
+      const float a = patch[dy * side + dx];
+      const float* r = row + dx;
+      for (int k = 0; k < count; ++k) cost[k] += std::abs(a + mean_right[k] - r[k]);
+    }
+  }
+}
+
+}  // namespace
+
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                             const StereoMatchOptions& options, StereoFrame* frame) {
   Require(frame != nullptr, "row search needs a frame");
@@ -148,6 +179,7 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
   std::vector<float> patch(side * side);  // left patch minus its mean, row-major
   std::vector<float> strip;               // right rows of the search range, as float
   std::vector<float> mean_right, cost;
+  std::vector<int> column_sum;
   for (int i = 0; i < n; ++i) {
     if (frame->u_right[i] >= 0.0) continue;
     const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
@@ -178,26 +210,27 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
     // The strip: 2w+1 right rows over columns [lo - w, hi + w].
     const int width = count + 2 * w;
     strip.resize(static_cast<size_t>(side) * width);
-    mean_right.assign(count, 0.0f);
+    // Patch means from column sums and a sliding window: O(width) per row, not O(side * count)
+    // (integer sums, so the means are the same floats as summing every pixel).
+    column_sum.assign(width, 0);
     for (int dy = 0; dy < side; ++dy) {
       const uchar* row = right.ptr<uchar>(v - w + dy) + (lo - w);
       float* out = strip.data() + static_cast<size_t>(dy) * width;
-      for (int x = 0; x < width; ++x) out[x] = row[x];
-      for (int dx = 0; dx < side; ++dx) {
-        for (int k = 0; k < count; ++k) mean_right[k] += out[k + dx];
+      for (int x = 0; x < width; ++x) {
+        out[x] = row[x];
+        column_sum[x] += row[x];
       }
     }
-    for (float& m : mean_right) m /= area;
-    // cost[k] = sum |(L - mean_L) - (R - mean_R[k])|: contiguous in k, vectorised.
+    mean_right.resize(count);
+    int window_sum = 0;
+    for (int x = 0; x < side; ++x) window_sum += column_sum[x];
+    for (int k = 0; k < count; ++k) {
+      if (k > 0) window_sum += column_sum[k + side - 1] - column_sum[k - 1];
+      mean_right[k] = static_cast<float>(window_sum) / area;
+    }
     cost.assign(count, 0.0f);
-    for (int dy = 0; dy < side; ++dy) {
-      const float* row = strip.data() + static_cast<size_t>(dy) * width;
-      for (int dx = 0; dx < side; ++dx) {
-        const float a = patch[dy * side + dx];
-        const float* r = row + dx;
-        for (int k = 0; k < count; ++k) cost[k] += std::abs(a + mean_right[k] - r[k]);
-      }
-    }
+    AccumulateRowSearchCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
+                             cost.data());
     int best = 0;
     for (int k = 1; k < count; ++k) {
       if (cost[k] < cost[best]) best = k;
