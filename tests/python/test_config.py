@@ -134,12 +134,12 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
 
     config = load_config(DEFAULT_YAML.parent / "xfeat.yaml")
     assert config.features.point_frontend == "xfeat"
-    assert config.features.dynamic_cells.sigma_median_ratio == 3.0
+    assert config.features.dynamic_cells.sigma_median_ratio == 2.0
     assert config.features.xfeat.precision == "int8"
     assert config.features.xfeat.intra_op_threads == 1
     assert _core.DynamicCellOptions().sigma_median_ratio == 0.0  # the paper's fixed width
     camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
-    assert _core_options(camera, config).dynamic.sigma_median_ratio == 3.0
+    assert _core_options(camera, config).dynamic.sigma_median_ratio == 2.0
     # the network on the left image only, the row search on the right
     assert config.tracking.stereo_row_search and not Config().tracking.stereo_row_search
     assert _core_options(camera, config).stereo.row_search
