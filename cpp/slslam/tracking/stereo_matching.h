@@ -27,10 +27,11 @@ struct StereoMatchOptions {
   /// run its network on the left image only.
   bool row_search = false;
   /// half size of the SAD patch of the row search [px]. 7 (15 x 15): XFeat + lines on 150 dark
-  /// frames of the simulated loop drifted 0.0353 m with 3, 0.0314 with 4, 0.0197 with 5, 0.0155
-  /// with 7 and 0.0174 with 9 (bright: 0.0054, 0.0055, 0.0060, 0.0050, -): the small patch of a
-  /// noisy pair refused or biased matches, and the map's scale came out about 2 % short
-  /// (benchmarks/README.md, 2026-11-26 evening)
+  /// frames of the simulated loop (subpixel patch 11 x 11) drifted 0.0353 m with 3, 0.0314 with
+  /// 4, 0.0219 with 5 and 0.0162 with 7 (bright: 0.0054, 0.0055, 0.0051, 0.0064, no trend): the
+  /// small patch of a noisy pair refused or biased matches, and the map's scale came out about
+  /// 2 % short. Keypoints within w px of the image's edge are not searched (benchmarks/README.md,
+  /// 2026-11-26 evening)
   int row_search_window = 7;
   /// best cost / lowest other local minimum of the cost along the row must be below this [-]
   float row_search_ratio = 0.8f;
@@ -64,10 +65,11 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
 // (row_search_max_cost), a clear lowest minimum (row_search_ratio against the lowest other local
 // minimum: repeated structure along the row is refused) and a minimum inside the range. Give it
 // a noisy (dark) pair smoothed (SmoothIfNoisy, as StereoFrontend does): on raw light-0.15 frames
-// the patches' own noise decides (16 of 2,500 keypoints matched, about 550 smoothed, with fewer
-// wrong than the descriptors' matches). The integer column is stored; RefineStereoSubpixel refines it as a descriptor match. Keypoints with
-// a match already keep it. About 49 x (disparity range) absolute differences per keypoint, in
-// contiguous float rows the compiler vectorises.
+// the patches' own noise decides (with the 7 x 7 patch: 16 of 2,500 keypoints matched, about 550
+// smoothed, with fewer wrong than the descriptors' matches). The integer column is stored;
+// RefineStereoSubpixel refines it as a descriptor match. Keypoints with a match already keep it.
+// About (2w+1)^2 x (disparity range) absolute differences per keypoint (225 x for the default),
+// in contiguous float rows that are vectorised (an AVX2 version where the CPU has it).
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                             const StereoMatchOptions& options, StereoFrame* frame);
 
