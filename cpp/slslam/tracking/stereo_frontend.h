@@ -56,8 +56,9 @@ class StereoFrontend {
 
   // The left image's lines exactly as Build extracts them from the same image (smoothed when
   // noisy), for a caller that runs them beside the point front end (slslam.Tracker hands both
-  // the copy it already smoothed, which the check then finds quiet). Requires right_lines_on_keyframes (with it off,
-  // Build extracts both images' lines side by side) and use_lines. Thread-safe (const).
+  // the copy it already smoothed, which the check then finds quiet). Requires
+  // right_lines_on_keyframes (with it off, Build extracts both images' lines side by side) and
+  // use_lines. Thread-safe (const).
   LineFeatures ExtractLeftLines(const cv::Mat& left) const;
 
   // The stereo lines of a frame Build left pending: the right image's segments, matched and

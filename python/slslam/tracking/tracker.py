@@ -481,11 +481,14 @@ class Tracker:
         return _core.smooth_if_noisy(image, above) if above > 0.0 else image
 
     def _smooth_and_detect(self, image: np.ndarray) -> tuple[np.ndarray, Keypoints]:
-        """The image as the core gets it (smoothed when noisy) and its keypoints, detected on
-        that image or, for a front end whose ``smoothed_input`` is False (SuperPoint), on the
-        image as it came."""
+        """The image as the core gets it (smoothed when noisy) and its keypoints."""
         smoothed = self._smooth(image)
-        return smoothed, self._detect(smoothed if self._detect_smoothed else image)
+        return smoothed, self._detect_either(image, smoothed)
+
+    def _detect_either(self, raw: np.ndarray, smoothed: np.ndarray) -> Keypoints:
+        """Keypoints detected on the smoothed image or, for a front end whose
+        ``smoothed_input`` is False (SuperPoint), on the image as it came."""
+        return self._detect(smoothed if self._detect_smoothed else raw)
 
     def _detect(self, image: np.ndarray) -> Keypoints:
         if self._weak_threshold is not None:
@@ -634,7 +637,7 @@ class Tracker:
             if self._lines_side is not None
             else None
         )
-        kl = self._detect(left if self._detect_smoothed else raw_left)
+        kl = self._detect_either(raw_left, left)
         if row_search:
             right = right_side.result()
             kr = kl.select(np.zeros(0, dtype=np.int64))
