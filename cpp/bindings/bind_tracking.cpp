@@ -75,15 +75,16 @@ class TrackerSession {
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
+      cv::Mat left_used;  // as stereo matching saw it, for the tracker's keypoint refinement
       auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out,
-                                   left_lines ? &left_lines->features : nullptr);
+                                   left_lines ? &left_lines->features : nullptr, &left_used);
       if (left_lines) out.line_extraction_ms = left_lines->extraction_ms;
       out.lines = frame->NumLines();
       // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
         frontend_.CompleteStereoLines(right, f);
       };
-      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete);
+      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete, left_used);
     }
     return out;
   }
@@ -388,6 +389,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("close_depth_baselines", &TrackerOptions::close_depth_baselines)
       .def_readwrite("keyframe_min_inliers", &TrackerOptions::keyframe_min_inliers)
       .def_readwrite("point_sigma_px", &TrackerOptions::point_sigma_px)
+      .def_readwrite("track_refine_window_px", &TrackerOptions::track_refine_window_px)
+      .def_readwrite("track_refine_max_px", &TrackerOptions::track_refine_max_px)
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)

@@ -135,6 +135,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "keyframe_min_inliers",
         "close_depth_baselines",
         "point_sigma_px",
+        "track_refine_window_px",
+        "track_refine_max_px",
         "line_sigma_px",
         "line_inlier_weight",
         "recently_lost_frames",
@@ -413,6 +415,12 @@ class TrackingConfig:
     denoise_above_noise: float = _tracking("denoise_above_noise", "[0, 255]")
     # keypoint measurement sigma [px]
     point_sigma_px: float = _tracking("point_sigma_px", "[0.01, 1000]")
+    # half size of the patch each map point keeps from the keyframe that made it: later matches
+    # are aligned to it (scaled by the point's change of depth) instead of taking the detected
+    # keypoint position as it is [px]; 0: off
+    track_refine_window_px: int = _tracking("track_refine_window_px", "[0, 50]")
+    # an alignment that moves the keypoint further than this is not taken [px]
+    track_refine_max_px: float = _tracking("track_refine_max_px", "(0, 1e5]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")

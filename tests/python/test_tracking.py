@@ -473,6 +473,37 @@ def test_row_search_runs_the_front_end_on_the_left_image_only(sim_loop):
     assert ate.summary()["ape"]["rmse"] < 0.03
 
 
+def test_matches_are_aligned_to_their_map_points_patches(sim_loop):
+    """tracking.track_refine_window_px (on by default): each map point keeps the patch of the
+    keyframe that made it and later matches are aligned to it. The image reaches the core's
+    tracker through the bindings (the poses change), and the trajectory is at least as accurate
+    as with the detected positions (ORB + lines on these 80 frames: 0.0042 against 0.0051 m
+    when measured)."""
+    from slslam.eval.report import evaluate
+    from slslam.tracking.run import tracked_trajectory
+
+    sequence = EurocSequence(sim_loop)
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+    gt = sequence.groundtruth(frame="rectified")
+    on = config("orb", lines=True)
+    assert on.tracking.track_refine_window_px > 0
+    off = dataclasses.replace(
+        on, tracking=dataclasses.replace(on.tracking, track_refine_window_px=0)
+    )
+    ate, poses = {}, {}
+    for name, cfg in (("on", on), ("off", off)):
+        with Tracker(sequence.camera, cfg) as tracker:
+            results = list(tracker.track_stream(frames))
+        assert all(r.tracked for r in results[1:])
+        poses[name] = np.array([r.T_world_cam[:3, 3] for r in results])
+        trajectory = tracked_trajectory(results)
+        ate[name] = evaluate(trajectory, gt, align="se3", rpe_delta=None, plot=False)
+        ate[name] = ate[name].summary()["ape"]["rmse"]
+    assert np.abs(poses["on"] - poses["off"]).max() > 1e-4, "the refinement changed nothing"
+    assert ate["on"] < 0.03
+    assert ate["on"] <= 1.1 * ate["off"], ate
+
+
 def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     """tracking.right_lines_on_keyframes: the right image's lines are extracted only for frames
     that become keyframes (or start a map), the only ones whose stereo lines are used, so the

@@ -29,6 +29,10 @@ struct MapPoint {
   int found = 0;    ///< frames that matched it [-]
   int first_keyframe = -1;
   bool bad = false;
+  /// float patch of the creating keyframe's left image centred on the point's keypoint
+  /// (TrackerOptions::track_refine_window_px; empty otherwise, and not saved in map files)
+  cv::Mat patch;
+  double patch_depth_m = 0.0;  ///< the point's depth in that keyframe [m]
 };
 
 struct MapLine {

@@ -34,7 +34,8 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
                                                    const Keypoints& left_keypoints,
                                                    const Keypoints& right_keypoints,
                                                    StereoFrontendTiming* timing,
-                                                   const LineFeatures* given_left_lines) const {
+                                                   const LineFeatures* given_left_lines,
+                                                   cv::Mat* left_used) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
@@ -69,6 +70,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
     timing->line_extraction_ms = line_ms;
     timing->stereo_matching_ms = Ms(start);
   }
+  if (left_used != nullptr) *left_used = left;
   return frame;
 }
 

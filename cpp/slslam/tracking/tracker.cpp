@@ -249,6 +249,13 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
         const Eigen::Vector3d p_w = world_from_cam * frame->Backproject(options_.rig.camera, i);
         auto p = map.AddPoint(p_w, frame->keypoints.descriptors.row(i), kf_id);
         map.AddPointObservation(p->id, kf_id, i);
+        if (options_.track_refine_window_px > 0 && current_left_ != nullptr) {
+          // the image around its keypoint: later matches are aligned to it (RefineTracks)
+          p->patch = tracker_detail::SamplePatch(*current_left_, frame->keypoints.uv(i, 0),
+                                                 frame->keypoints.uv(i, 1),
+                                                 options_.track_refine_window_px);
+          p->patch_depth_m = frame->depth[i];
+        }
       }
     }
     if (options_.use_lines) {
@@ -354,14 +361,20 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
 }
 
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
-                           const StereoLineCompleter& complete_stereo_lines) {
+                           const StereoLineCompleter& complete_stereo_lines,
+                           const cv::Mat& left_image) {
   Require(frame != nullptr, "Track needs a frame");
-  // The completer is valid for this call only.
-  struct CompleterScope {
-    const StereoLineCompleter*& slot;
-    ~CompleterScope() { slot = nullptr; }
-  } scope{complete_stereo_lines_};
+  // The completer and the image are valid for this call only.
+  struct CallScope {
+    const StereoLineCompleter*& completer;
+    const cv::Mat*& image;
+    ~CallScope() {
+      completer = nullptr;
+      image = nullptr;
+    }
+  } scope{complete_stereo_lines_, current_left_};
   complete_stereo_lines_ = &complete_stereo_lines;
+  current_left_ = &left_image;
   TrackResult result;
   if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
     const cv::Mat& d = frame->keypoints.descriptors;
@@ -434,7 +447,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
       SetAnchor(map, last_keyframe_);
       break;
     }
-    tracking = TrackSnapshot(*frame, local, predicted, scale, &valid);
+    tracking = TrackSnapshot(*frame, local, predicted, scale, &valid, current_left_);
   };
   if (mode_ != Mode::kLost) {
     track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
@@ -530,6 +543,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
     }
     if (make_keyframe && !options_.localise_only) {
       const auto start = Clock::now();
+      frame = WithRefinedKeypoints(std::move(frame), tracking);
       if (options_.use_lines) frame = WithStereoLines(std::move(frame));
       InsertKeyFrame(frame, tracking.pose.cam_from_world, point_match, line_match, valid);
       result.keyframe = true;

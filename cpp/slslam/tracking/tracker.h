@@ -122,6 +122,19 @@ struct TrackerOptions {
                                        ///< ones): keyframe, as ORB-SLAM3's stereo rule [-]
   double close_depth_baselines = 40.0;  ///< "close" stereo points for the rule above [-]
   double point_sigma_px = 1.0;          ///< [px]
+  /// Half size of the patch that refines a tracked keypoint's position [px]: a map point made
+  /// from a keyframe's keypoint keeps the (2w+1)^2 patch of the left image around it (as stereo
+  /// matching saw it), and a later match is aligned to that patch (inverse compositional
+  /// Gauss-Newton, zero-mean, the patch scaled by the point's change of depth, the detected
+  /// position as the start; textured patches only, accepted at NCC >= 0.8). The motion-only BA
+  /// and a keyframe take the aligned position, the stereo column shifted with it. Detected
+  /// keypoints repeat to 1-2 px against the ground truth (XFeat 1.8, SuperPoint and ORB 1.1 px
+  /// median on the simulated loop); aligned ones follow the point the map was made from.
+  /// Measured (benchmarks/README.md, 2026-11-27): XFeat + lines 0.0404 -> 0.015 m on the
+  /// 600-frame bright loop, ORB + lines 0.163 -> 0.095 m on the hard junction. Points that local
+  /// mapping triangulates and points loaded from a map file have no patch. 0: off
+  int track_refine_window_px = 5;
+  float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
   double line_sigma_px = 3.0;           ///< line endpoint distance sigma [px]: the two
                                         ///< distances of one segment share the map line's error
                                         ///< (benchmarks/README.md: 1.5 px over-weighted lines)
@@ -201,8 +214,12 @@ class Tracker {
   // start a map: the only places the right image's lines are used.
   using StereoLineCompleter = std::function<void(StereoFrame*)>;
 
+  // `left_image`: the left image as stereo matching saw it (StereoFrontend::Build's
+  // `left_used`), for track_refine_window_px; empty: no refinement for this frame. Read during
+  // the call only.
   TrackResult Track(std::shared_ptr<const StereoFrame> frame,
-                    const StereoLineCompleter& complete_stereo_lines = {});
+                    const StereoLineCompleter& complete_stereo_lines = {},
+                    const cv::Mat& left_image = cv::Mat());
   // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
   // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
   // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
@@ -235,6 +252,8 @@ class Tracker {
     std::vector<int> point_ids, keypoints, line_ids, segments;  ///< matched pairs
     /// matches of keypoints in invalid cells: left out of the pose, kept for the cell filter
     std::vector<int> masked_point_ids, masked_keypoints;
+    /// per matched pair: the keypoint's refined position (track_refine_window_px), or NaN
+    std::vector<Eigen::Vector2f> refined_uv;
     double weighted_inliers = 0.0;
     double matching_ms = 0.0;
     double optimisation_ms = 0.0;
@@ -262,6 +281,8 @@ class Tracker {
     std::vector<Eigen::Vector3d> point_w;
     Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> point_uv;  ///< predicted [px]
     cv::Mat point_descriptors;                                            ///< one row per point
+    std::vector<cv::Mat> point_patches;    ///< per point: MapPoint::patch (may be empty)
+    std::vector<double> point_patch_depth_m;  ///< per point: MapPoint::patch_depth_m
     std::vector<int> line_ids;
     std::vector<PluckerLine> lines_w;
     std::vector<LineSegment> line_px;  ///< predicted segments [px]
@@ -272,10 +293,14 @@ class Tracker {
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                                     const Rigid3d& pred_cam_from_world) const
       SLSLAM_REQUIRES(map.mutex());
-  // No lock: guided matching of the snapshot in the frame and the motion-only BA.
+  // No lock: guided matching of the snapshot in the frame and the motion-only BA. With
+  // `refine_image` (the frame's left image, as stereo matching saw it) the matches are aligned
+  // to their points' patches first (track_refine_window_px): tracking's own frames only, never
+  // a keyframe re-tracked by loop verification on its thread.
   LocalTracking TrackSnapshot(const StereoFrame& frame, const LocalMapSnapshot& local,
                               const Rigid3d& pred_cam_from_world, float radius_scale,
-                              const std::vector<bool>* valid_keypoints = nullptr) const;
+                              const std::vector<bool>* valid_keypoints = nullptr,
+                              const cv::Mat* refine_image = nullptr) const;
   // Both in one (caller holds map.mutex()): relocalisation, loop verification.
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                               const Rigid3d& pred_cam_from_world, float radius_scale,
@@ -318,6 +343,18 @@ class Tracker {
   int bridge_map_ = -1;                     ///< the map whose world the bridge's poses are in
   // Gives the bridge the pose the camera estimated for `frame` (in the active map's world).
   void BridgePose(const StereoFrame& frame, const Rigid3d& cam_from_world);
+  // Aligns matched keypoints to their map points' patches in `image` (track_refine_window_px;
+  // null or empty: none): fills tracking->refined_uv (rows of the snapshot: called before they
+  // become map ids).
+  void RefineTracks(const StereoFrame& frame, const LocalMapSnapshot& local,
+                    const Rigid3d& pred_cam_from_world, const cv::Mat* image,
+                    LocalTracking* tracking) const;
+  // The frame, or a copy whose inlier keypoints sit at their refined positions (a keyframe's
+  // observations in the local BA).
+  std::shared_ptr<const StereoFrame> WithRefinedKeypoints(std::shared_ptr<const StereoFrame> frame,
+                                                          const LocalTracking& tracking) const;
+  const cv::Mat* current_left_ = nullptr;  ///< the image handed to Track, during the call
+                                           ///< (tracking's thread only)
   std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
   Rigid3d previous_cam_from_world_;  ///< of previous_frame_
   int active_ = -1;  ///< index of the map being tracked in

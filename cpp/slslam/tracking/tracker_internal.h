@@ -27,4 +27,16 @@ inline bool InImage(const PinholeCamera& camera, const Eigen::Vector2d& uv, doub
          uv.y() <= camera.height - 1 + margin;
 }
 
+// The (2w+1) x (2w+1) float patch of an 8-bit image centred on (u, v), bilinear, with `scale`
+// pixels of the image per patch pixel; empty when it does not fit inside the image.
+cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w, double scale = 1.0);
+
+// Aligns `patch` (SamplePatch's, w from its size) to `image` around (u, v), the patch spanning
+// `scale` image pixels per patch pixel: Gauss-Newton on the zero-mean difference (a brightness
+// offset between the two drops out), at most 10 steps. True with (u, v) moved to the alignment
+// when it converged on texture (both eigenvalues of the normal matrix large enough) and the two
+// patches correlate (zero-mean NCC >= min_ncc).
+bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc,
+                double* u, double* v);
+
 }  // namespace slslam::tracker_detail

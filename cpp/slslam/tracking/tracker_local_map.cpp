@@ -1,11 +1,17 @@
 // Tracker: the local map around the reference keyframe, copied under the map lock
 // (SnapshotLocalMap) and matched in the frame with the motion-only BA outside it (TrackSnapshot);
-// the dynamic-cell filter's update from the previous frame.
+// matched keypoints aligned to their map points' patches (RefineTracks); the
+// dynamic-cell filter's update from the previous frame.
 #include "slslam/tracking/tracker.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <set>
 #include <tuple>
+#include <vector>
+
+#include <Eigen/Dense>
 
 #include "slslam/features/line_segment.h"
 #include "slslam/tracking/tracker_internal.h"
@@ -70,6 +76,8 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
       snap.point_w.push_back(points[i]->position);
       snap.point_uv.row(static_cast<Eigen::Index>(i)) = predicted[i].transpose();
       points[i]->descriptor.copyTo(snap.point_descriptors.row(static_cast<int>(i)));
+      snap.point_patches.push_back(points[i]->patch);  // (shared pixels: never written again)
+      snap.point_patch_depth_m.push_back(points[i]->patch_depth_m);
     }
   }
 
@@ -110,7 +118,8 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
                                               const LocalMapSnapshot& local,
                                               const Rigid3d& pred_cam_from_world,
                                               float radius_scale,
-                                              const std::vector<bool>* valid_keypoints) const {
+                                              const std::vector<bool>* valid_keypoints,
+                                              const cv::Mat* refine_image) const {
   LocalTracking out;
   const auto match_start = Clock::now();
   // Points: matched in a window around the predicted position.
@@ -131,6 +140,7 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
       (masked ? out.masked_keypoints : out.keypoints).push_back(m(i));
     }
   }
+  RefineTracks(frame, local, pred_cam_from_world, refine_image, &out);
 
   // Lines: predicted segments against frame segments (angle, distance, LBD).
   std::vector<int> line_rows;  // snapshot rows of the matched lines
@@ -175,6 +185,12 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
     points[i].point_w = local.point_w[out.point_ids[i]];
     points[i].stereo = frame.u_right[k] >= 0.0;
     points[i].observed << frame.keypoints.uv(k, 0), frame.keypoints.uv(k, 1), frame.u_right[k];
+    const Eigen::Vector2f& refined = out.refined_uv[i];
+    if (std::isfinite(refined.x())) {  // the stereo column moves with the keypoint
+      const double du = refined.x() - frame.keypoints.uv(k, 0);
+      points[i].observed << refined.x(), refined.y(),
+          points[i].stereo ? frame.u_right[k] + du : frame.u_right[k];
+    }
     points[i].sigma_px = options_.point_sigma_px;
   }
   std::vector<LineObservation> lines(line_rows.size());
@@ -210,6 +226,164 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
       descriptor_type == CV_8U ? options_.max_distance_binary : options_.max_distance_float;
   guided.ratio = options_.match_ratio;
   return guided;
+}
+
+namespace tracker_detail {
+
+namespace {
+
+// Bilinear sample of an 8-bit image at (x, y), inside [0, cols - 1] x [0, rows - 1].
+inline float Bilinear(const cv::Mat& image, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);
+  const float ax = static_cast<float>(x - x0), ay = static_cast<float>(y - y0);
+  const uchar* r0 = image.ptr<uchar>(y0);
+  const uchar* r1 = image.ptr<uchar>(y1);
+  const float top = (1.0f - ax) * r0[x0] + ax * r0[x1];
+  const float bottom = (1.0f - ax) * r1[x0] + ax * r1[x1];
+  return (1.0f - ay) * top + ay * bottom;
+}
+
+}  // namespace
+
+cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w, double scale) {
+  const double reach = (w + 1) * scale;  // (one more pixel for the gradients)
+  if (image.empty() || image.type() != CV_8UC1 || u - reach < 0.0 || v - reach < 0.0 ||
+      u + reach > image.cols - 1.0 || v + reach > image.rows - 1.0) {
+    return cv::Mat();
+  }
+  cv::Mat patch(2 * w + 1, 2 * w + 1, CV_32F);
+  for (int r = -w; r <= w; ++r) {
+    float* row = patch.ptr<float>(r + w);
+    for (int c = -w; c <= w; ++c) row[c + w] = Bilinear(image, u + c * scale, v + r * scale);
+  }
+  return patch;
+}
+
+bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc,
+                double* u, double* v) {
+  // Inverse compositional (Baker and Matthews): the template's gradients and normal matrix are
+  // computed once, each step samples the image once per patch pixel.
+  const int size = patch.rows, w = size / 2, n = size * size;
+  static thread_local std::vector<float> tm, tgx, tgy, values;  // (no allocation per call)
+  tm.resize(n);
+  tgx.resize(n);
+  tgy.resize(n);
+  values.resize(n);
+  double t_mean = 0.0;
+  for (int r = 0, k = 0; r < size; ++r) {
+    const float* row = patch.ptr<float>(r);
+    for (int c = 0; c < size; ++c, ++k) t_mean += row[c];
+  }
+  t_mean /= n;
+  Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+  double t_ss = 0.0;
+  for (int r = 0, k = 0; r < size; ++r) {
+    const float* row = patch.ptr<float>(r);
+    const float* up = patch.ptr<float>(std::max(r - 1, 0));
+    const float* down = patch.ptr<float>(std::min(r + 1, size - 1));
+    const float dy = (r == 0 || r == size - 1) ? 1.0f : 0.5f;
+    for (int c = 0; c < size; ++c, ++k) {
+      const int left = std::max(c - 1, 0), right = std::min(c + 1, size - 1);
+      tm[k] = static_cast<float>(row[c] - t_mean);
+      tgx[k] = (row[right] - row[left]) * ((c == 0 || c == size - 1) ? 1.0f : 0.5f);
+      tgy[k] = (down[c] - up[c]) * dy;
+      h(0, 0) += tgx[k] * tgx[k];
+      h(0, 1) += tgx[k] * tgy[k];
+      h(1, 1) += tgy[k] * tgy[k];
+      t_ss += static_cast<double>(tm[k]) * tm[k];
+    }
+  }
+  h(1, 0) = h(0, 1);
+  // Texture: the smaller eigenvalue of the normal matrix, per pixel, in gray levels^2 (flat or
+  // edge-only patches cannot be aligned in both directions).
+  const double trace = h(0, 0) + h(1, 1);
+  const double det = h(0, 0) * h(1, 1) - h(0, 1) * h(0, 1);
+  const double min_eigen = 0.5 * (trace - std::sqrt(std::max(0.0, trace * trace - 4.0 * det)));
+  if (min_eigen < 1.0 * n) return false;
+  const Eigen::Matrix2d h_inv = h.inverse();
+  double x = *u, y = *v;
+  const double reach = w * scale + 1.0;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    if (x - reach < 0.0 || y - reach < 0.0 || x + reach > image.cols - 1.0 ||
+        y + reach > image.rows - 1.0) {
+      return false;
+    }
+    double mean = 0.0;
+    for (int r = -w, k = 0; r <= w; ++r) {
+      for (int c = -w; c <= w; ++c, ++k) {
+        values[k] = Bilinear(image, x + c * scale, y + r * scale);
+        mean += values[k];
+      }
+    }
+    mean /= n;
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    double i_ss = 0.0, i_t = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double i = values[k] - mean;
+      const double e = i - tm[k];
+      b(0) += tgx[k] * e;
+      b(1) += tgy[k] * e;
+      i_ss += i * i;
+      i_t += i * tm[k];
+    }
+    // The image shows the template moved by delta: the patch centre moves back by it.
+    const Eigen::Vector2d delta = h_inv * b;
+    x -= scale * delta.x();
+    y -= scale * delta.y();
+    if (scale * scale * delta.squaredNorm() < 1e-4) {
+      if (i_t < min_ncc * std::sqrt(std::max(1e-12, i_ss * t_ss))) return false;
+      *u = x;
+      *v = y;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace tracker_detail
+
+void Tracker::RefineTracks(const StereoFrame& frame, const LocalMapSnapshot& local,
+                           const Rigid3d& pred_cam_from_world, const cv::Mat* image,
+                           LocalTracking* tracking) const {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  tracking->refined_uv.assign(tracking->keypoints.size(), Eigen::Vector2f::Constant(kNaN));
+  if (options_.track_refine_window_px <= 0 || image == nullptr || image->empty()) return;
+  const float max_sq = options_.track_refine_max_px * options_.track_refine_max_px;
+  for (size_t i = 0; i < tracking->keypoints.size(); ++i) {
+    const int row = tracking->point_ids[i];
+    const cv::Mat& patch = local.point_patches[row];
+    if (patch.empty()) continue;
+    // The patch grows as the point comes closer: image pixels per patch pixel.
+    const double depth = (pred_cam_from_world * local.point_w[row]).z();
+    if (depth <= 0.05) continue;
+    const double scale = local.point_patch_depth_m[row] / depth;
+    if (scale < 0.5 || scale > 2.0) continue;
+    const int k = tracking->keypoints[i];
+    double u = frame.keypoints.uv(k, 0), v = frame.keypoints.uv(k, 1);
+    constexpr double kMinNcc = 0.8;  // (a patch that no longer looks like the point: keep it)
+    if (!tracker_detail::AlignPatch(*image, patch, scale, kMinNcc, &u, &v)) continue;
+    const Eigen::Vector2f refined(static_cast<float>(u), static_cast<float>(v));
+    if ((refined - frame.keypoints.uv.row(k).transpose()).squaredNorm() > max_sq) continue;
+    tracking->refined_uv[i] = refined;
+  }
+}
+
+std::shared_ptr<const StereoFrame> Tracker::WithRefinedKeypoints(
+    std::shared_ptr<const StereoFrame> frame, const LocalTracking& tracking) const {
+  if (tracking.refined_uv.size() != tracking.point_ids.size()) return frame;
+  std::shared_ptr<StereoFrame> copy;
+  for (size_t i = 0; i < tracking.point_ids.size() && i < tracking.pose.point_inlier.size(); ++i) {
+    const Eigen::Vector2f& refined = tracking.refined_uv[i];
+    if (!tracking.pose.point_inlier[i] || !std::isfinite(refined.x())) continue;
+    if (!copy) copy = std::make_shared<StereoFrame>(*frame);
+    const int k = tracking.keypoints[i];
+    const double du = refined.x() - copy->keypoints.uv(k, 0);
+    copy->keypoints.uv.row(k) = refined.transpose();
+    if (copy->u_right[k] >= 0.0) copy->u_right[k] += du;
+  }
+  if (!copy) return frame;
+  return copy;
 }
 
 void Tracker::UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world) {

@@ -61,6 +61,9 @@ void TrackerOptions::Check() const {
   // doubled on a retry and scaled by lost_search_scale: still far inside int
   CheckAboveInRange("tracking.search_radius_px", search_radius_px, 0.0f,
                     limits::kMaxImageDistancePx);
+  CheckInRange("tracking.track_refine_window_px", track_refine_window_px, 0, 50);
+  CheckAboveInRange("tracking.track_refine_max_px", track_refine_max_px, 0.0f,
+                    limits::kMaxImageDistancePx);
   CheckAboveInRange("tracking.max_distance_binary", max_distance_binary, 0.0f, 256.0f);
   CheckAboveInRange("tracking.max_distance_float", max_distance_float, 0.0f,
                     limits::kMaxDescriptorDistance);

@@ -307,6 +307,8 @@ TEST(OptionsCheck, TrackingOptions) {
       {FIELD(min_init_points, "tracking.min_init_points", 3, 1e6, "[]"),
        FIELD(min_inliers, "tracking.min_inliers", 3, 1e6, "[]"),
        FIELD(search_radius_px, "tracking.search_radius_px", 0, 1e5, "(]"),
+       FIELD(track_refine_window_px, "tracking.track_refine_window_px", 0, 50, "[]"),
+       FIELD(track_refine_max_px, "tracking.track_refine_max_px", 0, 1e5, "(]"),
        FIELD(max_distance_binary, "tracking.max_distance_binary", 0, 256, "(]"),
        FIELD(max_distance_float, "tracking.max_distance_float", 0, 1e6, "(]"),
        FIELD(match_ratio, "tracking.match_ratio", 0, 1, "(]"),

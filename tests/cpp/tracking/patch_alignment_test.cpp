@@ -1,0 +1,69 @@
+// The tracker's keypoint refinement: a map point's patch aligned to a later image (shifted,
+// scaled, brighter), and refused on flat images and on a patch of something else.
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "slslam/tracking/tracker_internal.h"
+
+namespace slslam {
+namespace {
+
+using tracker_detail::AlignPatch;
+using tracker_detail::SamplePatch;
+
+// A smooth random texture, 8 bits, stretched over [20, 235] gray levels.
+cv::Mat Texture(int seed, int rows = 200, int cols = 240) {
+  cv::Mat noise(rows, cols, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+  cv::Mat smooth, out;
+  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 1.5);
+  cv::normalize(smooth, smooth, 20.0, 235.0, cv::NORM_MINMAX);
+  smooth.convertTo(out, CV_8U);
+  return out;
+}
+
+TEST(PatchAlignment, RecoversTheShiftFromTheDetectedPosition) {
+  const cv::Mat image = Texture(1);
+  const cv::Mat patch = SamplePatch(image, 100.3, 90.7, 5);
+  ASSERT_EQ(patch.rows, 11);
+  ASSERT_EQ(patch.cols, 11);
+  // A detector placed the keypoint about 2 px away.
+  double u = 101.8, v = 89.5;
+  ASSERT_TRUE(AlignPatch(image, patch, 1.0, 0.8, &u, &v));
+  EXPECT_NEAR(u, 100.3, 0.05);
+  EXPECT_NEAR(v, 90.7, 0.05);
+}
+
+TEST(PatchAlignment, FollowsAChangeOfScaleAndOfBrightness) {
+  const cv::Mat image = Texture(2);
+  const cv::Mat patch = SamplePatch(image, 110.0, 95.0, 5);
+  // The point came closer: the image is 1.25x larger, and the headlamp made it brighter.
+  cv::Mat larger;
+  cv::resize(image, larger, cv::Size(), 1.25, 1.25, cv::INTER_CUBIC);
+  larger.convertTo(larger, CV_8U, 1.0, 15.0);
+  const double u_true = (110.0 + 0.5) * 1.25 - 0.5, v_true = (95.0 + 0.5) * 1.25 - 0.5;
+  double u = u_true - 1.5, v = v_true + 1.2;
+  ASSERT_TRUE(AlignPatch(larger, patch, 1.25, 0.8, &u, &v));
+  EXPECT_NEAR(u, u_true, 0.15);
+  EXPECT_NEAR(v, v_true, 0.15);
+}
+
+TEST(PatchAlignment, RefusesFlatImagesAndOtherPatches) {
+  const cv::Mat flat(200, 240, CV_8U, cv::Scalar(90));
+  const cv::Mat flat_patch = SamplePatch(flat, 100.0, 100.0, 5);
+  double u = 100.0, v = 100.0;
+  EXPECT_FALSE(AlignPatch(flat, flat_patch, 1.0, 0.8, &u, &v));
+  EXPECT_EQ(u, 100.0);  // untouched on failure
+  // A textured patch of another scene does not correlate with this one anywhere near.
+  const cv::Mat other = SamplePatch(Texture(3), 100.0, 100.0, 5);
+  const cv::Mat image = Texture(4);
+  u = 100.0;
+  v = 100.0;
+  EXPECT_FALSE(AlignPatch(image, other, 1.0, 0.8, &u, &v));
+  // Near the border there is no patch to take.
+  EXPECT_TRUE(SamplePatch(image, 3.0, 100.0, 5).empty());
+}
+
+}  // namespace
+}  // namespace slslam
