@@ -420,7 +420,7 @@ class TrackingConfig:
     # keypoint position as it is [px]; 0: off
     track_refine_window_px: int = _tracking("track_refine_window_px", "[0, 50]")
     # an alignment that moves the keypoint further than this is not taken [px]
-    track_refine_max_px: float = _tracking("track_refine_max_px", "(0, 1e5]")
+    track_refine_max_px: float = _tracking("track_refine_max_px", "[0.1, 10000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")
