@@ -131,7 +131,7 @@ struct TrackerOptions {
   /// keypoints repeat to 1-2 px against the ground truth (XFeat 1.8, SuperPoint and ORB 1.1 px
   /// median on the simulated loop); aligned ones follow the point the map was made from.
   /// Measured (benchmarks/README.md, 2026-11-27): XFeat + lines 0.0404 -> 0.015 m on the
-  /// 600-frame bright loop, ORB + lines 0.163 -> 0.095 m on the hard junction. Points that local
+  /// 600-frame bright loop, ORB + lines 0.163 -> 0.089 m on the hard junction. Points that local
   /// mapping triangulates and points loaded from a map file have no patch. 0: off
   int track_refine_window_px = 5;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
