@@ -265,7 +265,11 @@ bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double
   // Inverse compositional (Baker and Matthews): the template's gradients and normal matrix are
   // computed once, each step samples the image once per patch pixel.
   const int size = patch.rows, w = size / 2, n = size * size;
-  static thread_local std::vector<float> tm, tgx, tgy, values;  // (no allocation per call)
+  static thread_local std::vector<float> tm, tgx, tgy, values, col_ax;  // (no allocation per
+  static thread_local std::vector<int> col_x0, col_x1;                    //  call)
+  col_ax.resize(size);
+  col_x0.resize(size);
+  col_x1.resize(size);
   tm.resize(n);
   tgx.resize(n);
   tgy.resize(n);
@@ -309,10 +313,26 @@ bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double
         y + reach > image.rows - 1.0) {
       return false;
     }
+    // Bilinear samples (Bilinear's, bit for bit), the column taps computed once per step: they
+    // are the same on every row.
+    for (int c = -w; c <= w; ++c) {
+      const double sx = x + c * scale;
+      col_x0[c + w] = static_cast<int>(sx);
+      col_x1[c + w] = std::min(col_x0[c + w] + 1, image.cols - 1);
+      col_ax[c + w] = static_cast<float>(sx - col_x0[c + w]);
+    }
     double mean = 0.0;
     for (int r = -w, k = 0; r <= w; ++r) {
-      for (int c = -w; c <= w; ++c, ++k) {
-        values[k] = Bilinear(image, x + c * scale, y + r * scale);
+      const double sy = y + r * scale;
+      const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.rows - 1);
+      const float ay = static_cast<float>(sy - y0);
+      const uchar* r0 = image.ptr<uchar>(y0);
+      const uchar* r1 = image.ptr<uchar>(y1);
+      for (int c = 0; c < size; ++c, ++k) {
+        const float ax = col_ax[c];
+        const float top = (1.0f - ax) * r0[col_x0[c]] + ax * r0[col_x1[c]];
+        const float bottom = (1.0f - ax) * r1[col_x0[c]] + ax * r1[col_x1[c]];
+        values[k] = (1.0f - ay) * top + ay * bottom;
         mean += values[k];
       }
     }
