@@ -2,11 +2,13 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "slslam/core/pinhole_camera.h"
+#include "slslam/features/stereo_frame.h"
 
 namespace slslam::tracker_detail {
 
@@ -27,9 +29,20 @@ inline bool InImage(const PinholeCamera& camera, const Eigen::Vector2d& uv, doub
          uv.y() <= camera.height - 1 + margin;
 }
 
-// The (2w+1) x (2w+1) float patch of an 8-bit image centred on (u, v), bilinear, with `scale`
-// pixels of the image per patch pixel; empty when it does not fit inside the image.
-cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w, double scale = 1.0);
+// (u_left, v, u_right) of keypoint k as an observation: at `refined` when that is finite (the
+// stereo column moved by as much as the keypoint, a keypoint without one keeps -1), else as
+// detected.
+inline Eigen::Vector3d ObservedPixel(const StereoFrame& frame, int k,
+                                     const Eigen::Vector2f& refined) {
+  const double u = frame.keypoints.uv(k, 0), v = frame.keypoints.uv(k, 1);
+  const double u_right = frame.u_right[k];
+  if (!std::isfinite(refined.x())) return {u, v, u_right};
+  return {refined.x(), refined.y(), u_right >= 0.0 ? u_right + (refined.x() - u) : u_right};
+}
+
+// The (2w+1) x (2w+1) float patch of an 8-bit image centred on (u, v), bilinear; empty when it
+// (with one pixel more around it) does not fit inside the image.
+cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w);
 
 // Aligns `patch` (SamplePatch's, w from its size) to `image` around (u, v), the patch spanning
 // `scale` image pixels per patch pixel: Gauss-Newton on the zero-mean difference (a brightness

@@ -184,13 +184,7 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
     const int k = out.keypoints[i];
     points[i].point_w = local.point_w[out.point_ids[i]];
     points[i].stereo = frame.u_right[k] >= 0.0;
-    points[i].observed << frame.keypoints.uv(k, 0), frame.keypoints.uv(k, 1), frame.u_right[k];
-    const Eigen::Vector2f& refined = out.refined_uv[i];
-    if (std::isfinite(refined.x())) {  // the stereo column moves with the keypoint
-      const double du = refined.x() - frame.keypoints.uv(k, 0);
-      points[i].observed << refined.x(), refined.y(),
-          points[i].stereo ? frame.u_right[k] + du : frame.u_right[k];
-    }
+    points[i].observed = tracker_detail::ObservedPixel(frame, k, out.refined_uv[i]);
     points[i].sigma_px = options_.point_sigma_px;
   }
   std::vector<LineObservation> lines(line_rows.size());
@@ -232,31 +226,50 @@ namespace tracker_detail {
 
 namespace {
 
-// Bilinear sample of an 8-bit image at (x, y), inside [0, cols - 1] x [0, rows - 1].
-inline float Bilinear(const cv::Mat& image, double x, double y) {
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);
-  const float ax = static_cast<float>(x - x0), ay = static_cast<float>(y - y0);
-  const uchar* r0 = image.ptr<uchar>(y0);
-  const uchar* r1 = image.ptr<uchar>(y1);
-  const float top = (1.0f - ax) * r0[x0] + ax * r0[x1];
-  const float bottom = (1.0f - ax) * r1[x0] + ax * r1[x1];
-  return (1.0f - ay) * top + ay * bottom;
+// Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
+// image pixels apart, row-major into `out`; the grid must lie inside [0, cols - 1] x
+// [0, rows - 1]. The column taps are computed once: they are the same on every row. Returns the
+// samples' sum.
+double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out) {
+  const int size = 2 * w + 1;
+  static thread_local std::vector<float> col_ax;  // (no allocation per call)
+  static thread_local std::vector<int> col_x0, col_x1;
+  col_ax.resize(size);
+  col_x0.resize(size);
+  col_x1.resize(size);
+  for (int c = -w; c <= w; ++c) {
+    const double sx = x + c * scale;
+    col_x0[c + w] = static_cast<int>(sx);
+    col_x1[c + w] = std::min(col_x0[c + w] + 1, image.cols - 1);
+    col_ax[c + w] = static_cast<float>(sx - col_x0[c + w]);
+  }
+  double sum = 0.0;
+  for (int r = -w, k = 0; r <= w; ++r) {
+    const double sy = y + r * scale;
+    const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.rows - 1);
+    const float ay = static_cast<float>(sy - y0);
+    const uchar* r0 = image.ptr<uchar>(y0);
+    const uchar* r1 = image.ptr<uchar>(y1);
+    for (int c = 0; c < size; ++c, ++k) {
+      const float ax = col_ax[c];
+      const float top = (1.0f - ax) * r0[col_x0[c]] + ax * r0[col_x1[c]];
+      const float bottom = (1.0f - ax) * r1[col_x0[c]] + ax * r1[col_x1[c]];
+      out[k] = (1.0f - ay) * top + ay * bottom;
+      sum += out[k];
+    }
+  }
+  return sum;
 }
 
 }  // namespace
 
-cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w, double scale) {
-  const double reach = (w + 1) * scale;  // (one more pixel for the gradients)
-  if (image.empty() || image.type() != CV_8UC1 || u - reach < 0.0 || v - reach < 0.0 ||
-      u + reach > image.cols - 1.0 || v + reach > image.rows - 1.0) {
-    return cv::Mat();
+cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w) {
+  if (image.empty() || image.type() != CV_8UC1 || u - w - 1 < 0.0 || v - w - 1 < 0.0 ||
+      u + w + 1 > image.cols - 1.0 || v + w + 1 > image.rows - 1.0) {
+    return cv::Mat();  // (one pixel more than the patch: its gradients stay inside the image)
   }
   cv::Mat patch(2 * w + 1, 2 * w + 1, CV_32F);
-  for (int r = -w; r <= w; ++r) {
-    float* row = patch.ptr<float>(r + w);
-    for (int c = -w; c <= w; ++c) row[c + w] = Bilinear(image, u + c * scale, v + r * scale);
-  }
+  SampleGrid(image, u, v, w, 1.0, patch.ptr<float>());
   return patch;
 }
 
@@ -265,11 +278,7 @@ bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double
   // Inverse compositional (Baker and Matthews): the template's gradients and normal matrix are
   // computed once, each step samples the image once per patch pixel.
   const int size = patch.rows, w = size / 2, n = size * size;
-  static thread_local std::vector<float> tm, tgx, tgy, values, col_ax;  // (no allocation per
-  static thread_local std::vector<int> col_x0, col_x1;                    //  call)
-  col_ax.resize(size);
-  col_x0.resize(size);
-  col_x1.resize(size);
+  static thread_local std::vector<float> tm, tgx, tgy, values;  // (no allocation per call)
   tm.resize(n);
   tgx.resize(n);
   tgy.resize(n);
@@ -313,29 +322,7 @@ bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double
         y + reach > image.rows - 1.0) {
       return false;
     }
-    // Bilinear samples (Bilinear's, bit for bit), the column taps computed once per step: they
-    // are the same on every row.
-    for (int c = -w; c <= w; ++c) {
-      const double sx = x + c * scale;
-      col_x0[c + w] = static_cast<int>(sx);
-      col_x1[c + w] = std::min(col_x0[c + w] + 1, image.cols - 1);
-      col_ax[c + w] = static_cast<float>(sx - col_x0[c + w]);
-    }
-    double mean = 0.0;
-    for (int r = -w, k = 0; r <= w; ++r) {
-      const double sy = y + r * scale;
-      const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.rows - 1);
-      const float ay = static_cast<float>(sy - y0);
-      const uchar* r0 = image.ptr<uchar>(y0);
-      const uchar* r1 = image.ptr<uchar>(y1);
-      for (int c = 0; c < size; ++c, ++k) {
-        const float ax = col_ax[c];
-        const float top = (1.0f - ax) * r0[col_x0[c]] + ax * r0[col_x1[c]];
-        const float bottom = (1.0f - ax) * r1[col_x0[c]] + ax * r1[col_x1[c]];
-        values[k] = (1.0f - ay) * top + ay * bottom;
-        mean += values[k];
-      }
-    }
+    double mean = SampleGrid(image, x, y, w, scale, values.data());
     mean /= n;
     Eigen::Vector2d b = Eigen::Vector2d::Zero();
     double i_ss = 0.0, i_t = 0.0;
@@ -398,9 +385,9 @@ std::shared_ptr<const StereoFrame> Tracker::WithRefinedKeypoints(
     if (!tracking.pose.point_inlier[i] || !std::isfinite(refined.x())) continue;
     if (!copy) copy = std::make_shared<StereoFrame>(*frame);
     const int k = tracking.keypoints[i];
-    const double du = refined.x() - copy->keypoints.uv(k, 0);
+    const Eigen::Vector3d observed = tracker_detail::ObservedPixel(*frame, k, refined);
     copy->keypoints.uv.row(k) = refined.transpose();
-    if (copy->u_right[k] >= 0.0) copy->u_right[k] += du;
+    copy->u_right[k] = observed.z();
   }
   if (!copy) return frame;
   return copy;
