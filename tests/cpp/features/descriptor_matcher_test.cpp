@@ -42,6 +42,30 @@ TEST(DescriptorMatcher, RejectsMismatchedDescriptors) {
                std::invalid_argument);
 }
 
+TEST(DescriptorDistance, CountsTheBitsAsOpenCvDoes) {
+  // Word-wise popcount against cv::norm(NORM_HAMMING), at ORB's 32 bytes and at lengths that
+  // leave a tail of bytes after the 8-byte words.
+  cv::RNG rng(7);
+  for (int cols : {32, 33, 61, 5}) {
+    cv::Mat a(20, cols, CV_8U), b(20, cols, CV_8U);
+    rng.fill(a, cv::RNG::UNIFORM, 0, 256);
+    rng.fill(b, cv::RNG::UNIFORM, 0, 256);
+    for (int i = 0; i < a.rows; ++i) {
+      for (int j = 0; j < b.rows; ++j) {
+        EXPECT_EQ(DescriptorDistance(a, i, b, j), cv::norm(a.row(i), b.row(j), cv::NORM_HAMMING))
+            << cols << " bytes, rows " << i << " / " << j;
+      }
+      EXPECT_EQ(DescriptorDistance(a, i, a, i), 0.0f);
+    }
+  }
+  const cv::Mat ones(1, 32, CV_8U, cv::Scalar(255)), zeros(1, 32, CV_8U, cv::Scalar(0));
+  EXPECT_EQ(DescriptorDistance(ones, 0, zeros, 0), 256.0f);
+  EXPECT_THROW(DescriptorDistance(ones, 0, cv::Mat(1, 31, CV_8U, cv::Scalar(0)), 0),
+               std::invalid_argument);
+  cv::Mat f(1, 4, CV_32F, cv::Scalar(0.0f)), g(1, 4, CV_32F, cv::Scalar(0.5f));
+  EXPECT_FLOAT_EQ(DescriptorDistance(f, 0, g, 0), 1.0f);  // L2 for float descriptors
+}
+
 TEST(OrbExtractor, ShiftedImageMatchesWithTheSameShift) {
   cv::Mat image(240, 320, CV_8UC1);
   cv::RNG rng(7);
