@@ -67,6 +67,8 @@ void GuidedMatchOptions::Check() const {
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   SLSLAM_CHECK(a.cols == b.cols && a.type() == b.type(), "descriptors differ in length or type: ",
                a.cols, " vs ", b.cols, " columns");
+  SLSLAM_CHECK(i >= 0 && i < a.rows && j >= 0 && j < b.rows, "descriptor rows ", i, " / ", j,
+               " outside ", a.rows, " / ", b.rows);
   if (a.type() == CV_8U) {
     // Hamming bits, 8 bytes a word: the same count as cv::norm(NORM_HAMMING), without its two
     // row headers and dispatch per call (this runs for every candidate of every guided, stereo,

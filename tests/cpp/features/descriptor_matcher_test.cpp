@@ -62,6 +62,8 @@ TEST(DescriptorDistance, CountsTheBitsAsOpenCvDoes) {
   EXPECT_EQ(DescriptorDistance(ones, 0, zeros, 0), 256.0f);
   EXPECT_THROW(DescriptorDistance(ones, 0, cv::Mat(1, 31, CV_8U, cv::Scalar(0)), 0),
                std::invalid_argument);
+  EXPECT_THROW(DescriptorDistance(ones, 1, zeros, 0), std::invalid_argument);  // no row 1
+  EXPECT_THROW(DescriptorDistance(ones, 0, zeros, -1), std::invalid_argument);
   cv::Mat f(1, 4, CV_32F, cv::Scalar(0.0f)), g(1, 4, CV_32F, cv::Scalar(0.5f));
   EXPECT_FLOAT_EQ(DescriptorDistance(f, 0, g, 0), 1.0f);  // L2 for float descriptors
 }
