@@ -10,6 +10,7 @@
 #include <opencv2/features2d.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/core/cpu_dispatch.h"
 
 namespace slslam {
 
@@ -64,27 +65,35 @@ void GuidedMatchOptions::Check() const {
   CheckAboveInRange("guided.ratio", ratio, 0.0f, 1.0f);
 }
 
+namespace {
+
+// Hamming bits of two byte strings, 8 bytes a word, with the POPCNT instruction where the CPU has
+// it (core/cpu_dispatch.h): the same count as cv::norm(NORM_HAMMING).
+SLSLAM_POPCNT_CLONES int HammingBytes(const uint8_t* x, const uint8_t* y, int bytes) {
+  int bits = 0;
+  int k = 0;
+  for (; k + 8 <= bytes; k += 8) {
+    uint64_t u, v;
+    std::memcpy(&u, x + k, 8);
+    std::memcpy(&v, y + k, 8);
+    bits += __builtin_popcountll(u ^ v);
+  }
+  for (; k < bytes; ++k) bits += __builtin_popcount(static_cast<unsigned>(x[k] ^ y[k]));
+  return bits;
+}
+
+}  // namespace
+
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   SLSLAM_CHECK(a.cols == b.cols && a.type() == b.type(), "descriptors differ in length or type: ",
                a.cols, " vs ", b.cols, " columns");
   SLSLAM_CHECK(i >= 0 && i < a.rows && j >= 0 && j < b.rows, "descriptor rows ", i, " / ", j,
                " outside ", a.rows, " / ", b.rows);
   if (a.type() == CV_8U) {
-    // Hamming bits, 8 bytes a word: the same count as cv::norm(NORM_HAMMING), without its two
-    // row headers and dispatch per call (this runs for every candidate of every guided, stereo,
-    // line and triangulation match; measured in benchmarks/README.md, 2026-11-27 b).
-    const uint8_t* x = a.ptr<uint8_t>(i);
-    const uint8_t* y = b.ptr<uint8_t>(j);
-    int bits = 0;
-    int k = 0;
-    for (; k + 8 <= a.cols; k += 8) {
-      uint64_t u, v;
-      std::memcpy(&u, x + k, 8);
-      std::memcpy(&v, y + k, 8);
-      bits += __builtin_popcountll(u ^ v);
-    }
-    for (; k < a.cols; ++k) bits += __builtin_popcount(static_cast<unsigned>(x[k] ^ y[k]));
-    return static_cast<float>(bits);
+    // (not cv::norm: its two row headers and dispatch per call cost more than the count, and
+    // this runs for every candidate of every guided, stereo, line and triangulation match;
+    // benchmarks/README.md, 2026-11-27 b)
+    return static_cast<float>(HammingBytes(a.ptr<uint8_t>(i), b.ptr<uint8_t>(j), a.cols));
   }
   const float* x = a.ptr<float>(i);
   const float* y = b.ptr<float>(j);

@@ -1,19 +1,10 @@
-// The Hamming kernels of descriptor_space.h. Baseline x86-64 has no POPCNT instruction (slslam is
-// built without -march so wheels run anywhere), and without it a popcount is a library call; so
-// these loops are compiled twice and the loader picks the POPCNT version where the CPU has it
-// (GCC / Clang function multiversioning). 1,000 ORB look-ups take about half the time.
+// The Hamming kernels of descriptor_space.h, compiled with and without the POPCNT instruction
+// (core/cpu_dispatch.h). 1,000 ORB look-ups take about half the time with it.
 #include "slslam/place/descriptor_space.h"
 
 #include <limits>
 
-// Not under a sanitizer: the loader runs the clones' resolver before the sanitizer's runtime is
-// up, and an instrumented resolver crashes the program at start (SLSLAM_SANITIZED, CMakeLists).
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(SLSLAM_SANITIZED)
-#define SLSLAM_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
-#else
-#define SLSLAM_POPCNT_CLONES
-#endif
+#include "slslam/core/cpu_dispatch.h"
 
 namespace slslam::place_detail {
 

@@ -7,16 +7,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/core/cpu_dispatch.h"
 #include "slslam/features/descriptor_matcher.h"
-
-// Not under a sanitizer: the loader runs the clones' resolver before the sanitizer's runtime is
-// up (see place/descriptor_space.cpp).
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(SLSLAM_SANITIZED)
-#define SLSLAM_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define SLSLAM_AVX2_CLONES
-#endif
 
 namespace slslam {
 
