@@ -17,7 +17,11 @@ settings (local mapping inline, so both passes give the same poses; the script c
 * pipelined (``Tracker.track_stream``, the default of ``slslam run``): throughput (frames / wall
   time), per-frame latency from the moment the worker takes the pair to the pose, CPU use
   (process CPU time / wall time: 2.0 is both cores busy) and the per-stage medians (the stage
-  columns come from this pass with --no-sequential, which skips the sequential one).
+  columns come from this pass with --no-sequential, which skips the sequential one);
+* live (``--live``): the pipeline again, the frames handed over at the camera's rate (20 Hz):
+  latency from each frame's due time to its pose, median, p95 and maximum. A pipeline that
+  keeps up shows its processing delay; one that does not falls behind, and its latency grows
+  through the run.
 
 XFeat configurations start from configs/xfeat.yaml (its preset), with --set on top. Besides the
 default five, ``*_row`` configurations run the front end on the left image only with the row
@@ -201,6 +205,38 @@ def pipelined_pass(sequence: EurocSequence, frames: list, config: Config, gt) ->
     }
 
 
+def live_pass(sequence: EurocSequence, frames: list, config: Config) -> dict:
+    """The frames handed over at the camera's rate (their timestamps from the pass's start, as a
+    driver delivers them), the pipeline as ``slslam run`` drives it. Latency from each frame's
+    due time to its pose: a frame the pipeline could not take yet waits at the source, and that
+    wait counts. A pipeline slower than the camera falls behind, and the latency grows through
+    the run (its maximum is then the last frame's)."""
+    load_before = os.getloadavg()[0]
+    t_first = frames[0][2]
+    due: list[float] = []
+
+    def feed():
+        start = time.perf_counter()
+        for left, right, t in frames:
+            due.append(start + (t - t_first))
+            wait = due[-1] - time.perf_counter()
+            if wait > 0.0:
+                time.sleep(wait)
+            yield left, right, t
+
+    latency = []
+    with Tracker(sequence.camera, config) as tracker:
+        for result in tracker.track_stream(feed(), pipeline=True):
+            latency.append((time.perf_counter() - due[result.index]) * 1e3)
+    camera_hz = (len(frames) - 1) / (frames[-1][2] - t_first)
+    return {
+        "camera_hz": camera_hz,
+        "latency_ms": {**percentiles(latency), "max": float(np.max(latency))},
+        "load_before": load_before,
+        "load_after": os.getloadavg()[0],
+    }
+
+
 def run_one(
     name: str,
     light: float,
@@ -210,6 +246,7 @@ def run_one(
     model,
     sequential: bool,
     mapping_thread: bool = False,
+    live: bool = False,
 ) -> dict:
     sequence = EurocSequence(data)
     frames = [(f.left, f.right, f.t_ns * 1e-9) for f in (sequence[i] for i in range(n))]
@@ -220,12 +257,9 @@ def run_one(
     # poses depend on thread timing, so they are not compared with the sequential pass.
     pipe_config = config_for(name, overrides, model, mapping_thread) if mapping_thread else config
     pipe = pipelined_pass(sequence, frames, pipe_config, gt)
+    live_result = live_pass(sequence, frames, pipe_config) if live else None
     poses = pipe.pop("poses")
-    same = (
-        None
-        if seq is None or mapping_thread
-        else bool(np.array_equal(seq.pop("poses"), poses))
-    )
+    same = None if seq is None or mapping_thread else bool(np.array_equal(seq.pop("poses"), poses))
     if seq is not None:
         seq.pop("poses", None)
     return {
@@ -234,12 +268,20 @@ def run_one(
         "frames": n,
         "sequential": seq,
         "pipelined": pipe,
+        "live": live_result,
         "same_poses": same,
     }
 
 
 def fmt(x, spec: str) -> str:
     return "-" if x is None else format(x, spec)
+
+
+def live_cell(live: dict | None) -> str:
+    if live is None:
+        return " - |"
+    ms = live["latency_ms"]
+    return f" {ms['median']:.1f} / {ms['p95']:.1f} / {ms['max']:.1f} |"
 
 
 def table(runs: list[dict]) -> str:
@@ -249,7 +291,10 @@ def table(runs: list[dict]) -> str:
         "| pipelined latency median / p95 [ms] | CPU [cores] "
         "| inference | lines | stereo | matching | optimisation | mapping | load 1 min |"
     )
-    lines = [head, "|---|---:" + "|---:" * 14 + "|"]
+    live = any(r.get("live") for r in runs)
+    if live:
+        head += " live latency median / p95 / max [ms] |"
+    lines = [head, "|---|---:" + "|---:" * (15 if live else 14) + "|"]
     reference = {
         r["light"]: r["pipelined"]["ate_rmse_m"]
         for r in runs
@@ -275,6 +320,7 @@ def table(runs: list[dict]) -> str:
             f"| {p['cpu_cores']:.2f} "
             + " ".join(f"| {st[k]:.1f}" for k in STAGES[:-1])
             + f" | {s['load_before']:.1f}-{p['load_after']:.1f} |"
+            + (live_cell(r.get("live")) if live else "")
         )
     return "\n".join(lines)
 
@@ -304,6 +350,13 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="pipelined pass with local mapping on its own thread (tracking.sequential=false, "
         "as ORB-SLAM3 and `slslam run --realtime`) instead of inline",
+    )
+    parser.add_argument(
+        "--live",
+        action="store_true",
+        help="also a live pass: the frames handed over at the camera's rate (20 Hz), latency "
+        "from each frame's due time to its pose (what a robot sees; a pipeline slower than the "
+        "camera falls behind and the latency grows)",
     )
     args = parser.parse_args(argv)
     configs = [c for c in args.configs.split(",") if c]
@@ -337,10 +390,13 @@ def main(argv: list[str] | None = None) -> int:
                 model,
                 not args.no_sequential,
                 args.mapping_thread,
+                args.live,
             )
             runs.append(r)
             p, s = r["pipelined"], r["sequential"]
             latency = "-" if s is None else f"{s['latency_ms']['median']:.1f}"
+            if r["live"] is not None:
+                latency += f" (live {r['live']['latency_ms']['median']:.1f})"
             print(
                 f"{r['label']:20s} light {light:4.2f}: ATE {fmt(p['ate_rmse_m'], '.4f')} m, "
                 f"tracked {p['tracked_ratio']:.3f}, latency {latency} ms "
@@ -361,6 +417,7 @@ def main(argv: list[str] | None = None) -> int:
             "lights": lights,
             "overrides": overrides,
             "mapping_thread": args.mapping_thread,
+            "live": args.live,
             "cpu_count": os.cpu_count(),
             "runs": runs,
             "notes": notes,

@@ -359,6 +359,10 @@ class TrackingConfig:
     mapping_brake: bool = _tracking("mapping_brake")
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
+    # frames the pipeline's worker may have prepared and the core not yet taken: more lets the
+    # front end run on through a keyframe's local mapping (benchmarks/README.md: 10-24 % more
+    # frames/s offline at 3 than at 1; a live camera's frames are taken as they come either way)
+    pipeline_frames_ahead: int = _option(3, "[1, 64]")
     # stereo points a frame needs to start a map
     min_init_points: int = _tracking("min_init_points", "[3, 100000]")
     # fewer inliers after motion-only BA: the frame is LOST

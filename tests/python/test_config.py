@@ -197,7 +197,14 @@ def test_every_mirrored_default_equals_the_cpp_default():
                 assert value == pytest.approx(expected, rel=1e-6), (name, path)
             checked += 1
     assert checked >= 50
-    python_only = {"pipeline", "relocalisation", "vocabulary_path", "loop_closing", "imu"}
+    python_only = {
+        "pipeline",
+        "pipeline_frames_ahead",
+        "relocalisation",
+        "vocabulary_path",
+        "loop_closing",
+        "imu",
+    }
     fields = {f.name for f in dataclasses.fields(config.tracking)}
     assert fields - set(TRACKING_TO_CORE) - set(LINES_TO_CORE) == python_only
 

@@ -1,15 +1,17 @@
-"""The tracker's frame pipeline (``Tracker.track_stream``): the front end of frame k+1 on a worker
-thread while the core tracks frame k gives the same poses as ``track`` in a loop, prepares at
-most one frame ahead, and reports a bad frame after the results of the frames before it."""
+"""The tracker's frame pipeline (``Tracker.track_stream``): the front end of the next frames on a
+worker thread while the core tracks frame k gives the same poses as ``track`` in a loop,
+prepares at most ``frames_ahead`` frames ahead, and reports a bad frame after the results of the
+frames before it."""
 
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 import pytest
 
-from slslam.config import Config
+from slslam.config import Config, ConfigError, load_config
 from slslam.datasets import EurocSequence
 from slslam.errors import InputError
 from slslam.sim import SimOptions, Simulator
@@ -39,24 +41,44 @@ def frames_of(sequence: EurocSequence, pulled: list[int] | None = None):
         yield f.left, f.right, f.t_ns * 1e-9
 
 
-def test_pipelined_stream_gives_the_poses_of_a_plain_loop(sequence):
+@pytest.mark.parametrize("frames_ahead", [1, 3])
+def test_pipelined_stream_gives_the_poses_of_a_plain_loop(sequence, frames_ahead):
     with Tracker(sequence.camera, orb_lines()) as tracker:
         for left, right, t in frames_of(sequence):
             tracker.track(left, right, t)
         _, loop_poses, loop_states = tracker.trajectory()
     pulled: list[int] = []
     ahead = []
-    with Tracker(sequence.camera, orb_lines()) as tracker:
+    config = orb_lines()
+    config = dataclasses.replace(
+        config,
+        tracking=dataclasses.replace(config.tracking, pipeline_frames_ahead=frames_ahead),
+    )
+    with Tracker(sequence.camera, config) as tracker:
         for result in tracker.track_stream(frames_of(sequence, pulled), pipeline=True):
             ahead.append(len(pulled) - 1 - result.index)  # frames read beyond this result
+            if result.index == 2:
+                # The core stalls (as on a keyframe): the worker fills the queue and stops there.
+                time.sleep(2.0)
+                ahead.append(len(pulled) - 1 - result.index)
         _, poses, states = tracker.trajectory()
         indices = [r.index for r in tracker.results]
     assert indices == list(range(FRAMES))
     assert states == loop_states and "OK" in states
     assert np.array_equal(poses, loop_poses)
-    # One frame ahead at most (two would mean the worker ran past its slot); the worker did run
-    # ahead at some point, or nothing overlapped.
-    assert max(ahead) == 1
+    # frames_ahead at most (more would mean the worker ran past its slots), and the worker did
+    # fill them while the core stalled.
+    assert max(ahead) == frames_ahead
+
+
+def test_frames_ahead_is_checked(sequence, tmp_path):
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        with pytest.raises(ValueError, match="frames_ahead must be an integer >= 1, got 0"):
+            next(tracker.track_stream(frames_of(sequence), frames_ahead=0))
+    path = tmp_path / "bad.yaml"
+    path.write_text("tracking:\n  pipeline_frames_ahead: 0\n")
+    with pytest.raises(ConfigError, match=r"bad.yaml.*tracking.pipeline_frames_ahead.*\[1, 64\]"):
+        load_config(path)
 
 
 def test_a_bad_frame_is_raised_after_the_frames_before_it(sequence):
@@ -83,10 +105,11 @@ def test_a_failing_reader_is_raised_and_stopping_early_stops_the_worker(sequence
         assert len(tracker.results) == 3
     pulled: list[int] = []
     with Tracker(sequence.camera, orb_lines()) as tracker:
-        stream = tracker.track_stream(frames_of(sequence, pulled))
+        stream = tracker.track_stream(frames_of(sequence, pulled), frames_ahead=3)
         next(stream)
         stream.close()
-        assert len(tracker.results) == 1 and len(pulled) <= 2
+        # the frame tracked and at most the three prepared ahead, of 24
+        assert len(tracker.results) == 1 and len(pulled) <= 1 + 3
 
 
 def test_bad_images_name_the_frame(sequence):

@@ -246,7 +246,7 @@ def test_low_texture_stretch_in_the_dark_starts_and_holds_a_map_with_the_fallbac
     error = np.linalg.norm(est[:, :3, 3] - truth[:, :3, 3], axis=1)
     assert travelled > 2.5
     assert error[tracked].max() < 0.1 * travelled, error[tracked].max()
-    plain, plain_maps = run(False)
+    plain, _plain_maps = run(False)
     plain_tracked = np.mean([r.tracked for r in plain])
     assert plain_tracked < 0.5, plain_tracked
 
@@ -383,14 +383,15 @@ def test_bad_imu_samples_are_clear_errors(sim_loop):
             tracker.add_imu(np.array([2.0]), np.zeros((1, 3)), np.zeros((1, 3)))
 
 
-
 def _row_search_disparities(
     left, right, uv, descriptors, camera, denoise: float = 6.0, window: int | None = None
 ):
     """(disparity per keypoint or NaN) of the core's stereo matching with the row search
     (its default patch, or a (2 window + 1)^2 one)."""
     rig = _core.StereoRig(
-        _core.PinholeCamera(camera.fx, camera.fx, camera.cx, camera.cy, camera.width, camera.height),
+        _core.PinholeCamera(
+            camera.fx, camera.fx, camera.cx, camera.cy, camera.width, camera.height
+        ),
         camera.baseline_m,
     )
     options = _core.StereoMatchOptions()
@@ -599,9 +600,7 @@ def test_a_front_end_sees_the_smoothed_pair_unless_it_asks_for_the_raw_one(
     for seen in frontend.seen:
         raw = any(np.array_equal(seen, image) for image in given)
         assert raw is (not smoothed_input)
-        smoothed = any(
-            np.array_equal(seen, _core.smooth_if_noisy(image, 6.0)) for image in given
-        )
+        smoothed = any(np.array_equal(seen, _core.smooth_if_noisy(image, 6.0)) for image in given)
         assert smoothed is smoothed_input
 
 

@@ -10,11 +10,13 @@ with the GIL released.
         stamps, poses, states = tracker.trajectory()
         cloud = tracker.map()
 
-Frame pipeline (``Tracker.track_stream``): a worker thread reads frame k+1 and runs the point
-front end on it (onnxruntime and the C++ ORB release the GIL) while the C++ core tracks frame k.
-The hand-over holds one frame: the worker starts frame k+1 only once the core has taken frame k,
-so a result comes at most one frame later than from ``track`` in a loop, and the poses are the
-same (the front end has no state from frame to frame).
+Frame pipeline (``Tracker.track_stream``): a worker thread reads the next frames and runs the
+point front end on them (onnxruntime and the C++ ORB release the GIL) while the C++ core tracks
+frame k. The hand-over holds ``tracking.pipeline_frames_ahead`` frames (default 3): the worker
+reads a frame only while fewer than that wait for the core, so the queue is bounded and the
+poses are the same as ``track`` in a loop (the front end has no state from frame to frame). With
+more than one the front end goes on through a keyframe's inline local mapping instead of
+waiting for it.
 """
 
 from __future__ import annotations
@@ -525,16 +527,23 @@ class Tracker:
         return self._track_prepared(self._prepare(index, left, right, timestamp, previous))
 
     def track_stream(
-        self, frames: Iterable[tuple[np.ndarray, np.ndarray, float]], pipeline: bool = True
+        self,
+        frames: Iterable[tuple[np.ndarray, np.ndarray, float]],
+        pipeline: bool = True,
+        frames_ahead: int | None = None,
     ) -> Iterator[TrackResult]:
         """Tracks (left, right, timestamp) triples in order, yielding each frame's result.
 
-        With ``pipeline`` the point front end of frame k+1 (and reading it from ``frames``)
-        runs on a worker thread while the core tracks frame k: one frame prepared ahead at most,
-        results in input order and equal to ``track`` in a loop. An error in frame k (bad input,
-        a failing reader) is raised after the results of the frames before it. Stopping the
-        iteration early (break, an exception, a signal) stops the worker after the frame it is
-        preparing.
+        With ``pipeline`` the point front end of the next frames (and reading them from
+        ``frames``) runs on a worker thread while the core tracks frame k: at most
+        ``frames_ahead`` frames prepared and not yet taken by the core (default
+        ``tracking.pipeline_frames_ahead``; 1: frame k+1 only), results in input order and
+        equal to ``track`` in a loop. More than one lets the front end go on while the core
+        spends a keyframe's local mapping, so more frames go through a second; a frame the
+        worker takes early waits in the queue instead of at its source. An error in frame k (bad
+        input, a failing reader) is raised after the results of the frames before it. Stopping
+        the iteration early (break, an exception, a signal) stops the worker after the frame it
+        is preparing; frames prepared and not yet tracked are dropped.
         """
         if self._closed:
             raise RuntimeError("the tracker is closed")
@@ -542,8 +551,11 @@ class Tracker:
             for left, right, timestamp in frames:
                 yield self.track(left, right, timestamp)
             return
+        ahead = self.config.tracking.pipeline_frames_ahead if frames_ahead is None else frames_ahead
+        if isinstance(ahead, bool) or not isinstance(ahead, int) or ahead < 1:
+            raise ValueError(f"frames_ahead must be an integer >= 1, got {ahead!r}")
         handoff: queue.Queue = queue.Queue()
-        slot = threading.Semaphore(1)  # frames prepared and not yet taken by the core: <= 1
+        slot = threading.Semaphore(ahead)  # frames prepared and not yet taken by the core
         stop = threading.Event()
         worker = threading.Thread(
             target=self._prepare_frames,
@@ -573,8 +585,8 @@ class Tracker:
         slot: threading.Semaphore,
         stop: threading.Event,
     ) -> None:
-        """The pipeline's worker: reads and prepares frames one at a time, each after the core
-        has taken the one before; ends with _END or the exception that stopped it."""
+        """The pipeline's worker: reads and prepares frames one at a time while fewer than the
+        slot's count wait for the core; ends with _END or the exception that stopped it."""
         index = len(self._results)
         previous = self._results[-1].timestamp if self._results else None
         try:
