@@ -117,7 +117,7 @@ class TrackerSession {
     }
   }
 
-  py::dict Map() {
+  py::dict Map(bool settle) {
     MapExport m;
     LocalMappingStats s;
     int maps = 0;
@@ -127,7 +127,7 @@ class TrackerSession {
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);
-      tracker_.Flush();
+      if (settle) tracker_.Flush();
       m = tracker_.ExportMap();
       s = tracker_.mapping_stats();
       maps = tracker_.live_maps();
@@ -373,6 +373,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("denoise_above_noise", &TrackerOptions::denoise_above_noise)
       .def_readwrite("sequential", &TrackerOptions::sequential)
       .def_readwrite("mapping_brake", &TrackerOptions::mapping_brake)
+      .def_readwrite("mapping_overlap", &TrackerOptions::mapping_overlap)
       .def_readwrite("min_init_points", &TrackerOptions::min_init_points)
       .def_readwrite("min_inliers", &TrackerOptions::min_inliers)
       .def_readwrite("search_radius_px", &TrackerOptions::search_radius_px)
@@ -488,7 +489,9 @@ void BindTracking(py::module_& m) {
       .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
            "IMU samples (body frame) for the bridge through visual outages, before the frames "
            "they precede.")
-      .def("map", &TrackerSession::Map, "Waits for local mapping, returns points and lines.")
+      .def("map", &TrackerSession::Map, py::arg("settle") = true,
+           "Points and lines; settle: first waits for local mapping (and applies an overlapped "
+           "local BA), else the map as it stands.")
       .def("save_map", &TrackerSession::SaveMap, py::arg("path"), py::arg("version"),
            "Writes every live map (versioned binary, checksummed); waits for mapping.")
       .def("load_map", &TrackerSession::LoadMap, py::arg("path"),

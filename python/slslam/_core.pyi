@@ -1217,6 +1217,7 @@ class TrackerOptions:
     loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions
     mapping_brake: bool
+    mapping_overlap: bool
     pose: PoseOptimizerOptions
     relocalisation: RelocalisationOptions
     rig: StereoRig
@@ -1475,9 +1476,9 @@ class TrackerCore:
         """
         Loads a saved atlas before the first frame; tracking starts by relocalising in it.
         """
-    def map(self) -> dict:
+    def map(self, settle: bool = True) -> dict:
         """
-        Waits for local mapping, returns points and lines.
+        Points and lines; settle: first waits for local mapping (and applies an overlapped local BA), else the map as it stands.
         """
     def save_map(self, path: str, version: str) -> None:
         """

@@ -119,6 +119,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "use_lines",
         "sequential",
         "mapping_brake",
+        "mapping_overlap",
         "min_init_points",
         "min_inliers",
         "search_radius_px",
@@ -357,6 +358,9 @@ class TrackingConfig:
     # threaded mode only: ORB-SLAM3's brake on keyframes while local mapping is busy (more
     # frames/s, worse ATE on the hard dark sequences: off)
     mapping_brake: bool = _tracking("mapping_brake")
+    # sequential mode only: each keyframe's local BA solves on its own thread while tracking goes
+    # on, applied when the next keyframe comes (still exactly reproducible)
+    mapping_overlap: bool = _tracking("mapping_overlap")
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
     # frames the pipeline's worker may have prepared and the core not yet taken: more lets the

@@ -71,6 +71,32 @@ def test_pipelined_stream_gives_the_poses_of_a_plain_loop(sequence, frames_ahead
     assert max(ahead) == frames_ahead
 
 
+def test_overlapped_local_mapping_through_the_pipeline_is_reproducible(sequence):
+    """tracking.mapping_overlap reaches the core (the poses differ from inline mapping's) and
+    keeps the run exactly reproducible: the pipeline with a queue gives the poses of a plain
+    loop."""
+
+    def run(overlap: bool, stream: bool) -> np.ndarray:
+        config = orb_lines()
+        config = dataclasses.replace(
+            config, tracking=dataclasses.replace(config.tracking, mapping_overlap=overlap)
+        )
+        with Tracker(sequence.camera, config) as tracker:
+            if stream:
+                for _ in tracker.track_stream(frames_of(sequence), frames_ahead=3):
+                    pass
+            else:
+                for left, right, t in frames_of(sequence):
+                    tracker.track(left, right, t)
+            _, poses, states = tracker.trajectory()
+        assert "OK" in states
+        return poses
+
+    overlapped = run(True, stream=False)
+    assert np.array_equal(run(True, stream=True), overlapped)
+    assert not np.array_equal(run(False, stream=False), overlapped)
+
+
 def test_frames_ahead_is_checked(sequence, tmp_path):
     with Tracker(sequence.camera, orb_lines()) as tracker:
         with pytest.raises(ValueError, match="frames_ahead must be an integer >= 1, got 0"):

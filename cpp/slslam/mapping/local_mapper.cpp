@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <memory>
 #include <set>
 #include <unordered_map>
 
@@ -10,13 +11,15 @@
 
 namespace slslam {
 
-LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential)
-    : rig_(rig), options_(options), sequential_(sequential) {
+LocalMapper::LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential,
+                         bool overlap)
+    : rig_(rig), options_(options), sequential_(sequential), overlap_(sequential && overlap) {
   options_.Check();
   if (!sequential_) worker_ = std::thread([this] { Run(); });
 }
 
 LocalMapper::~LocalMapper() {
+  if (pending_ && pending_->solver.joinable()) pending_->solver.join();
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stop_ = true;
@@ -26,6 +29,26 @@ LocalMapper::~LocalMapper() {
 }
 
 void LocalMapper::Insert(Map* map, int keyframe_id) {
+  if (sequential_ && overlap_) {
+    // The previous keyframe's solve is applied first: always here, whatever its timing.
+    FinishPending();
+    auto window = std::make_unique<Window>();
+    window->map = map;
+    window->keyframe_id = keyframe_id;
+    if (Prepare(window.get())) {
+      Window* w = window.get();
+      w->solver = std::thread([this, w] {
+        try {
+          Solve(w);
+        } catch (...) {  // rethrown by FinishPending on the caller's thread
+          w->error = std::current_exception();
+        }
+      });
+      pending_ = std::move(window);
+    }
+    if (after_keyframe_) after_keyframe_(map, keyframe_id);
+    return;
+  }
   if (sequential_) {
     Process(map, keyframe_id);
     if (after_keyframe_) after_keyframe_(map, keyframe_id);
@@ -39,7 +62,10 @@ void LocalMapper::Insert(Map* map, int keyframe_id) {
 }
 
 void LocalMapper::Flush() {
-  if (sequential_) return;
+  if (sequential_) {
+    FinishPending();
+    return;
+  }
   std::unique_lock<std::mutex> lock(queue_mutex_);
   idle_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
   if (error_) {
@@ -94,16 +120,34 @@ void LocalMapper::Run() {
 }
 
 void LocalMapper::Process(Map* map, int keyframe_id) {
+  Window window;
+  window.map = map;
+  window.keyframe_id = keyframe_id;
+  if (!Prepare(&window)) return;
+  Solve(&window);
+  Finish(&window);
+}
+
+void LocalMapper::FinishPending() {
+  if (!pending_) return;
+  std::unique_ptr<Window> window = std::move(pending_);
+  window->solver.join();
+  if (window->error) std::rethrow_exception(window->error);
+  Finish(window.get());
+}
+
+bool LocalMapper::Prepare(Window* window) {
   const auto start = std::chrono::steady_clock::now();
-  MapBundleAdjustment ba;
-  TriangulationStats triangulated;
+  Map* map = window->map;
+  const int keyframe_id = window->keyframe_id;
+  MapBundleAdjustment& ba = window->ba;
   {
     MutexLock lock(map->mutex());
     auto current = map->keyframe(keyframe_id);
-    if (!current) return;
+    if (!current) return false;
     if (options_.triangulate) {
-      triangulated = CreateNewLandmarks(map, keyframe_id, rig_, options_.triangulation);
-      if (triangulated.points > 0) map->UpdateConnections(keyframe_id);
+      window->triangulated = CreateNewLandmarks(map, keyframe_id, rig_, options_.triangulation);
+      if (window->triangulated.points > 0) map->UpdateConnections(keyframe_id);
     }
     ba = MapBundleAdjustment(map->correction_epoch());
     std::vector<int> local = {keyframe_id};
@@ -124,18 +168,36 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
     ba.AddWindowLandmarks(*map, local, &pose_index, options_.max_fixed_keyframes,
                           options_.point_sigma_px, options_.line_sigma_px);
   }
+  window->ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
 
+void LocalMapper::Solve(Window* window) {
+  const auto start = std::chrono::steady_clock::now();
   // The solve runs without the map lock: tracking goes on meanwhile. An interruption asked for
   // before this point (while the keyframe waited in the queue) is dropped: this BA is the newer
   // window already. (A request that lands between this store and the solve's first check stops
-  // it early: harmless, the next keyframe is on its way.)
+  // it early: harmless, the next keyframe is on its way.) Overlapped solves are never
+  // interrupted (their result must not depend on timing).
   interrupt_ba_.store(false);
-  const BundleAdjustmentReport report =
-      SolveBundleAdjustment(rig_, &ba.problem(), options_.ba, nullptr, &interrupt_ba_);
+  window->report = SolveBundleAdjustment(rig_, &window->ba.problem(), options_.ba, nullptr,
+                                         overlap_ ? nullptr : &interrupt_ba_);
+  window->ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
 
+void LocalMapper::Finish(Window* window) {
+  const auto start = std::chrono::steady_clock::now();
+  Map* map = window->map;
+  const int keyframe_id = window->keyframe_id;
+  const MapBundleAdjustment& ba = window->ba;
+  const BundleAdjustmentReport& report = window->report;
+  const TriangulationStats& triangulated = window->triangulated;
   MutexLock lock(map->mutex());
-  // A global BA that finished meanwhile moved the map (threaded mode): this window's solution
-  // is in the old world and is dropped (the next keyframe's window starts from the new one).
+  // A global BA that finished meanwhile (threaded mode), or a loop correction or merge while the
+  // solve was pending (overlap), moved the map: this window's solution is in the old world and
+  // is dropped (the next keyframe's window starts from the new one).
   if (report.solved && map->correction_epoch() == ba.correction_epoch()) ba.Apply(map, report);
 
   // Landmark culling: unobserved points and lines, and those tracking rarely finds where it
@@ -193,6 +255,7 @@ void LocalMapper::Process(Map* map, int keyframe_id) {
   }
 
   const double ms =
+      window->ms +
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard<std::mutex> stats_lock(queue_mutex_);
   stats_.keyframes_processed += 1;

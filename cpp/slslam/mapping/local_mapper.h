@@ -4,7 +4,9 @@
 // those landmarks stay fixed), removal of outlier observations, landmark culling and keyframe
 // culling (a keyframe is redundant when > 90 % of its map points are seen by >= 3 other
 // keyframes). Runs inline (sequential mode, exactly reproducible) or on a background thread as in
-// ORB-SLAM3.
+// ORB-SLAM3. Sequential mode can overlap each keyframe's local BA with tracking and still be
+// exactly reproducible: the solve runs on a thread of its own, on the window's copy of the map,
+// and its result is applied when the next keyframe comes (or at Flush), whatever its timing.
 #pragma once
 
 #include <atomic>
@@ -12,10 +14,12 @@
 #include <deque>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 
 #include "slslam/map/map.h"
+#include "slslam/mapping/map_bundle_adjustment.h"
 #include "slslam/mapping/triangulation.h"
 #include "slslam/optimization/bundle_adjustment.h"
 
@@ -50,16 +54,22 @@ struct LocalMappingStats {
 
 class LocalMapper {
  public:
-  LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential);
+  // `overlap` (sequential mode only): keyframe k's triangulation and window are made inline; its
+  // local BA solves on a thread of its own while tracking goes on; the solution is applied, and
+  // the landmarks and keyframes culled, when keyframe k+1 is inserted or at Flush. The frames in
+  // between are tracked against the map as it was before that BA.
+  LocalMapper(const StereoRig& rig, const LocalMapperOptions& options, bool sequential,
+              bool overlap = false);
   ~LocalMapper();
   LocalMapper(const LocalMapper&) = delete;
   LocalMapper& operator=(const LocalMapper&) = delete;
 
-  // Queues (threaded) or processes at once (sequential) a new keyframe of `map`. The map must
-  // outlive the processing (Flush before destroying it).
+  // Queues (threaded) or processes at once (sequential; with overlap, the previous keyframe's
+  // solve is applied first and this one's starts) a new keyframe of `map`. The map must outlive
+  // the processing (Flush before destroying it).
   void Insert(Map* map, int keyframe_id);
-  // Waits until every queued keyframe has been processed; rethrows the first error the mapping
-  // thread caught since the last Flush.
+  // Waits until every queued keyframe has been processed (with overlap: the pending solve has
+  // been applied); rethrows the first error the mapping thread caught since the last Flush.
   void Flush();
   LocalMappingStats stats() const;
   // Threaded mode (ORB-SLAM3's brake on keyframe insertion): true when no keyframe is queued or
@@ -78,12 +88,29 @@ class LocalMapper {
   void SetAfterKeyFrame(std::function<void(Map*, int)> hook) { after_keyframe_ = std::move(hook); }
 
  private:
+  // One keyframe's local mapping between its steps.
+  struct Window {
+    Map* map = nullptr;
+    int keyframe_id = -1;
+    MapBundleAdjustment ba;
+    TriangulationStats triangulated;
+    BundleAdjustmentReport report;
+    double ms = 0.0;  ///< the steps' own time so far [ms]
+    std::exception_ptr error;
+    std::thread solver;
+  };
   void Process(Map* map, int keyframe_id);
+  bool Prepare(Window* window);  ///< triangulation, the window's problem; false: no keyframe
+  void Solve(Window* window);    ///< the local BA, without the map lock
+  void Finish(Window* window);   ///< the solution applied, culling, statistics
+  void FinishPending();
   void Run();
 
   StereoRig rig_;
   LocalMapperOptions options_;
   bool sequential_;
+  bool overlap_ = false;
+  std::unique_ptr<Window> pending_;
   mutable std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
   std::condition_variable idle_cv_;

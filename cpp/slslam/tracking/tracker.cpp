@@ -54,7 +54,8 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   mapping.triangulation.lines = options_.use_lines;
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
-  mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential);
+  mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential,
+                                          options_.mapping_overlap);
   if (options_.dynamic_cells) {
     dynamic_ = std::make_unique<DynamicCellFilter>(options_.rig.camera.width,
                                                    options_.rig.camera.height, options_.dynamic);

@@ -97,6 +97,17 @@ struct TrackerOptions {
   /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/README.md,
   /// 2026-11-26): 5-20 % more frames/s, but worse ATE on the hard dark sequences, so off.
   bool mapping_brake = false;
+  /// Sequential mode only: each keyframe's local BA solves on a thread of its own, on the window's
+  /// copy of the map, while tracking goes on; its solution is applied (and the landmarks and
+  /// keyframes culled) when the next keyframe is inserted, or at Flush. Still exactly
+  /// reproducible: the point where a solution lands is fixed by the frames, not by timing. The
+  /// frames between two keyframes are tracked against the map as it was before the first one's BA
+  /// (ORB-SLAM3's tracking sees the same while its mapping thread is busy). Off: on two cores the
+  /// solve competes with the frames' own work, so the 95th percentile of the per-frame latency
+  /// falls by a third to a half but its median rises (ORB points, bright loop: 108-129 -> 64-70
+  /// ms and 21-23 -> 29-34 ms), frames/s gain only in the dark, and XFeat + lines drifted
+  /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/README.md, 2026-11-27 d).
+  bool mapping_overlap = false;
   int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
   float search_radius_px = 15.0f;      ///< guided matching window [px]; doubled on a retry

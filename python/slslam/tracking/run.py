@@ -602,7 +602,7 @@ def _show(viewer, show: Callable, *args):
 def _show_frame(viewer, tracker: Tracker, result: TrackResult) -> None:
     viewer.log_frame(result, tracker.last_image, tracker.last_keypoints_uv)
     if viewer.wants_map(result.index):
-        viewer.log_map(tracker.map())
+        viewer.log_map(tracker.map(settle=False))  # a snapshot: the run's poses stay the same
 
 
 def _show_end(viewer, map_data: MapData | None, estimate, gt, metrics: dict) -> None:

@@ -729,9 +729,11 @@ class Tracker:
         poses = np.array([r.T_world_cam for r in self._results]).reshape(-1, 4, 4)
         return stamps, poses, [r.state for r in self._results]
 
-    def map(self) -> MapData:
-        """The sparse map of every map of the atlas (waits for local mapping first)."""
-        m = self._core.map()
+    def map(self, settle: bool = True) -> MapData:
+        """The sparse map of every map of the atlas. ``settle`` waits for local mapping first
+        (and applies an overlapped local BA, ``tracking.mapping_overlap``); False takes the map
+        as it stands and changes nothing, so a viewer's snapshots leave the poses as they were."""
+        m = self._core.map(settle)
         names = {f.name for f in dataclasses.fields(MapStats)} - {"loop_events"}
         events = tuple(
             LoopEvent(

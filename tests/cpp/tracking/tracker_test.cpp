@@ -243,6 +243,45 @@ TEST(TrackerTest, SequentialModeIsExactlyReproducible) {
   }
 }
 
+// mapping_overlap: each keyframe's local BA solves on its own thread and lands when the next
+// keyframe comes; the landing point is fixed by the frames, so two runs agree bit for bit, and
+// the frames tracked against the map before its BA stay as accurate as inline mapping's.
+TEST(TrackerTest, OverlappedLocalMappingIsExactlyReproducible) {
+  const Scene scene;
+  TrackerOptions options = Options();
+  options.mapping_overlap = true;
+  Tracker a(options), b(options), inline_mapping(Options());
+  double worst = 0.0;
+  int keyframes = 0;
+  bool differs = false;
+  for (int k = 0; k < 40; ++k) {
+    const auto frame = Render(scene, k, 0.5);
+    const TrackResult ra = a.Track(frame);
+    const TrackResult rb = b.Track(frame);
+    const TrackResult ri = inline_mapping.Track(frame);
+    ASSERT_EQ(ra.state, TrackingState::kOk) << "frame " << k;
+    ASSERT_EQ(ra.state, rb.state);
+    for (int i = 0; i < 9; ++i) {
+      ASSERT_EQ(ra.cam_from_world.rotation.data()[i], rb.cam_from_world.rotation.data()[i])
+          << "frame " << k;
+    }
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_EQ(ra.cam_from_world.translation[i], rb.cam_from_world.translation[i])
+          << "frame " << k;
+    }
+    differs = differs || ra.cam_from_world.translation != ri.cam_from_world.translation;
+    worst = std::max(worst, CenterError(ra, k));
+    keyframes += ra.keyframe;
+  }
+  EXPECT_TRUE(differs);  // the option reached local mapping: its frames saw another map
+  EXPECT_LT(worst, 0.03);
+  // Every keyframe's BA was applied, the last one by Flush.
+  EXPECT_EQ(a.mapping_stats().keyframes_processed, keyframes - 1);
+  a.Flush();
+  EXPECT_EQ(a.mapping_stats().keyframes_processed, keyframes);
+  EXPECT_GT(a.ExportMap().points.rows(), 300);
+}
+
 TEST(TrackerTest, ThreadedModeTracksToo) {
   const Scene scene;
   for (const bool brake : {false, true}) {  // with ORB-SLAM3's brake on keyframes too
@@ -419,9 +458,11 @@ Eigen::Vector3d TrueCenterIn(int k, int origin) {
 // starts at the frozen pose, 4.5 m off; once its keyframes see map 1's landmarks, loop closing
 // merges it into map 1, and every frame of the second stretch ends up at its true place in map
 // 1's frame.
-void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true) {
+void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true,
+                                        bool overlap = false) {
   const Scene scene;
   TrackerOptions options = Options(sequential, /*lines=*/false);
+  options.mapping_overlap = overlap;
   options.loop_closing.global_ba = global_ba;
   options.vocabulary_path = SceneVocabulary(scene);
   options.relocalisation.min_inliers = 1e9;
@@ -459,6 +500,12 @@ void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true) 
 
 TEST(TrackerTest, ASecondMapIsMergedIntoTheFirstWhereTheyOverlap) {
   ExpectASecondMapMergedIntoTheFirst(/*sequential=*/true);
+}
+
+// The same with each local BA overlapped with tracking: the merge moves the map while the merged
+// keyframe's solve is pending, whose solution is then dropped (the map's correction epoch).
+TEST(TrackerTest, AMergeWithAnOverlappedLocalBaPending) {
+  ExpectASecondMapMergedIntoTheFirst(/*sequential=*/true, /*global_ba=*/true, /*overlap=*/true);
 }
 
 // The same in threaded mode: loop closing on the mapping thread, the global BA after the merge on
