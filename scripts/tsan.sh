@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the C++ tests under ThreadSanitizer (build/tsan: no Python module, no LiDAR module) and
 # runs the tests that drive the tracker with local mapping, loop closing and global BA on their
-# own threads. Fails on any data race or lock-order inversion TSan reports.
+# own threads, and with each local BA overlapped with tracking (tracking.mapping_overlap). Fails on
+# any data race or lock-order inversion TSan reports.
 #
 #   bash scripts/tsan.sh                 # the threaded tracker tests
 #   bash scripts/tsan.sh 'TrackerTest.*' # another gtest filter
@@ -12,7 +13,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 build_dir="build/tsan"
-filter="${1:-TrackerTest.Threaded*:MapBundleAdjustment*}"
+filter="${1:-TrackerTest.Threaded*:TrackerTest.*Overlapped*:MapBundleAdjustment*}"
 
 if ! dpkg-query -W -f='${Status}' libtsan2 2>/dev/null | grep -q "install ok installed"; then
   sudo=""

@@ -222,9 +222,10 @@ void LocalMapper::Finish(Window* window) {
   lines_culled = static_cast<int>(erase_lines.size());
   map->UpdateConnections(keyframe_id);
 
-  // Keyframe culling among the covisible keyframes (never the first or the newest).
+  // Keyframe culling among the covisible keyframes (never the first or the newest). The map is
+  // empty when a merge moved its content into another while an overlapped solve was pending.
   int keyframes_culled = 0;
-  if (options_.cull_keyframes) {
+  if (options_.cull_keyframes && !map->keyframes().empty()) {
     const int first_keyframe = map->keyframes().begin()->first;
     for (int kf_id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
       // Never the first keyframe, this one, or newer ones still queued (threaded mode).
