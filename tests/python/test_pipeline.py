@@ -101,6 +101,9 @@ def test_frames_ahead_is_checked(sequence, tmp_path):
     with Tracker(sequence.camera, orb_lines()) as tracker:
         with pytest.raises(ValueError, match="frames_ahead must be an integer >= 1, got 0"):
             next(tracker.track_stream(frames_of(sequence), frames_ahead=0))
+        with pytest.raises(ValueError, match=r"frames_ahead must be an integer >= 1, got 2\.5"):
+            next(tracker.track_stream(frames_of(sequence), frames_ahead=2.5))
+        assert next(tracker.track_stream(frames_of(sequence), frames_ahead=np.int64(2))).index == 0
     path = tmp_path / "bad.yaml"
     path.write_text("tracking:\n  pipeline_frames_ahead: 0\n")
     with pytest.raises(ConfigError, match=r"bad.yaml.*tracking.pipeline_frames_ahead.*\[1, 64\]"):

@@ -25,6 +25,7 @@ import dataclasses
 import inspect
 import logging
 import math
+import numbers
 import queue
 import threading
 import time
@@ -552,8 +553,9 @@ class Tracker:
                 yield self.track(left, right, timestamp)
             return
         ahead = self.config.tracking.pipeline_frames_ahead if frames_ahead is None else frames_ahead
-        if isinstance(ahead, bool) or not isinstance(ahead, int) or ahead < 1:
+        if isinstance(ahead, bool) or not isinstance(ahead, numbers.Integral) or ahead < 1:
             raise ValueError(f"frames_ahead must be an integer >= 1, got {ahead!r}")
+        ahead = int(ahead)  # numpy integers too
         handoff: queue.Queue = queue.Queue()
         slot = threading.Semaphore(ahead)  # frames prepared and not yet taken by the core
         stop = threading.Event()
