@@ -29,7 +29,7 @@ LocalMapper::~LocalMapper() {
 }
 
 void LocalMapper::Insert(Map* map, int keyframe_id) {
-  if (sequential_ && overlap_) {
+  if (overlap_) {  // (sequential mode only: the constructor clears it otherwise)
     // The previous keyframe's solve is applied first: always here, whatever its timing.
     FinishPending();
     auto window = std::make_unique<Window>();

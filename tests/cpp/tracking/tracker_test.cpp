@@ -224,6 +224,21 @@ TEST(TrackerTest, TracksASyntheticRoadwayWithPointsAndLines) {
   EXPECT_GT(on_surface, 0.8 * map.lines.rows());
 }
 
+// Bit for bit: every element of the two poses equal.
+::testing::AssertionResult SamePose(const TrackResult& a, const TrackResult& b) {
+  for (int i = 0; i < 9; ++i) {
+    if (a.cam_from_world.rotation.data()[i] != b.cam_from_world.rotation.data()[i]) {
+      return ::testing::AssertionFailure() << "rotation element " << i << " differs";
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (a.cam_from_world.translation[i] != b.cam_from_world.translation[i]) {
+      return ::testing::AssertionFailure() << "translation element " << i << " differs";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
 TEST(TrackerTest, SequentialModeIsExactlyReproducible) {
   const Scene scene;
   Tracker a(Options()), b(Options());
@@ -232,14 +247,7 @@ TEST(TrackerTest, SequentialModeIsExactlyReproducible) {
     const TrackResult ra = a.Track(frame);
     const TrackResult rb = b.Track(frame);
     ASSERT_EQ(ra.state, rb.state);
-    for (int i = 0; i < 9; ++i) {
-      ASSERT_EQ(ra.cam_from_world.rotation.data()[i], rb.cam_from_world.rotation.data()[i])
-          << "frame " << k;
-    }
-    for (int i = 0; i < 3; ++i) {
-      ASSERT_EQ(ra.cam_from_world.translation[i], rb.cam_from_world.translation[i])
-          << "frame " << k;
-    }
+    ASSERT_TRUE(SamePose(ra, rb)) << "frame " << k;
   }
 }
 
@@ -261,14 +269,7 @@ TEST(TrackerTest, OverlappedLocalMappingIsExactlyReproducible) {
     const TrackResult ri = inline_mapping.Track(frame);
     ASSERT_EQ(ra.state, TrackingState::kOk) << "frame " << k;
     ASSERT_EQ(ra.state, rb.state);
-    for (int i = 0; i < 9; ++i) {
-      ASSERT_EQ(ra.cam_from_world.rotation.data()[i], rb.cam_from_world.rotation.data()[i])
-          << "frame " << k;
-    }
-    for (int i = 0; i < 3; ++i) {
-      ASSERT_EQ(ra.cam_from_world.translation[i], rb.cam_from_world.translation[i])
-          << "frame " << k;
-    }
+    ASSERT_TRUE(SamePose(ra, rb)) << "frame " << k;
     differs = differs || ra.cam_from_world.translation != ri.cam_from_world.translation;
     worst = std::max(worst, CenterError(ra, k));
     keyframes += ra.keyframe;
