@@ -104,7 +104,7 @@ struct TrackerOptions {
   /// frames between two keyframes are tracked against the map as it was before the first one's BA
   /// (ORB-SLAM3's tracking sees the same while its mapping thread is busy). Off: on two cores the
   /// solve competes with the frames' own work, so the 95th percentile of the per-frame latency
-  /// falls by a third to a half but its median rises (ORB points, bright loop: 108-129 -> 64-70
+  /// falls by 29-49 % but its median rises (ORB points, bright loop: 108-129 -> 64-70
   /// ms and 21-23 -> 29-34 ms), frames/s gain only in the dark, and XFeat + lines drifted
   /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/README.md, 2026-11-27 d).
   bool mapping_overlap = false;
