@@ -270,6 +270,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("refine_iterations", &BundleAdjustmentOptions::refine_iterations)
       .def_readwrite("line_angle_weight", &BundleAdjustmentOptions::line_angle_weight)
       .def_readwrite("line_weight", &BundleAdjustmentOptions::line_weight)
+      .def_readwrite("line_prior_weight", &BundleAdjustmentOptions::line_prior_weight)
+      .def_readwrite("dogleg_with_lines", &BundleAdjustmentOptions::dogleg_with_lines)
       .def("check", &BundleAdjustmentOptions::Check);
   py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
       .def(py::init<>())

@@ -826,6 +826,7 @@ class BundleAdjustmentOptions:
     """
     Local bundle adjustment.
     """
+    dogleg_with_lines: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:
@@ -835,6 +836,12 @@ class BundleAdjustmentOptions:
         ...
     @line_angle_weight.setter
     def line_angle_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def line_prior_weight(self) -> float:
+        ...
+    @line_prior_weight.setter
+    def line_prior_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def line_weight(self) -> float:

@@ -156,6 +156,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "local_keyframes": ("mapping.local_keyframes",),
     "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
     "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
+    "local_ba_line_prior_weight": ("mapping.ba.line_prior_weight",),
+    "local_ba_dogleg": ("mapping.ba.dogleg_with_lines",),
 }
 LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
     name: (f"loop_closing.{name}",)
@@ -359,7 +361,8 @@ class TrackingConfig:
     # frames/s, worse ATE on the hard dark sequences: off)
     mapping_brake: bool = _tracking("mapping_brake")
     # sequential mode only: each keyframe's local BA solves on its own thread while tracking goes
-    # on, applied when the next keyframe comes (still exactly reproducible)
+    # on, applied when the next keyframe comes (still exactly reproducible, unless the settled
+    # map is asked for mid-run: flush, save_map, final_trajectory and map() apply it early)
     mapping_overlap: bool = _tracking("mapping_overlap")
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
@@ -402,6 +405,13 @@ class TrackingConfig:
     line_weight: float = _tracking("line_weight", "[0, 1e6]")
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
     line_angle_weight: float = _tracking("line_angle_weight", "[0, 1e6]")
+    # local BA: each line's pull towards its value at the start of the solve [1/rad] (0: none);
+    # with local_ba_dogleg a local BA with lines takes about 40 % less time, but the drift moved
+    # both ways over three seeds (benchmarks/README.md, 2026-11-27 f), so off
+    local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1e6]")
+    # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
+    # no linear solve); needs local_ba_line_prior_weight > 0
+    local_ba_dogleg: bool = _tracking("local_ba_dogleg")
     # stereo depths beyond this many baselines are unused
     max_depth_baselines: float = _tracking("max_depth_baselines", "[1, 1e6]")
     # stereo points without right-image keypoints: the point front end runs on the left image

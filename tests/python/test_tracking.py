@@ -505,6 +505,38 @@ def test_matches_are_aligned_to_their_map_points_patches(sim_loop):
     assert ate["on"] <= 1.1 * ate["off"], ate
 
 
+def test_pulled_lines_with_the_dogleg_reach_local_ba(sim_loop):
+    """tracking.local_ba_line_prior_weight / local_ba_dogleg (off by default): the keys reach the
+    core's local BA through the bindings (the poses change) and keep the trajectory accurate
+    on these frames."""
+    from slslam.eval.report import evaluate
+    from slslam.tracking.run import tracked_trajectory
+
+    sequence = EurocSequence(sim_loop)
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+    gt = sequence.groundtruth(frame="rectified")
+    off = config("orb", lines=True)
+    assert off.tracking.local_ba_line_prior_weight == 0.0
+    assert not off.tracking.local_ba_dogleg
+    on = dataclasses.replace(
+        off,
+        tracking=dataclasses.replace(
+            off.tracking, local_ba_line_prior_weight=10.0, local_ba_dogleg=True
+        ),
+    )
+    poses, ate = {}, {}
+    for name, cfg in (("off", off), ("on", on)):
+        with Tracker(sequence.camera, cfg) as tracker:
+            results = list(tracker.track_stream(frames))
+        assert all(r.tracked for r in results[1:])
+        poses[name] = np.array([r.T_world_cam[:3, 3] for r in results])
+        trajectory = tracked_trajectory(results)
+        ate[name] = evaluate(trajectory, gt, align="se3", rpe_delta=None, plot=False)
+        ate[name] = ate[name].summary()["ape"]["rmse"]
+    assert np.abs(poses["on"] - poses["off"]).max() > 1e-5, "the options changed nothing"
+    assert ate["on"] < 0.03, ate
+
+
 def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     """tracking.right_lines_on_keyframes: the right image's lines are extracted only for frames
     that become keyframes (or start a map), the only ones whose stereo lines are used, so the

@@ -37,8 +37,15 @@ class StopCallback : public ceres::IterationCallback {
 struct Parameters {
   std::vector<std::array<double, kPoseSize>> poses;
   std::vector<Eigen::Vector3d> points;
-  std::vector<std::array<double, kLineSize>> lines;
+  std::vector<std::array<double, kLineSize>> lines;  ///< each relative to its anchor
+  std::vector<Eigen::Vector3d> line_anchors;          ///< world points (LineCost's anchor)
 };
+
+PluckerLine LineInWorld(const Parameters& p, int line) {
+  PluckerLine world = ParametersToLine(p.lines[line].data()).ToPlucker();
+  world.n += p.line_anchors[line].cross(world.v);
+  return world;
+}
 
 double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObservation& o) {
   Rigid3d cam_from_world;
@@ -61,7 +68,7 @@ double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObserva
 double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservation& o) {
   Rigid3d cam_from_world;
   ParametersToPose(p.poses[o.pose].data(), &cam_from_world);
-  const PluckerLine line = ParametersToLine(p.lines[o.line].data()).ToPlucker();
+  const PluckerLine line = LineInWorld(p, o.line);
   Eigen::Vector3d e;
   if (!LineResidual(rig.camera, cam_from_world, line, o.start_px, o.end_px, 0.0, &e)) {
     return INFINITY;
@@ -83,6 +90,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
   CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
   CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
+  CheckInRange("ba.line_prior_weight", line_prior_weight, 0.0, 1e6);
 }
 
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
@@ -110,9 +118,21 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     PoseToParameters(ba.poses[i].cam_from_world, params.poses[i].data());
   }
   params.points = ba.points;
+  // With the pull (line_prior_weight), each line anchored at the camera centre of its first
+  // observation: the line as that camera's centre sees it, a few metres away, not as the world's
+  // origin does, possibly far behind, so the pull's tangent means about the same everywhere.
   params.lines.resize(ba.lines.size());
+  params.line_anchors.assign(ba.lines.size(), Eigen::Vector3d::Zero());
+  std::vector<bool> anchored(ba.lines.size(), !(options.line_prior_weight > 0.0));
+  for (const auto& o : ba.line_observations) {
+    if (anchored[o.line]) continue;
+    params.line_anchors[o.line] = ba.poses[o.pose].cam_from_world.Inverse().translation;
+    anchored[o.line] = true;
+  }
   for (size_t i = 0; i < ba.lines.size(); ++i) {
-    LineToParameters(OrthonormalLine::FromPlucker(ba.lines[i]), params.lines[i].data());
+    PluckerLine local = ba.lines[i];
+    local.n -= params.line_anchors[i].cross(local.v);
+    LineToParameters(OrthonormalLine::FromPlucker(local), params.lines[i].data());
   }
 
   BundleAdjustmentReport report;
@@ -153,7 +173,8 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       if (report.line_outlier[i] || options.line_weight <= 0.0) continue;
       const BaLineObservation& o = ba.line_observations[i];
       ceres::CostFunction* cost =
-          new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px);
+          new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px,
+                       params.line_anchors[o.line]);
       ceres::LossFunction* loss =
           robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
       if (options.line_weight != 1.0) {
@@ -161,8 +182,14 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       }
       solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
                                       params.lines[o.line].data());
-      if (!line_used[o.line])
+      if (!line_used[o.line]) {
         solver_problem.SetManifold(params.lines[o.line].data(), new LineManifold);
+        if (options.line_prior_weight > 0.0) {
+          solver_problem.AddResidualBlock(
+              new LinePriorCost(params.lines[o.line].data(), options.line_prior_weight), nullptr,
+              params.lines[o.line].data());
+        }
+      }
       line_used[o.line] = true;
       pose_used[o.pose] = true;
       ++blocks;
@@ -176,6 +203,10 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
 
     ceres::Solver::Options solver_options;
     solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    if (options.dogleg_with_lines && std::any_of(line_used.begin(), line_used.end(),
+                                                 [](bool used) { return used; })) {
+      solver_options.trust_region_strategy_type = ceres::DOGLEG;
+    }
     solver_options.max_num_iterations =
         robust ? options.robust_iterations : options.refine_iterations;
     solver_options.num_threads = 1;
@@ -226,7 +257,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   }
   ba.points = params.points;
   for (size_t i = 0; i < ba.lines.size(); ++i) {
-    ba.lines[i] = ParametersToLine(params.lines[i].data()).ToPlucker();
+    ba.lines[i] = LineInWorld(params, static_cast<int>(i));
   }
   return report;
 }

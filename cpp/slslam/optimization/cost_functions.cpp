@@ -1,6 +1,9 @@
 #include "slslam/optimization/cost_functions.h"
 
+#include <algorithm>
+
 #include "slslam/core/check.h"
+#include "slslam/geometry/rotation.h"
 
 namespace slslam {
 
@@ -81,32 +84,58 @@ bool StereoPointCost::Evaluate(double const* const* parameters, double* residual
 }
 
 LineCost::LineCost(const PinholeCamera& camera, const Eigen::Vector2d& start_px,
-                   const Eigen::Vector2d& end_px, double angle_weight, double sigma_px)
+                   const Eigen::Vector2d& end_px, double angle_weight, double sigma_px,
+                   const Eigen::Vector3d& anchor_world)
     : camera_(camera),
       start_(start_px),
       end_(end_px),
       angle_weight_(angle_weight),
-      inv_sigma_(InverseSigma(sigma_px)) {}
+      inv_sigma_(InverseSigma(sigma_px)),
+      anchor_(anchor_world) {}
 
 bool LineCost::Evaluate(double const* const* parameters, double* residuals,
                         double** jacobians) const {
   Rigid3d cam_from_world;
   ParametersToPose(parameters[0], &cam_from_world);
   const OrthonormalLine line = ParametersToLine(parameters[1]);
+  PluckerLine world = line.ToPlucker();
+  world.n += anchor_.cross(world.v);
   Eigen::Vector3d e;
   Eigen::Matrix<double, 3, 6> d_pose;
   Eigen::Matrix<double, 3, 6> d_plucker;
   const bool want = jacobians != nullptr;
-  if (!LineResidual(camera_, cam_from_world, line.ToPlucker(), start_, end_, angle_weight_, &e,
+  if (!LineResidual(camera_, cam_from_world, world, start_, end_, angle_weight_, &e,
                     want ? &d_pose : nullptr, want ? &d_plucker : nullptr)) {
     return false;
   }
+  // d n_world / d v = [anchor]x
+  if (want) d_plucker.rightCols<3>() += d_plucker.leftCols<3>() * Skew(anchor_);
   Eigen::Map<Eigen::Vector3d> r(residuals);
   r = inv_sigma_ * e;
   if (want && jacobians[0]) WriteLifted<3, 6, kPoseSize>(d_pose, inv_sigma_, jacobians[0]);
   if (want && jacobians[1]) {
     const Eigen::Matrix<double, 3, 4> d_line = d_plucker * line.PluckerJacobian();
     WriteLifted<3, 4, kLineSize>(d_line, inv_sigma_, jacobians[1]);
+  }
+  return true;
+}
+
+LinePriorCost::LinePriorCost(const double* reference, double weight) : weight_(weight) {
+  std::copy(reference, reference + kLineSize, reference_.begin());
+}
+
+bool LinePriorCost::Evaluate(double const* const* parameters, double* residuals,
+                             double** jacobians) const {
+  const LineManifold manifold;
+  manifold.Minus(parameters[0], reference_.data(), residuals);
+  for (int i = 0; i < kLineTangentSize; ++i) residuals[i] *= weight_;
+  if (jacobians && jacobians[0]) {
+    // d Minus(x, ref) / d delta at x = the identity for the small steps a solve takes (exact at
+    // x = ref: the residual only has to hold the line, not model the manifold's curvature);
+    // lifted to the ambient block as the manifold's PlusJacobian expects.
+    Eigen::Matrix<double, kLineTangentSize, kLineTangentSize> j =
+        weight_ * Eigen::Matrix<double, kLineTangentSize, kLineTangentSize>::Identity();
+    WriteLifted<kLineTangentSize, kLineTangentSize, kLineSize>(j, 1.0, jacobians[0]);
   }
   return true;
 }

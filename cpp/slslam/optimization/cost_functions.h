@@ -4,6 +4,8 @@
 // falls behind the camera, which makes Ceres reject that step.
 #pragma once
 
+#include <array>
+
 #include <ceres/sized_cost_function.h>
 #include <Eigen/Core>
 
@@ -39,10 +41,15 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
 };
 
 // Line segment: parameters pose (7), line (5); residual 3 (e1, e2, e3 of LineResidual).
+// The line parameters hold the line as seen from `anchor_world` (a world point, the origin by
+// default): the world line is that line moved by +anchor (n_world = n + anchor x v). Bundle
+// adjustment anchors each line at a camera that observes it, so the orthonormal representation's
+// angle phi = atan(1 / distance) stays away from 0 wherever the map has gone.
 class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> {
  public:
   LineCost(const PinholeCamera& camera, const Eigen::Vector2d& start_px,
-           const Eigen::Vector2d& end_px, double angle_weight, double sigma_px);
+           const Eigen::Vector2d& end_px, double angle_weight, double sigma_px,
+           const Eigen::Vector3d& anchor_world = Eigen::Vector3d::Zero());
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
 
@@ -52,6 +59,23 @@ class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> 
   Eigen::Vector2d end_;
   double angle_weight_;
   double inv_sigma_;
+  Eigen::Vector3d anchor_;
+};
+
+// A line's pull towards a reference value of its parameters, in the line manifold's tangent:
+// residual 4 = weight * Minus(line, reference) [weight / rad]. Bundle adjustment gives every line
+// one towards its value when the solve starts when BundleAdjustmentOptions::line_prior_weight > 0:
+// it bounds the Gauss-Newton step along directions the observations leave (nearly) free, which
+// otherwise made most trust-region steps fail (benchmarks/README.md, 2026-11-27 f).
+class LinePriorCost final : public ceres::SizedCostFunction<4, kLineSize> {
+ public:
+  LinePriorCost(const double* reference, double weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  std::array<double, kLineSize> reference_;
+  double weight_;
 };
 
 }  // namespace slslam

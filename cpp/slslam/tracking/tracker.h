@@ -100,7 +100,10 @@ struct TrackerOptions {
   /// Sequential mode only: each keyframe's local BA solves on a thread of its own, on the window's
   /// copy of the map, while tracking goes on; its solution is applied (and the landmarks and
   /// keyframes culled) when the next keyframe is inserted, or at Flush. Still exactly
-  /// reproducible: the point where a solution lands is fixed by the frames, not by timing. The
+  /// reproducible: the point where a solution lands is fixed by the frames, not by timing, as
+  /// long as nothing asks for the settled map mid-run: Flush, a saved map, the final trajectory
+  /// and Python's `Tracker.map()` (but not `map(settle=False)`) apply a pending solution there
+  /// and then, so a run that calls them mid-way differs from one that does not. The
   /// frames between two keyframes are tracked against the map as it was before the first one's BA
   /// (ORB-SLAM3's tracking sees the same while its mapping thread is busy). Off: on two cores the
   /// solve competes with the frames' own work, so the 95th percentile of the per-frame latency

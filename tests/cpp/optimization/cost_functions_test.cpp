@@ -98,6 +98,58 @@ TEST(CostFunctions, LineCostJacobiansThroughManifold) {
   CheckCost(cost, {PoseParams(), line}, {&pose_manifold, &line_manifold});
 }
 
+std::vector<double> LineParams(const PluckerLine& line) {
+  std::vector<double> p(kLineSize);
+  LineToParameters(OrthonormalLine::FromPlucker(line), p.data());
+  return p;
+}
+
+TEST(CostFunctions, AnchoredLineCostJacobiansThroughManifold) {
+  const StereoRig rig = EurocLikeRig();
+  const Eigen::Vector3d anchor(2.0, -1.0, 30.0);  // far from the line and from the origin
+  LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
+                1.0, anchor);
+  const PluckerLine world =
+      PluckerLine::FromPoints(Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5));
+  PluckerLine local = world;
+  local.n -= anchor.cross(local.v);
+  PoseManifold pose_manifold;
+  LineManifold line_manifold;
+  CheckCost(cost, {PoseParams(), LineParams(local)}, {&pose_manifold, &line_manifold});
+
+  // The same residual as the world line given to an unanchored cost.
+  LineCost plain(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
+                 1.0);
+  const std::vector<double> pose = PoseParams();
+  const std::vector<double> anchored_line = LineParams(local), world_line = LineParams(world);
+  const double* a[] = {pose.data(), anchored_line.data()};
+  const double* b[] = {pose.data(), world_line.data()};
+  Eigen::Vector3d ra, rb;
+  ASSERT_TRUE(cost.Evaluate(a, ra.data(), nullptr));
+  ASSERT_TRUE(plain.Evaluate(b, rb.data(), nullptr));
+  EXPECT_LT((ra - rb).cwiseAbs().maxCoeff(), 1e-9) << ra.transpose() << " / " << rb.transpose();
+}
+
+TEST(CostFunctions, LinePriorCostHoldsTheLine) {
+  const std::vector<double> reference = LineParams(
+      PluckerLine::FromPoints(Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5)));
+  LinePriorCost cost(reference.data(), 30.0);
+  LineManifold line_manifold;
+  // At the reference: zero residual, and the tangent Jacobian is weight * identity.
+  CheckCost(cost, {reference}, {&line_manifold});
+  const double* at[] = {reference.data()};
+  Eigen::Vector4d r;
+  ASSERT_TRUE(cost.Evaluate(at, r.data(), nullptr));
+  EXPECT_LT(r.norm(), 1e-12);
+  // A step away costs weight * its length in the tangent.
+  const Eigen::Vector4d step(0.01, -0.02, 0.005, 0.003);
+  std::vector<double> moved(kLineSize);
+  line_manifold.Plus(reference.data(), step.data(), moved.data());
+  const double* away[] = {moved.data()};
+  ASSERT_TRUE(cost.Evaluate(away, r.data(), nullptr));
+  EXPECT_LT((r - 30.0 * step).cwiseAbs().maxCoeff(), 1e-9) << r.transpose();
+}
+
 TEST(Manifolds, MinusInvertsPlus) {
   PoseManifold pose_manifold;
   const std::vector<double> x = PoseParams();
