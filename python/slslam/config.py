@@ -405,7 +405,7 @@ class TrackingConfig:
     line_weight: float = _tracking("line_weight", "[0, 1e6]")
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
     line_angle_weight: float = _tracking("line_angle_weight", "[0, 1e6]")
-    # local BA: each line's pull towards its value at the start of the solve [1/rad] (0: none);
+    # local BA: each line's pull towards its value at the start of each pass [1/rad] (0: none);
     # with local_ba_dogleg a local BA with lines takes about 40 % less time, but the drift moved
     # both ways over three seeds (benchmarks/README.md, 2026-11-27 f), so off
     local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1e6]")

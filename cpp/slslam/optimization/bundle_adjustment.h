@@ -51,17 +51,18 @@ struct BundleAdjustmentOptions {
   double chi2_line = 5.991;         ///< on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< [px]
   double line_weight = 1.0;         ///< [-]
-  /// Each line's pull towards its value at the start of the solve (LinePriorCost: the tangent of
-  /// its orthonormal representation, the line anchored at the camera centre of its first
-  /// observation) [1 / rad]; 0: none, lines relative to the world's origin as before. With lines,
-  /// local BA's Levenberg-Marquardt rejected 3 of 5 steps of the robust pass and 6 of 10 of the
-  /// refine pass and always ran to its cap (points alone: none rejected, 2-4 steps); with the
-  /// lines held fixed it rejected none. The full Gauss-Newton step raised the cost 10-1000x,
-  /// which the pull cures (likely cause: lines that their observers constrain in only two of
-  /// four degrees of freedom, as a roadway edge driven along). With `dogleg_with_lines` a local
-  /// BA then took 42 % less time; but the pull biases each solve towards its start, and over three
-  /// seeds of the hard sequences 30 drifted more on the dark loop and 10 on the bright one, so
-  /// both stay off (benchmarks/README.md, 2026-11-27 f).
+  /// Each line's pull towards its value at the start of each pass (in the refine pass: the
+  /// robust pass's result), in the tangent of its orthonormal representation (LinePriorCost; the
+  /// line anchored at the camera centre of its first observation) [1 / rad]; 0: none, lines
+  /// relative to the world's origin as before. With lines, local BA's Levenberg-Marquardt
+  /// rejected 3 of 5 steps of the robust pass and 6 of 10 of the refine pass and always ran to its
+  /// cap (points alone: almost none rejected, 2-4 steps); with the lines held fixed it rejected
+  /// almost none. The full Gauss-Newton step raised the cost 10-1300x, which the pull cures
+  /// (likely cause: lines that their observers constrain in only two of four degrees of freedom,
+  /// as a roadway edge driven along). With `dogleg_with_lines` a local BA then took 42 % less time
+  /// (pull 10); but the pull biases each pass towards its start, and over three seeds of the hard
+  /// sequences 30 drifted more on the dark loop and 10 on the bright one, so both stay off
+  /// (benchmarks/README.md, 2026-11-27 f).
   double line_prior_weight = 0.0;
   /// Powell's dogleg instead of Levenberg-Marquardt when the problem has lines: a rejected step
   /// costs one evaluation, not a new linear solve (the Schur elimination, most of a solve). Use

@@ -109,7 +109,9 @@ bool LineCost::Evaluate(double const* const* parameters, double* residuals,
     return false;
   }
   // d n_world / d v = [anchor]x
-  if (want) d_plucker.rightCols<3>() += d_plucker.leftCols<3>() * Skew(anchor_);
+  if (want && !anchor_.isZero()) {
+    d_plucker.rightCols<3>() += d_plucker.leftCols<3>() * Skew(anchor_);
+  }
   Eigen::Map<Eigen::Vector3d> r(residuals);
   r = inv_sigma_ * e;
   if (want && jacobians[0]) WriteLifted<3, 6, kPoseSize>(d_pose, inv_sigma_, jacobians[0]);

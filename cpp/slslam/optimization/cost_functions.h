@@ -43,8 +43,9 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
 // Line segment: parameters pose (7), line (5); residual 3 (e1, e2, e3 of LineResidual).
 // The line parameters hold the line as seen from `anchor_world` (a world point, the origin by
 // default): the world line is that line moved by +anchor (n_world = n + anchor x v). Bundle
-// adjustment anchors each line at a camera that observes it, so the orthonormal representation's
-// angle phi = atan(1 / distance) stays away from 0 wherever the map has gone.
+// adjustment with BundleAdjustmentOptions::line_prior_weight > 0 anchors each line at a camera
+// that observes it, so the orthonormal representation's angle phi = atan(1 / distance) stays
+// away from 0 wherever the map has gone, and the pull's tangent means about the same everywhere.
 class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> {
  public:
   LineCost(const PinholeCamera& camera, const Eigen::Vector2d& start_px,
@@ -64,7 +65,8 @@ class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> 
 
 // A line's pull towards a reference value of its parameters, in the line manifold's tangent:
 // residual 4 = weight * Minus(line, reference) [weight / rad]. Bundle adjustment gives every line
-// one towards its value when the solve starts when BundleAdjustmentOptions::line_prior_weight > 0:
+// one towards its value at the start of each pass when BundleAdjustmentOptions::line_prior_weight
+// > 0:
 // it bounds the Gauss-Newton step along directions the observations leave (nearly) free, which
 // otherwise made most trust-region steps fail (benchmarks/README.md, 2026-11-27 f).
 class LinePriorCost final : public ceres::SizedCostFunction<4, kLineSize> {
