@@ -13,6 +13,25 @@ REPO = Path(__file__).resolve().parents[2]
 SHARED_DATA = REPO.parent / "shared" / "data"
 
 
+def load_benchmark(script: str):
+    """Imports benchmarks/<script> as a module (with benchmarks/ on sys.path while it loads and
+    runs, for its neighbour common.py); a generator for module-scoped fixtures to yield from."""
+    import importlib.util
+    import sys
+
+    folder = str(REPO / "benchmarks")
+    sys.path.insert(0, folder)
+    try:
+        spec = importlib.util.spec_from_file_location(
+            Path(script).stem, REPO / "benchmarks" / script
+        )
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.path.remove(folder)
+
+
 def shared_path(*parts: str) -> Path:
     """A path under ../shared/data, or skip the test with the reason when it is absent."""
     path = SHARED_DATA.joinpath(*parts)

@@ -3,7 +3,6 @@ and the table on the real EuRoC excerpt with a stand-in for a user's ORB-SLAM3 b
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import subprocess
 import sys
@@ -14,21 +13,14 @@ import pytest
 from slslam.datasets import CameraCalibration, read_trajectory
 from slslam.errors import InputError
 
-from conftest import REPO, shared_path
+from conftest import REPO, load_benchmark, shared_path
 
 BENCHMARKS = REPO / "benchmarks"
 
 
 @pytest.fixture(scope="module")
 def euroc_bench():
-    sys.path.insert(0, str(BENCHMARKS))  # the script imports its neighbour common.py
-    try:
-        spec = importlib.util.spec_from_file_location("euroc_bench", BENCHMARKS / "euroc.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    yield from load_benchmark("euroc.py")
 
 
 def test_sequence_names(euroc_bench):

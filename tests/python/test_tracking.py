@@ -474,32 +474,38 @@ def test_row_search_runs_the_front_end_on_the_left_image_only(sim_loop):
     assert ate.summary()["ape"]["rmse"] < 0.03
 
 
+def _positions_and_ate(sequence, configs: dict) -> tuple[dict, dict]:
+    """Per named config: the camera positions of a pipelined run over the whole sequence (every
+    frame after the first tracked) and its ATE RMSE (SE3) against the rectified ground truth."""
+    from slslam.eval.report import evaluate
+    from slslam.tracking.run import tracked_trajectory
+
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+    gt = sequence.groundtruth(frame="rectified")
+    positions, ate = {}, {}
+    for name, cfg in configs.items():
+        with Tracker(sequence.camera, cfg) as tracker:
+            results = list(tracker.track_stream(frames))
+        assert all(r.tracked for r in results[1:])
+        positions[name] = np.array([r.T_world_cam[:3, 3] for r in results])
+        summary = evaluate(tracked_trajectory(results), gt, align="se3", rpe_delta=None, plot=False)
+        ate[name] = summary.summary()["ape"]["rmse"]
+    return positions, ate
+
+
 def test_matches_are_aligned_to_their_map_points_patches(sim_loop):
     """tracking.track_refine_window_px (on by default): each map point keeps the patch of the
     keyframe that made it and later matches are aligned to it. The image reaches the core's
     tracker through the bindings (the poses change), and the trajectory is at least as accurate
     as with the detected positions (ORB + lines on these 80 frames: 0.0042 against 0.0051 m
     when measured)."""
-    from slslam.eval.report import evaluate
-    from slslam.tracking.run import tracked_trajectory
-
     sequence = EurocSequence(sim_loop)
-    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
-    gt = sequence.groundtruth(frame="rectified")
     on = config("orb", lines=True)
     assert on.tracking.track_refine_window_px > 0
     off = dataclasses.replace(
         on, tracking=dataclasses.replace(on.tracking, track_refine_window_px=0)
     )
-    ate, poses = {}, {}
-    for name, cfg in (("on", on), ("off", off)):
-        with Tracker(sequence.camera, cfg) as tracker:
-            results = list(tracker.track_stream(frames))
-        assert all(r.tracked for r in results[1:])
-        poses[name] = np.array([r.T_world_cam[:3, 3] for r in results])
-        trajectory = tracked_trajectory(results)
-        ate[name] = evaluate(trajectory, gt, align="se3", rpe_delta=None, plot=False)
-        ate[name] = ate[name].summary()["ape"]["rmse"]
+    poses, ate = _positions_and_ate(sequence, {"on": on, "off": off})
     assert np.abs(poses["on"] - poses["off"]).max() > 1e-4, "the refinement changed nothing"
     assert ate["on"] < 0.03
     assert ate["on"] <= 1.1 * ate["off"], ate
@@ -509,12 +515,7 @@ def test_pulled_lines_with_the_dogleg_reach_local_ba(sim_loop):
     """tracking.local_ba_line_prior_weight / local_ba_dogleg (off by default): the keys reach the
     core's local BA through the bindings (the poses change) and keep the trajectory accurate
     on these frames."""
-    from slslam.eval.report import evaluate
-    from slslam.tracking.run import tracked_trajectory
-
     sequence = EurocSequence(sim_loop)
-    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
-    gt = sequence.groundtruth(frame="rectified")
     off = config("orb", lines=True)
     assert off.tracking.local_ba_line_prior_weight == 0.0
     assert not off.tracking.local_ba_dogleg
@@ -524,15 +525,7 @@ def test_pulled_lines_with_the_dogleg_reach_local_ba(sim_loop):
             off.tracking, local_ba_line_prior_weight=10.0, local_ba_dogleg=True
         ),
     )
-    poses, ate = {}, {}
-    for name, cfg in (("off", off), ("on", on)):
-        with Tracker(sequence.camera, cfg) as tracker:
-            results = list(tracker.track_stream(frames))
-        assert all(r.tracked for r in results[1:])
-        poses[name] = np.array([r.T_world_cam[:3, 3] for r in results])
-        trajectory = tracked_trajectory(results)
-        ate[name] = evaluate(trajectory, gt, align="se3", rpe_delta=None, plot=False)
-        ate[name] = ate[name].summary()["ape"]["rmse"]
+    poses, ate = _positions_and_ate(sequence, {"off": off, "on": on})
     assert np.abs(poses["on"] - poses["off"]).max() > 1e-5, "the options changed nothing"
     assert ate["on"] < 0.03, ate
 

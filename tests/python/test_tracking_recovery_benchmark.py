@@ -3,29 +3,16 @@ spreads, and the refusal of repeated seeds."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
 
-from conftest import REPO
-
-BENCHMARKS = REPO / "benchmarks"
+from conftest import load_benchmark
 
 
 @pytest.fixture(scope="module")
 def recovery():
-    sys.path.insert(0, str(BENCHMARKS))  # the script imports its neighbour common.py
-    try:
-        spec = importlib.util.spec_from_file_location(
-            "tracking_recovery", BENCHMARKS / "tracking_recovery.py"
-        )
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    yield from load_benchmark("tracking_recovery.py")
 
 
 def test_seed_zero_keeps_the_old_folders(recovery):
