@@ -3,6 +3,8 @@ sequences made on the spot."""
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -16,9 +18,6 @@ SHARED_DATA = REPO.parent / "shared" / "data"
 def load_benchmark(script: str):
     """Imports benchmarks/<script> as a module (with benchmarks/ on sys.path while it loads and
     runs, for its neighbour common.py); a generator for module-scoped fixtures to yield from."""
-    import importlib.util
-    import sys
-
     folder = str(REPO / "benchmarks")
     sys.path.insert(0, folder)
     try:

@@ -123,11 +123,13 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   // origin does, possibly far behind, so the pull's tangent means about the same everywhere.
   params.lines.resize(ba.lines.size());
   params.line_anchors.assign(ba.lines.size(), Eigen::Vector3d::Zero());
-  std::vector<bool> anchored(ba.lines.size(), !(options.line_prior_weight > 0.0));
-  for (const auto& o : ba.line_observations) {
-    if (anchored[o.line]) continue;
-    params.line_anchors[o.line] = ba.poses[o.pose].cam_from_world.Inverse().translation;
-    anchored[o.line] = true;
+  if (options.line_prior_weight > 0.0) {
+    std::vector<bool> anchored(ba.lines.size(), false);
+    for (const auto& o : ba.line_observations) {
+      if (anchored[o.line]) continue;
+      params.line_anchors[o.line] = ba.poses[o.pose].cam_from_world.Center();
+      anchored[o.line] = true;
+    }
   }
   for (size_t i = 0; i < ba.lines.size(); ++i) {
     PluckerLine local = ba.lines[i];

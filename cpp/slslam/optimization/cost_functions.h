@@ -66,9 +66,8 @@ class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> 
 // A line's pull towards a reference value of its parameters, in the line manifold's tangent:
 // residual 4 = weight * Minus(line, reference) [weight / rad]. Bundle adjustment gives every line
 // one towards its value at the start of each pass when BundleAdjustmentOptions::line_prior_weight
-// > 0:
-// it bounds the Gauss-Newton step along directions the observations leave (nearly) free, which
-// otherwise made most trust-region steps fail (benchmarks/README.md, 2026-11-27 f).
+// > 0: it bounds the Gauss-Newton step along directions the observations leave (nearly) free,
+// which otherwise made most trust-region steps fail (benchmarks/README.md, 2026-11-27 f).
 class LinePriorCost final : public ceres::SizedCostFunction<4, kLineSize> {
  public:
   LinePriorCost(const double* reference, double weight);
