@@ -150,6 +150,9 @@ class TrackerSession {
     out["lines_triangulated"] = s.lines_triangulated;
     out["local_mapping_ms"] = s.total_ba_ms;
     out["local_ba_interrupted"] = s.ba_interrupted;
+    out["local_ba_solve_ms"] = s.ba_solve_ms;
+    out["local_ba_iterations"] = s.ba_iterations;
+    out["local_ba_rejected_steps"] = s.ba_rejected_steps;
     out["inertial_frames"] = t.inertial_frames;
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;

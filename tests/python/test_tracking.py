@@ -54,7 +54,13 @@ def test_run_on_the_simulated_loop_tracks_every_frame_and_writes_every_file(sim_
     # Measured 1.3 cm over the 3 m (ORB + lines); a broken pose chain is metres off.
     assert m["ape"]["rmse"] < 0.03
     assert m["keyframes"] >= 2 and m["map_points"] > 500 and m["map_lines"] > 20
-    assert m["local_mapping"]["keyframes_processed"] >= 2
+    lm = m["local_mapping"]
+    assert lm["keyframes_processed"] >= 2
+    # The local BAs' counters: steps within the caps (5 + 10 a keyframe), rejected ones among
+    # them, the solves' time within local mapping's.
+    assert 0 < lm["local_ba_iterations"] <= 15 * lm["keyframes_processed"]
+    assert 0 <= lm["local_ba_rejected_steps"] < lm["local_ba_iterations"]
+    assert 0.0 < lm["local_ba_solve_ms"] < lm["local_mapping_ms"]
     # Every input frame is in the TUM file, time-ordered, with finite poses.
     traj = np.loadtxt(tmp_path / "trajectory.tum")
     assert traj.shape == (80, 8) and np.all(np.isfinite(traj)) and np.all(np.diff(traj[:, 0]) > 0)

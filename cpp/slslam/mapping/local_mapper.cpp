@@ -183,8 +183,9 @@ void LocalMapper::Solve(Window* window) {
   interrupt_ba_.store(false);
   window->report = SolveBundleAdjustment(rig_, &window->ba.problem(), options_.ba, nullptr,
                                          overlap_ ? nullptr : &interrupt_ba_);
-  window->ms +=
+  window->solve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  window->ms += window->solve_ms;
 }
 
 void LocalMapper::Finish(Window* window) {
@@ -267,6 +268,9 @@ void LocalMapper::Finish(Window* window) {
   stats_.lines_triangulated += triangulated.lines;
   stats_.total_ba_ms += ms;
   stats_.ba_interrupted += report.interrupted ? 1 : 0;
+  stats_.ba_solve_ms += window->solve_ms;
+  stats_.ba_iterations += report.iterations;
+  stats_.ba_rejected_steps += report.rejected_steps;
 }
 
 }  // namespace slslam

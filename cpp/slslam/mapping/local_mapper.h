@@ -50,6 +50,9 @@ struct LocalMappingStats {
   int lines_triangulated = 0;
   double total_ba_ms = 0.0;        ///< local mapping's time, all steps [ms]
   int ba_interrupted = 0;          ///< local BAs stopped early by InterruptBA (threaded mode)
+  double ba_solve_ms = 0.0;        ///< of total_ba_ms, the local BAs' solves (Ceres) [ms]
+  int ba_iterations = 0;           ///< the local BAs' trust-region steps, both passes [-]
+  int ba_rejected_steps = 0;       ///< of which rejected (BundleAdjustmentReport) [-]
 };
 
 class LocalMapper {
@@ -95,7 +98,8 @@ class LocalMapper {
     MapBundleAdjustment ba;
     TriangulationStats triangulated;
     BundleAdjustmentReport report;
-    double ms = 0.0;  ///< the steps' own time so far [ms]
+    double ms = 0.0;        ///< the steps' own time so far [ms]
+    double solve_ms = 0.0;  ///< of which the solve [ms]
     std::exception_ptr error;
     std::thread solver;
   };

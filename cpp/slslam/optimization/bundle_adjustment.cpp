@@ -233,6 +233,9 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       report.interrupted = true;
       return report;
     }
+    // (iterations[0] is the start, not a step)
+    report.iterations += std::max(static_cast<int>(summary.iterations.size()) - 1, 0);
+    report.rejected_steps += summary.num_unsuccessful_steps;
     if (pass == 0) report.initial_cost = summary.initial_cost;
     report.final_cost = summary.final_cost;
     report.solved = summary.IsSolutionUsable();

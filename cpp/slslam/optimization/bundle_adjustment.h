@@ -80,6 +80,8 @@ struct BundleAdjustmentReport {
   double final_cost = 0.0;
   bool solved = false;
   bool interrupted = false;  ///< `interrupt` stopped it early (the estimate is still usable)
+  int iterations = 0;        ///< trust-region steps tried, both passes (Ceres' iterations) [-]
+  int rejected_steps = 0;    ///< of which rejected: the cost rose, the step was undone [-]
 };
 
 // Optimises the problem in place (poses that are not fixed, every point and line observed at

@@ -209,6 +209,11 @@ class MapStats:
     lines_culled: int = 0
     local_mapping_ms: float = 0.0  #: local mapping in all (triangulation, local BA, culling)
     local_ba_interrupted: int = 0  #: local BAs a newer keyframe stopped early (threaded mapping)
+    local_ba_solve_ms: float = 0.0  #: of local_mapping_ms, the local BAs' solves (Ceres)
+    #: the local BAs' trust-region steps (both passes; 5 + 10 at most each by default) and, of
+    #: them, those rejected because the cost rose (a rejected step costs a linear solve too)
+    local_ba_iterations: int = 0
+    local_ba_rejected_steps: int = 0
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0

@@ -796,6 +796,11 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
     const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &solved, options);
     ASSERT_TRUE(report.solved);
     EXPECT_LT(report.final_cost, 1e-6 * report.initial_cost);
+    // The steps of both passes are counted, at most the caps, the rejected ones among them.
+    EXPECT_GT(report.iterations, 0);
+    EXPECT_LE(report.iterations, options.robust_iterations + options.refine_iterations);
+    EXPECT_GE(report.rejected_steps, 0);
+    EXPECT_LT(report.rejected_steps, report.iterations);
     for (size_t f = 0; f < true_R.size(); ++f) {
       const Eigen::Vector3d c = solved.poses[f].cam_from_world.Center();
       const Eigen::Vector3d c_true = -true_R[f].transpose() * true_t[f];
