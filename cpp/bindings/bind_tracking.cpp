@@ -275,6 +275,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("line_weight", &BundleAdjustmentOptions::line_weight)
       .def_readwrite("line_prior_weight", &BundleAdjustmentOptions::line_prior_weight)
       .def_readwrite("dogleg_with_lines", &BundleAdjustmentOptions::dogleg_with_lines)
+      .def_readwrite("line_min_information_per_rad2",
+                     &BundleAdjustmentOptions::line_min_information_per_rad2)
       .def("check", &BundleAdjustmentOptions::Check);
   py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
       .def(py::init<>())

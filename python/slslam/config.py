@@ -158,6 +158,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
     "local_ba_line_prior_weight": ("mapping.ba.line_prior_weight",),
     "local_ba_dogleg": ("mapping.ba.dogleg_with_lines",),
+    "local_ba_line_min_information_per_rad2": ("mapping.ba.line_min_information_per_rad2",),
 }
 LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
     name: (f"loop_closing.{name}",)
@@ -412,6 +413,12 @@ class TrackingConfig:
     # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
     # no linear solve); needs local_ba_line_prior_weight > 0
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
+    # local BA: each line moves only in the directions of its tangent whose information (its
+    # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
+    # (0: free in all four; benchmarks/README.md, 2026-11-27 g)
+    local_ba_line_min_information_per_rad2: float = _tracking(
+        "local_ba_line_min_information_per_rad2", "[0, 1e12]"
+    )
     # stereo depths beyond this many baselines are unused
     max_depth_baselines: float = _tracking("max_depth_baselines", "[1, 1e6]")
     # stereo points without right-image keypoints: the point front end runs on the left image

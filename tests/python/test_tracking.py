@@ -536,6 +536,26 @@ def test_pulled_lines_with_the_dogleg_reach_local_ba(sim_loop):
     assert ate["on"] < 0.03, ate
 
 
+def test_lines_held_in_their_weak_directions_reach_local_ba(sim_loop):
+    """tracking.local_ba_line_min_information_per_rad2: the key reaches the core's local BA
+    (the poses change against 0, which frees every line in all four directions) and the
+    trajectory stays accurate on these frames."""
+    sequence = EurocSequence(sim_loop)
+    base = config("orb", lines=True)
+    runs = {
+        name: dataclasses.replace(
+            base,
+            tracking=dataclasses.replace(
+                base.tracking, local_ba_line_min_information_per_rad2=value
+            ),
+        )
+        for name, value in (("free", 0.0), ("held", 100.0))
+    }
+    poses, ate = _positions_and_ate(sequence, runs)
+    assert np.abs(poses["held"] - poses["free"]).max() > 1e-5, "the option changed nothing"
+    assert ate["held"] < 0.03, ate
+
+
 def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     """tracking.right_lines_on_keyframes: the right image's lines are extracted only for frames
     that become keyframes (or start a map), the only ones whose stereo lines are used, so the

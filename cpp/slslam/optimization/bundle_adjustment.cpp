@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <ceres/iteration_callback.h>
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
@@ -80,6 +81,44 @@ double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservati
   return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);
 }
 
+// Per line, the tangent directions its observations determine (outliers left out, the poses
+// held): the eigenvectors of its information sum_i J_i^T J_i (J_i: the line tangent Jacobian of
+// observation i's residual, in sigmas) whose eigenvalue reaches `min_information`. All four:
+// a 4 x 4 basis (the line is free as with LineManifold); none: 4 x 0 (the line is held).
+std::vector<LineSubspaceManifold::Basis> DeterminedLineDirections(
+    const StereoRig& rig, const Parameters& p, const BaProblem& ba,
+    const std::vector<bool>& line_outlier, const BundleAdjustmentOptions& options) {
+  std::vector<Eigen::Matrix4d> information(ba.lines.size(), Eigen::Matrix4d::Zero());
+  double residual[3];
+  std::array<double, 3 * kPoseSize> d_pose;
+  std::array<double, 3 * kLineSize> d_line;
+  double* jacobians[2] = {d_pose.data(), d_line.data()};
+  for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+    if (line_outlier[i]) continue;
+    const BaLineObservation& o = ba.line_observations[i];
+    const LineCost cost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px,
+                        p.line_anchors[o.line]);
+    const double* parameters[2] = {p.poses[o.pose].data(), p.lines[o.line].data()};
+    if (!cost.Evaluate(parameters, residual, jacobians)) continue;
+    // (the tangent Jacobian sits in the first four of the five ambient columns)
+    const Eigen::Matrix<double, 3, kLineTangentSize> j =
+        Eigen::Map<const Eigen::Matrix<double, 3, kLineSize, Eigen::RowMajor>>(d_line.data())
+            .leftCols<kLineTangentSize>();
+    information[o.line] += j.transpose() * j;
+  }
+  std::vector<LineSubspaceManifold::Basis> determined(ba.lines.size());
+  for (size_t l = 0; l < ba.lines.size(); ++l) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eigen(information[l]);
+    int weak = 0;  // eigenvalues ascend
+    while (weak < kLineTangentSize &&
+           !(eigen.eigenvalues()(weak) >= options.line_min_information_per_rad2)) {
+      ++weak;
+    }
+    determined[l] = eigen.eigenvectors().rightCols(kLineTangentSize - weak);
+  }
+  return determined;
+}
+
 }  // namespace
 
 void BundleAdjustmentOptions::Check() const {
@@ -91,6 +130,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
   CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
   CheckInRange("ba.line_prior_weight", line_prior_weight, 0.0, 1e6);
+  CheckInRange("ba.line_min_information_per_rad2", line_min_information_per_rad2, 0.0, 1e12);
 }
 
 BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
@@ -154,6 +194,11 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     ceres::Problem solver_problem(problem_options);
     std::vector<bool> pose_used(ba.poses.size(), false);
     std::vector<bool> line_used(ba.lines.size(), false);
+    // Each line free in the directions its observations determine, held in the others.
+    std::vector<LineSubspaceManifold::Basis> determined;
+    if (options.line_min_information_per_rad2 > 0.0) {
+      determined = DeterminedLineDirections(rig, params, ba, report.line_outlier, options);
+    }
     int blocks = 0;
     for (size_t i = 0; i < ba.point_observations.size(); ++i) {
       if (report.point_outlier[i]) continue;
@@ -185,7 +230,17 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
                                       params.lines[o.line].data());
       if (!line_used[o.line]) {
-        solver_problem.SetManifold(params.lines[o.line].data(), new LineManifold);
+        double* line = params.lines[o.line].data();
+        const int free = determined.empty() ? kLineTangentSize
+                                            : static_cast<int>(determined[o.line].cols());
+        if (free == kLineTangentSize) {
+          solver_problem.SetManifold(line, new LineManifold);
+        } else if (free == 0) {
+          solver_problem.SetManifold(line, new LineManifold);
+          solver_problem.SetParameterBlockConstant(line);
+        } else {
+          solver_problem.SetManifold(line, new LineSubspaceManifold(determined[o.line]));
+        }
         if (options.line_prior_weight > 0.0) {
           solver_problem.AddResidualBlock(
               new LinePriorCost(params.lines[o.line].data(), options.line_prior_weight), nullptr,

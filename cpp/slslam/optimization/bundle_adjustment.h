@@ -69,6 +69,15 @@ struct BundleAdjustmentOptions {
   /// it with line_prior_weight > 0: without the pull its Gauss-Newton steps fail (above). Problems
   /// of points alone keep Levenberg-Marquardt [-]
   bool dogleg_with_lines = false;
+  /// Each line moves only in the directions of its orthonormal tangent that its observations
+  /// determine: the eigenvectors of its information (the sum of J^T J over its observations'
+  /// residuals in sigmas, the poses held, recomputed at the start of each pass) with an
+  /// eigenvalue of at least this; it is held in the others (LineSubspaceManifold) [1 / rad^2].
+  /// Nearly every line of a local window has a direction its observers barely see (cameras
+  /// driven along a roadway edge): the smallest eigenvalue was below 1 for 45 % of them and
+  /// below 10 for 97 %, and their free steps there made Levenberg-Marquardt reject 60 % of its
+  /// steps (benchmarks/README.md, 2026-11-27 g). 0: every line free in all four directions.
+  double line_min_information_per_rad2 = 0.0;
 
   void Check() const;
 };

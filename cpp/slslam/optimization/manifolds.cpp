@@ -1,5 +1,6 @@
 #include "slslam/optimization/manifolds.h"
 
+#include "slslam/core/check.h"
 #include "slslam/geometry/rotation.h"
 
 namespace slslam {
@@ -103,6 +104,41 @@ bool LineManifold::Minus(const double* y, const double* x, double* y_minus_x) co
 
 bool LineManifold::MinusJacobian(const double*, double* jacobian) const {
   LoweredIdentity(kLineSize, kLineTangentSize, jacobian);
+  return true;
+}
+
+LineSubspaceManifold::LineSubspaceManifold(const Basis& basis) : basis_(basis) {
+  Require(basis_.cols() >= 1 && basis_.cols() <= kLineTangentSize,
+          "a line subspace needs 1 to 4 directions");
+}
+
+bool LineSubspaceManifold::Plus(const double* x, const double* delta,
+                                double* x_plus_delta) const {
+  const Eigen::Vector4d d = basis_ * Eigen::Map<const Eigen::VectorXd>(delta, basis_.cols());
+  LineToParameters(ParametersToLine(x).Plus(d), x_plus_delta);
+  return true;
+}
+
+bool LineSubspaceManifold::PlusJacobian(const double*, double* jacobian) const {
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian, kLineSize, basis_.cols());
+  j.setZero();
+  j.topRows(kLineTangentSize) = basis_;
+  return true;
+}
+
+bool LineSubspaceManifold::Minus(const double* y, const double* x, double* y_minus_x) const {
+  Eigen::Vector4d d;
+  LineManifold().Minus(y, x, d.data());
+  Eigen::Map<Eigen::VectorXd>(y_minus_x, basis_.cols()) = basis_.transpose() * d;
+  return true;
+}
+
+bool LineSubspaceManifold::MinusJacobian(const double*, double* jacobian) const {
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian, basis_.cols(), kLineSize);
+  j.setZero();
+  j.leftCols(kLineTangentSize) = basis_.transpose();
   return true;
 }
 

@@ -51,4 +51,25 @@ class LineManifold final : public ceres::Manifold {
   bool MinusJacobian(const double* x, double* jacobian) const override;
 };
 
+// A line that moves only within a subspace of LineManifold's tangent: Plus(x, delta) =
+// LineManifold::Plus(x, B delta) for the 4 x m orthonormal `basis` B (1 <= m <= 4), and
+// Minus(y, x) = B^T LineManifold::Minus(y, x). PlusJacobian is [B; 0] (the costs' Jacobians are
+// tangent Jacobians in the first four ambient columns, as for LineManifold). Bundle adjustment
+// holds a line's directions that its observations leave undetermined with it
+// (BundleAdjustmentOptions::line_min_information_per_rad2).
+class LineSubspaceManifold final : public ceres::Manifold {
+ public:
+  using Basis = Eigen::Matrix<double, kLineTangentSize, Eigen::Dynamic>;
+  explicit LineSubspaceManifold(const Basis& basis);
+  int AmbientSize() const override { return kLineSize; }
+  int TangentSize() const override { return static_cast<int>(basis_.cols()); }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override;
+  bool PlusJacobian(const double* x, double* jacobian) const override;
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override;
+  bool MinusJacobian(const double* x, double* jacobian) const override;
+
+ private:
+  Basis basis_;
+};
+
 }  // namespace slslam

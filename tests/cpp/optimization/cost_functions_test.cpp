@@ -173,6 +173,39 @@ TEST(Manifolds, MinusInvertsPlus) {
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(dl_back[i], dl[i], 1e-12);
 }
 
+TEST(Manifolds, LineSubspaceMovesWithinItsSpan) {
+  std::array<double, kLineSize> l;
+  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(
+                       Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(-1, 0, 5))),
+                   l.data());
+  // Two orthonormal tangent directions.
+  LineSubspaceManifold::Basis basis(4, 2);
+  basis.col(0) = Eigen::Vector4d(1, 1, 0, 0).normalized();
+  basis.col(1) = Eigen::Vector4d(0, 0, 1, -1).normalized();
+  LineSubspaceManifold subspace(basis);
+  ASSERT_EQ(subspace.TangentSize(), 2);
+  const std::array<double, 2> d{0.1, -0.05};
+  std::array<double, kLineSize> moved, full;
+  subspace.Plus(l.data(), d.data(), moved.data());
+  // The same line as LineManifold's step B d.
+  const Eigen::Vector4d step = basis * Eigen::Vector2d(d[0], d[1]);
+  LineManifold().Plus(l.data(), step.data(), full.data());
+  for (int i = 0; i < kLineSize; ++i) EXPECT_NEAR(moved[i], full[i], 1e-12);
+  std::array<double, 2> back;
+  subspace.Minus(moved.data(), l.data(), back.data());
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(back[i], d[i], 1e-12);
+
+  // Ceres sees a line cost through it as the cost's tangent Jacobian times B.
+  const StereoRig rig = EurocLikeRig();
+  LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
+                1.0);
+  const PluckerLine world =
+      PluckerLine::FromPoints(Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5));
+  PoseManifold pose_manifold;
+  CheckCost(cost, {PoseParams(), LineParams(world)}, {&pose_manifold, &subspace});
+  EXPECT_THROW(LineSubspaceManifold(LineSubspaceManifold::Basis(4, 0)), std::invalid_argument);
+}
+
 TEST(CostFunctions, BehindCameraIsNotEvaluated) {
   const StereoRig rig = EurocLikeRig();
   PointCost cost(rig.camera, Eigen::Vector2d(300.0, 200.0), 1.0);

@@ -257,7 +257,10 @@ TEST(OptionsCheck, OptimisationAndMappingOptions) {
                     FIELD(chi2_stereo, "ba.chi2_stereo", 0, 1e6, "(]"),
                     FIELD(chi2_line, "ba.chi2_line", 0, 1e6, "(]"),
                     FIELD(line_angle_weight, "ba.line_angle_weight", 0, 1e6, "[]"),
-                    FIELD(line_weight, "ba.line_weight", 0, 1e6, "[]")},
+                    FIELD(line_weight, "ba.line_weight", 0, 1e6, "[]"),
+                    FIELD(line_prior_weight, "ba.line_prior_weight", 0, 1e6, "[]"),
+                    FIELD(line_min_information_per_rad2, "ba.line_min_information_per_rad2", 0,
+                          1e12, "[]")},
                    CheckOnly<Opts>);
     BundleAdjustmentOptions bad;
     bad.line_weight = kInf;
