@@ -415,8 +415,9 @@ class TrackingConfig:
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
-    # (0: free in all four; 1, the default: less drift in the dark over five simulator seeds,
-    # benchmarks/README.md, 2026-11-27 g)
+    # (0: free in all four; 1: less drift in the dark with the IMU over five simulator seeds,
+    # but camera-only recovery after a blackout came out worse, so off; benchmarks/README.md,
+    # 2026-11-27 g)
     local_ba_line_min_information_per_rad2: float = _tracking(
         "local_ba_line_min_information_per_rad2", "[0, 1e12]"
     )

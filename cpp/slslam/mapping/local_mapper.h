@@ -25,18 +25,6 @@
 
 namespace slslam {
 
-// Local BA's settings: BundleAdjustmentOptions' own, with each line held in the tangent directions
-// its observations leave undetermined (information below 1 / rad^2). Over five simulator seeds of
-// the four 600-frame sequences (ORB + lines) this drifted 6 % less on the dark dusty loop (in all
-// five), 25 % less on the hard junction (worst seed 0.116 against 0.204 m), 4 % less on the spin
-// and 6 % more on the bright loop (one seed of five), and the refine pass rejects far fewer steps
-// (benchmarks/README.md, 2026-11-27 g). Global BA after a loop keeps every line free.
-inline BundleAdjustmentOptions LocalBundleAdjustmentDefaults() {
-  BundleAdjustmentOptions options;
-  options.line_min_information_per_rad2 = 1.0;
-  return options;
-}
-
 struct LocalMapperOptions {
   int local_keyframes = 10;       ///< covisible keyframes optimised with the new one [-]
   int max_fixed_keyframes = 10;   ///< fixed keyframes that anchor the local window [-]
@@ -48,7 +36,7 @@ struct LocalMapperOptions {
   TriangulationOptions triangulation;
   double point_sigma_px = 1.0;    ///< [px]
   double line_sigma_px = 3.0;     ///< [px]
-  BundleAdjustmentOptions ba = LocalBundleAdjustmentDefaults();
+  BundleAdjustmentOptions ba;
 
   void Check() const;  ///< mapping_options_check.cpp
 };
