@@ -233,18 +233,15 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
         double* line = params.lines[o.line].data();
         const int free = determined.empty() ? kLineTangentSize
                                             : static_cast<int>(determined[o.line].cols());
-        if (free == kLineTangentSize) {
-          solver_problem.SetManifold(line, new LineManifold);
-        } else if (free == 0) {
-          solver_problem.SetManifold(line, new LineManifold);
-          solver_problem.SetParameterBlockConstant(line);
-        } else {
+        if (free > 0 && free < kLineTangentSize) {
           solver_problem.SetManifold(line, new LineSubspaceManifold(determined[o.line]));
+        } else {
+          solver_problem.SetManifold(line, new LineManifold);
         }
+        if (free == 0) solver_problem.SetParameterBlockConstant(line);
         if (options.line_prior_weight > 0.0) {
-          solver_problem.AddResidualBlock(
-              new LinePriorCost(params.lines[o.line].data(), options.line_prior_weight), nullptr,
-              params.lines[o.line].data());
+          solver_problem.AddResidualBlock(new LinePriorCost(line, options.line_prior_weight),
+                                          nullptr, line);
         }
       }
       line_used[o.line] = true;

@@ -7,19 +7,34 @@ namespace slslam {
 
 namespace {
 
-// [I; 0] (ambient x tangent, row-major) and its transpose [I, 0] (tangent x ambient).
-void LiftedIdentity(int ambient, int tangent, double* jacobian) {
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
-      jacobian, ambient, tangent);
+using RowMajorMap =
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+
+// [B; 0] (ambient x B's columns, row-major) and its transpose [B^T, 0] (B's columns x ambient):
+// B spans directions of the tangent, whose coordinates are the first B.rows() ambient columns of
+// the costs' Jacobians.
+// (templates, so the identity below stays an expression: no allocation in Ceres' Jacobian path)
+template <class Basis>
+void Lifted(const Eigen::MatrixBase<Basis>& basis, int ambient, double* jacobian) {
+  RowMajorMap j(jacobian, ambient, basis.cols());
   j.setZero();
-  j.topRows(tangent).setIdentity();
+  j.topRows(basis.rows()) = basis;
+}
+
+template <class Basis>
+void Lowered(const Eigen::MatrixBase<Basis>& basis, int ambient, double* jacobian) {
+  RowMajorMap j(jacobian, basis.cols(), ambient);
+  j.setZero();
+  j.leftCols(basis.rows()) = basis.transpose();
+}
+
+// [I; 0] (ambient x tangent) and its transpose [I, 0] (tangent x ambient).
+void LiftedIdentity(int ambient, int tangent, double* jacobian) {
+  Lifted(Eigen::MatrixXd::Identity(tangent, tangent), ambient, jacobian);
 }
 
 void LoweredIdentity(int ambient, int tangent, double* jacobian) {
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
-      jacobian, tangent, ambient);
-  j.setZero();
-  j.leftCols(tangent).setIdentity();
+  Lowered(Eigen::MatrixXd::Identity(tangent, tangent), ambient, jacobian);
 }
 
 }  // namespace
@@ -120,10 +135,7 @@ bool LineSubspaceManifold::Plus(const double* x, const double* delta,
 }
 
 bool LineSubspaceManifold::PlusJacobian(const double*, double* jacobian) const {
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
-      jacobian, kLineSize, basis_.cols());
-  j.setZero();
-  j.topRows(kLineTangentSize) = basis_;
+  Lifted(basis_, kLineSize, jacobian);
   return true;
 }
 
@@ -135,10 +147,7 @@ bool LineSubspaceManifold::Minus(const double* y, const double* x, double* y_min
 }
 
 bool LineSubspaceManifold::MinusJacobian(const double*, double* jacobian) const {
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
-      jacobian, basis_.cols(), kLineSize);
-  j.setZero();
-  j.leftCols(kLineTangentSize) = basis_.transpose();
+  Lowered(basis_, kLineSize, jacobian);
   return true;
 }
 
