@@ -60,7 +60,10 @@ class TrackerSession {
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
       : tracker_(WithLineDescriptor(options, lines.descriptor)),
         frontend_({options.rig, options.stereo, lines, options.use_lines,
-                   options.right_lines_on_keyframes, options.denoise_above_noise}) {}
+                   options.right_lines_on_keyframes,
+                   options.use_lines && options.right_lines_on_keyframes &&
+                       options.lines_on_demand,
+                   options.denoise_above_noise}) {}
 
   FrameOutput Track(int index, double timestamp, const py::array& left_image,
                     const py::array& right_image, const PixelArray& left_uv,
@@ -76,15 +79,24 @@ class TrackerSession {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
       cv::Mat left_used;  // as stereo matching saw it, for the tracker's keypoint refinement
+      // lines_on_demand: lines extracted ahead are the completer's to hand over if the tracker
+      // asks (the same lines it would extract: only the time differs).
+      const bool on_demand = frontend_.options().left_lines_on_demand;
+      const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
       auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out,
-                                   left_lines ? &left_lines->features : nullptr, &left_used);
+                                   on_demand ? nullptr : ahead, &left_used);
       if (left_lines) out.line_extraction_ms = left_lines->extraction_ms;
-      out.lines = frame->NumLines();
       // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
         frontend_.CompleteStereoLines(right, f);
       };
-      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete, left_used);
+      // (lines_on_demand: the left image's lines when the tracker needs them)
+      const Tracker::StereoLineCompleter complete_left = [&](StereoFrame* f) {
+        frontend_.CompleteLeftLines(left, f, ahead);
+      };
+      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete, left_used, complete_left);
+      out.lines = out.frame_lines;
+      if (!ahead) out.line_extraction_ms += out.left_lines_ms;
     }
     return out;
   }
@@ -157,6 +169,7 @@ class TrackerSession {
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;
     out["maps_started"] = t.maps_started;
+    out["line_frames"] = t.line_frames;
     out["loop_keyframes_checked"] = loops.keyframes_checked;
     out["loop_candidates_verified"] = loops.candidates_verified;
     out["loops_detected"] = loops.loops_detected;
@@ -377,6 +390,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("mapping", &TrackerOptions::mapping)
       .def_readwrite("use_lines", &TrackerOptions::use_lines)
       .def_readwrite("right_lines_on_keyframes", &TrackerOptions::right_lines_on_keyframes)
+      .def_readwrite("lines_on_demand", &TrackerOptions::lines_on_demand)
+      .def_readwrite("lines_on_demand_inliers", &TrackerOptions::lines_on_demand_inliers)
       .def_readwrite("denoise_above_noise", &TrackerOptions::denoise_above_noise)
       .def_readwrite("sequential", &TrackerOptions::sequential)
       .def_readwrite("mapping_brake", &TrackerOptions::mapping_brake)

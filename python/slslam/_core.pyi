@@ -1226,6 +1226,7 @@ class TrackerOptions:
     dynamic: DynamicCellOptions
     dynamic_cells: bool
     imu: InertialBridgeOptions
+    lines_on_demand: bool
     localise_only: bool
     loop_closing: LoopClosingOptions
     mapping: LocalMapperOptions
@@ -1315,6 +1316,12 @@ class TrackerOptions:
         ...
     @line_sigma_px.setter
     def line_sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lines_on_demand_inliers(self) -> int:
+        ...
+    @lines_on_demand_inliers.setter
+    def lines_on_demand_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
     def lost_search_scale(self) -> float:

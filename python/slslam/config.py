@@ -152,6 +152,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "row_search_window_px": ("stereo.row_search_window",),
     "subpixel_window_px": ("stereo.subpixel_window",),
     "right_lines_on_keyframes": ("right_lines_on_keyframes",),
+    "lines_on_demand": ("lines_on_demand",),
+    "lines_on_demand_inliers": ("lines_on_demand_inliers",),
     "denoise_above_noise": ("denoise_above_noise",),
     "local_keyframes": ("mapping.local_keyframes",),
     "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
@@ -436,6 +438,14 @@ class TrackingConfig:
     # only ones whose stereo lines are used (tracking matches the left image's lines to the map);
     # false: both images every frame
     right_lines_on_keyframes: bool = _tracking("right_lines_on_keyframes")
+    # the left image's lines only for the frames that use them: a frame after one tracked with
+    # fewer than lines_on_demand_inliers point inliers, a frame its points alone do not track,
+    # a keyframe (its lines matched from the pose its points gave), a new map and every frame
+    # while lost; the frames between keyframes of a well-textured stretch skip line detection
+    # and LBD. Applies with right_lines_on_keyframes; false: every frame's lines
+    lines_on_demand: bool = _tracking("lines_on_demand")
+    # point inliers below which the next frame is tracked with its lines (lines_on_demand) [-]
+    lines_on_demand_inliers: int = _tracking("lines_on_demand_inliers", "[0, 1000000]")
     # images noisier than this (Immerkaer's estimate, gray levels) reach line detection, line
     # descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px, as ORB's detection
     # image (0: never)

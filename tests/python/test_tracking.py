@@ -563,6 +563,10 @@ def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     sequence = EurocSequence(sim_loop)
     lines = config("orb", lines=True)
     assert lines.tracking.right_lines_on_keyframes  # the default
+    # (every frame's left lines, so that the frames' lines are those of both images every frame)
+    lines = dataclasses.replace(
+        lines, tracking=dataclasses.replace(lines.tracking, lines_on_demand=False)
+    )
     both = dataclasses.replace(
         lines, tracking=dataclasses.replace(lines.tracking, right_lines_on_keyframes=False)
     )
@@ -576,6 +580,63 @@ def test_right_lines_on_keyframes_only_change_nothing_but_the_work(sim_loop):
     assert np.array_equal(map_a.lines, map_b.lines) and len(map_a.lines) > 20
     assert [r.counts.keyframe for r in results_a] == [r.counts.keyframe for r in results_b]
     assert sum(r.counts.keyframe for r in results_b) < 0.8 * len(results_b)  # work was skipped
+
+
+def test_lines_on_demand_skip_the_lines_of_frames_tracked_well_on_their_points(sim_loop):
+    """tracking.lines_on_demand: the left image's lines only for the frames that use them.
+
+    With a bound no frame reaches, every frame asks for its lines before it is tracked: the
+    poses and the map are those of lines on every frame, whether the lines were extracted ahead
+    beside the point front end or by the core when it asked. With the default bound the bright
+    loop's frames between keyframes are tracked on their points alone, every keyframe still has
+    its lines (matched into the local map from the pose its points gave), the trajectory stays
+    accurate, and the pipeline (whose guesses of which frames need lines come from older
+    results) gives the poses of the sequential run."""
+    sequence = EurocSequence(sim_loop)
+    frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
+    demand = config("orb", lines=True)
+    assert demand.tracking.lines_on_demand  # the default
+
+    def with_tracking(**changes):
+        return dataclasses.replace(demand, tracking=dataclasses.replace(demand.tracking, **changes))
+
+    base = with_tracking(lines_on_demand=False)  # every frame's lines
+    always = with_tracking(lines_on_demand_inliers=1_000_000)
+    runs = {}
+    for name, cfg, ahead in (
+        ("every", base, True),
+        ("always", always, True),
+        ("always, by the core", always, False),
+        ("demand", demand, True),
+    ):
+        with Tracker(sequence.camera, cfg) as tracker:
+            if not ahead:
+                tracker._lines_side.shutdown()
+                tracker._lines_side = None
+            results = [tracker.track(*f) for f in frames]
+            runs[name] = (tracker.trajectory()[1], tracker.map(), results)
+    poses_every, map_every, results_every = runs["every"]
+    assert map_every.stats.line_frames == len(frames)
+    for name in ("always", "always, by the core"):
+        poses, m, results = runs[name]
+        assert np.array_equal(poses, poses_every), name
+        assert np.array_equal(m.lines, map_every.lines), name
+        assert [r.counts.lines for r in results] == [r.counts.lines for r in results_every]
+
+    poses, m, results = runs["demand"]
+    assert all(r.tracked for r in results)
+    skipped = sum(r.counts.lines == 0 for r in results)
+    assert m.stats.line_frames == len(frames) - skipped
+    assert skipped > 0.2 * len(frames), skipped  # the work saved
+    keyframes = [r for r in results if r.counts.keyframe]
+    assert len(keyframes) > 5 and all(r.counts.lines > 20 for r in keyframes)
+    assert len(m.lines) > 20
+    with Tracker(sequence.camera, demand) as tracker:
+        streamed = list(tracker.track_stream(frames))
+    assert np.array_equal(np.array([r.T_world_cam for r in streamed]), poses)
+    _, ate = _positions_and_ate(sequence, {"every": base, "demand": demand})
+    # Measured 0.0042 m (every frame) and 0.0037 m (on demand) on these 80 frames.
+    assert ate["demand"] < 0.01, ate
 
 
 def noisy_frames(sequence: EurocSequence, count: int, seed: int) -> list:
@@ -599,6 +660,10 @@ def test_left_lines_extracted_beside_the_front_end_are_the_ones_the_core_would_e
     sequence = EurocSequence(sim_loop)
     frames = noisy_frames(sequence, 40, seed=5)
     cfg = config("orb", lines=True)
+    # every frame's lines (lines_on_demand: see the test above)
+    cfg = dataclasses.replace(
+        cfg, tracking=dataclasses.replace(cfg.tracking, lines_on_demand=False)
+    )
     runs = []
     for ahead in (True, False):
         with Tracker(sequence.camera, cfg) as tracker:

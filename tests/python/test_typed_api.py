@@ -83,7 +83,9 @@ def test_results_are_typed_not_dicts(sequence):
     assert t.line_extraction > 0 and t.inference > 0
     assert t.total >= max(t.inference, t.line_extraction) + t.stereo_matching + t.matching
     c = last.counts
-    assert c.keypoints > 100 and c.inlier_points > 50 and c.map == 0 and c.lines > 0
+    assert c.keypoints > 100 and c.inlier_points > 50 and c.map == 0 and c.lines >= 0
+    # (tracking.lines_on_demand: keyframes and thinly tracked frames take lines, others none)
+    assert any(r.counts.lines > 0 for r in results) and results[0].counts.lines > 0
     assert c.inlier_points <= c.matched_points
     assert results[0].counts.keyframe == 1  # the first frame starts the map
     assert list(c.as_dict()) == [f.name for f in dataclasses.fields(FrameCounts)]

@@ -30,6 +30,9 @@ struct StereoFrame {
   /// right_lines_on_keyframes): line_has_depth is all false until the tracker completes the
   /// frame before it becomes a keyframe or starts a map
   bool stereo_lines_pending = false;
+  /// the left image's lines are not extracted yet (TrackerOptions::lines_on_demand): `lines` is
+  /// empty until the tracker asks for them (a weak frame, a keyframe, a new map, a lost tracker)
+  bool left_lines_pending = false;
 
   int NumKeypoints() const { return keypoints.size(); }
   int NumLines() const { return static_cast<int>(lines.size()); }

@@ -22,6 +22,9 @@ void StereoFrontendOptions::Check() const {
   rig.Check();
   stereo.Check();
   lines.Check();
+  Require(!left_lines_on_demand || (use_lines && right_lines_on_keyframes),
+          "tracking.lines_on_demand needs tracking.use_lines and "
+          "tracking.right_lines_on_keyframes");
 }
 
 StereoFrontend::StereoFrontend(const StereoFrontendOptions& options) : options_(options) {
@@ -56,7 +59,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
         std::async(std::launch::async, [&] { return ExtractLines(right, options_.lines); });
     left_lines = ExtractLines(left, options_.lines);
     right_lines = right_future.get();
-  } else if (options_.use_lines) {
+  } else if (options_.use_lines && !options_.left_lines_on_demand) {
     left_lines = ExtractLines(left, options_.lines);
   }
   const double line_ms = Ms(start);
@@ -65,6 +68,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
       index, timestamp, left_keypoints, right_keypoints, options_.use_lines ? &left_lines : nullptr,
       right_now ? &right_lines : nullptr, options_.rig, options_.stereo));
   frame->stereo_lines_pending = options_.use_lines && !right_now;
+  frame->left_lines_pending = options_.left_lines_on_demand && given_left_lines == nullptr;
   SearchAndRefineStereoPoints(left, right, options_.rig, options_.stereo, frame.get());
   if (timing != nullptr) {
     timing->line_extraction_ms = line_ms;
@@ -82,6 +86,19 @@ LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image) const {
   Require(options_.use_lines && options_.right_lines_on_keyframes,
           "ExtractLeftLines needs use_lines and right_lines_on_keyframes");
   return ExtractLines(SmoothIfNoisy(left_image, options_.denoise_above_noise), options_.lines);
+}
+
+void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
+                                       const LineFeatures* extracted) const {
+  Require(frame != nullptr, "CompleteLeftLines needs a frame");
+  if (!frame->left_lines_pending) return;
+  const LineFeatures lines = extracted != nullptr ? *extracted : ExtractLeftLines(left);
+  frame->lines = lines.segments;
+  frame->line_descriptors = lines.descriptors;
+  const int m = frame->NumLines();
+  frame->line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+  frame->line_has_depth.assign(m, false);
+  frame->left_lines_pending = false;
 }
 
 void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const {

@@ -25,6 +25,10 @@ struct StereoFrontendOptions {
   /// ones whose stereo lines are used): Build extracts the left image's and marks the frame
   /// (stereo_lines_pending); CompleteStereoLines adds the right image's when the tracker asks.
   bool right_lines_on_keyframes = true;
+  /// The left image's lines only when the tracker asks for them (TrackerOptions::
+  /// lines_on_demand): Build extracts none and marks the frame (left_lines_pending);
+  /// CompleteLeftLines adds them. Needs use_lines and right_lines_on_keyframes.
+  bool left_lines_on_demand = false;
   /// Dark frames are noisy: an image noisier than this (Immerkaer's estimate) is smoothed,
   /// sigma = noise / 7 px, before line detection, line descriptors, the row search and the
   /// subpixel refinement, as ORB smooths its detection image. Measured on the dark dusty loop
@@ -67,6 +71,13 @@ class StereoFrontend {
   // The stereo lines of a frame Build left pending: the right image's segments, matched and
   // triangulated (for Tracker::Track's completer). Does nothing when none are pending.
   void CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const;
+
+  // The left lines of a frame Build left pending (left_lines_on_demand), for Tracker::Track's
+  // completer: `extracted` when given (ExtractLeftLines of this image, run ahead on another
+  // thread in case the tracker would ask), else ExtractLeftLines on `left`, the image given to
+  // Build. The frame's stereo lines stay pending. Does nothing when none are pending.
+  void CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
+                         const LineFeatures* extracted = nullptr) const;
 
   const StereoFrontendOptions& options() const { return options_; }
 

@@ -181,8 +181,22 @@ void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
   have_pose_ = true;
 }
 
+std::shared_ptr<const StereoFrame> Tracker::WithLeftLines(
+    std::shared_ptr<const StereoFrame> frame, double* ms) const {
+  if (!frame->left_lines_pending || complete_left_lines_ == nullptr || !*complete_left_lines_) {
+    return frame;
+  }
+  const auto start = Clock::now();
+  auto full = std::make_shared<StereoFrame>(*frame);
+  (*complete_left_lines_)(full.get());
+  full->left_lines_pending = false;
+  if (ms != nullptr) *ms += Ms(start);
+  return full;
+}
+
 std::shared_ptr<const StereoFrame> Tracker::WithStereoLines(
     std::shared_ptr<const StereoFrame> frame) const {
+  frame = WithLeftLines(std::move(frame));  // (stereo lines are matched to the left ones)
   if (!frame->stereo_lines_pending || complete_stereo_lines_ == nullptr ||
       !*complete_stereo_lines_) {
     return frame;
@@ -283,25 +297,35 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
   mapper_->Insert(live, kf_id);
 }
 
-bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
-                             std::vector<int>* point_match, std::vector<int>* line_match) {
-  const PoseOptimizerResult& pose = tracking.pose;
-  // The map lock was released after matching: local mapping (threaded) may have culled a
-  // landmark since, so each is looked up again.
+void Tracker::AcceptPoints(Map& map, const LocalTracking& tracking,
+                           std::vector<int>* point_match, bool count_found) {
   for (size_t i = 0; i < tracking.point_ids.size(); ++i) {
-    if (!pose.point_inlier[i]) continue;
+    if (!tracking.pose.point_inlier[i]) continue;
     auto p = map.point(tracking.point_ids[i]);
     if (!p || p->bad) continue;
-    p->found += 1;
+    if (count_found) p->found += 1;
     (*point_match)[tracking.keypoints[i]] = tracking.point_ids[i];
   }
+}
+
+void Tracker::AcceptLines(Map& map, const LocalTracking& tracking,
+                          std::vector<int>* line_match) {
   for (size_t i = 0; i < tracking.line_ids.size(); ++i) {
-    if (!pose.line_inlier[i]) continue;
+    if (!tracking.pose.line_inlier[i]) continue;
     auto l = map.line(tracking.line_ids[i]);
     if (!l || l->bad) continue;
     l->found += 1;
     (*line_match)[tracking.segments[i]] = tracking.line_ids[i];
   }
+}
+
+bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
+                             std::vector<int>* point_match, std::vector<int>* line_match) {
+  const PoseOptimizerResult& pose = tracking.pose;
+  // The map lock was released after matching: local mapping (threaded) may have culled a
+  // landmark since, so each is looked up again.
+  AcceptPoints(map, tracking, point_match, /*count_found=*/true);
+  AcceptLines(map, tracking, line_match);
   // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, as with local mapping idle: it is
   // in sequential mode, and in threaded mode the queue absorbs the keyframe, unless mapping_brake
   // holds it back, below). Reference: the reference keyframe's map points seen by at least
@@ -363,19 +387,29 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
 
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
                            const StereoLineCompleter& complete_stereo_lines,
-                           const cv::Mat& left_image) {
+                           const cv::Mat& left_image,
+                           const StereoLineCompleter& complete_left_lines) {
   Require(frame != nullptr, "Track needs a frame");
-  // The completer and the image are valid for this call only.
+  // The completers and the image are valid for this call only.
   struct CallScope {
-    const StereoLineCompleter*& completer;
-    const cv::Mat*& image;
+    Tracker& tracker;
     ~CallScope() {
-      completer = nullptr;
-      image = nullptr;
+      tracker.complete_stereo_lines_ = nullptr;
+      tracker.complete_left_lines_ = nullptr;
+      tracker.current_left_ = nullptr;
     }
-  } scope{complete_stereo_lines_, current_left_};
+  } scope{*this};
   complete_stereo_lines_ = &complete_stereo_lines;
+  complete_left_lines_ = &complete_left_lines;
   current_left_ = &left_image;
+  TrackResult result = TrackFrame(frame);
+  // (the frame as it ended up: its left lines completed on demand or not)
+  if (options_.use_lines && !frame->left_lines_pending) ++stats_.line_frames;
+  result.frame_lines = frame->NumLines();
+  return result;
+}
+
+TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   TrackResult result;
   if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
     const cv::Mat& d = frame->keypoints.descriptors;
@@ -395,6 +429,13 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
   // Recently lost with the IMU: its pose is the better guess (kept when it cannot bridge).
   if (bridge_ && mode_ == Mode::kRecentlyLost && bridge_map_ == active_) {
     bridge_->Predict(frame->timestamp, &predicted);
+  }
+  // lines_on_demand: a frame that starts a map, a frame while lost, and a frame after thin
+  // tracking take their lines before anything else (as if extracted up front).
+  if (frame->left_lines_pending &&
+      (atlas_.size() == 0 || mode_ != Mode::kTracking ||
+       last_point_inliers_ < options_.lines_on_demand_inliers)) {
+    frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
   }
   if (atlas_.size() == 0) {  // not initialised yet
     const auto start = Clock::now();
@@ -425,7 +466,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
     valid = dynamic_->KeypointMask(frame->keypoints.uv);
     result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
   }
-  auto track_local_map = [&](float scale) {
+  auto track_local_map = [&](float scale, bool points_visible) {
     LocalMapSnapshot local;
     for (int attempt = 0;; ++attempt) {
       // The lock covers the copy only; matching and the pose run beside local mapping. The
@@ -444,15 +485,22 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
         Predict(&predicted);
         continue;
       }
-      local = SnapshotLocalMap(*frame, map, last_keyframe_, predicted);
+      local = SnapshotLocalMap(*frame, map, last_keyframe_, predicted, points_visible);
       SetAnchor(map, last_keyframe_);
       break;
     }
     tracking = TrackSnapshot(*frame, local, predicted, scale, &valid, current_left_);
   };
   if (mode_ != Mode::kLost) {
-    track_local_map(mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f);
+    const float scale = mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f;
+    track_local_map(scale, /*points_visible=*/true);
     tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
+    if (!tracked && frame->left_lines_pending) {
+      // lines_on_demand: its points alone do not track it; again with its lines.
+      frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
+      track_local_map(scale, /*points_visible=*/false);
+      tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
+    }
   }
   if (!tracked && mode_ != Mode::kTracking) {
     // Recently lost: the active map only; lost: every map, the active one first, then the newest.
@@ -497,6 +545,35 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
       }
       make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
     }
+    if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
+      // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
+      // from the pose its points gave, and the pose is optimised again with them; the keyframe
+      // takes that tracking's matches (its points were counted found already, and the keyframe
+      // is made either way).
+      frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
+      const LocalTracking points_only = tracking;
+      predicted = tracking.pose.cam_from_world;
+      track_local_map(1.0f, /*points_visible=*/false);
+      if (tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers) {
+        const std::unique_lock<Mutex> lock = LockActiveMap();
+        Map& map = atlas_.map(active_);
+        map.mutex().AssertHeld();  // locked by LockActiveMap
+        point_match.assign(frame->NumKeypoints(), -1);
+        line_match.assign(frame->NumLines(), -1);
+        AcceptPoints(map, tracking, &point_match, /*count_found=*/false);
+        AcceptLines(map, tracking, &line_match);
+      } else {
+        tracking = points_only;
+        line_match.assign(frame->NumLines(), -1);
+      }
+      result.matched_lines = static_cast<int>(tracking.line_ids.size());
+      result.inlier_lines = tracking.pose.line_inliers;
+      result.inlier_points = tracking.pose.point_inliers;
+      result.weighted_inliers = tracking.weighted_inliers;
+      result.matching_ms += tracking.matching_ms;
+      result.optimisation_ms += tracking.optimisation_ms;
+    }
+    last_point_inliers_ = tracking.pose.point_inliers;
     if (dynamic_) {
       // Thin tracking (low texture, dark, dust) masks nothing: its sparse frame-to-frame
       // evidence is noise-dominated, and every keypoint counts there (measured on the junction
@@ -556,6 +633,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
 
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
   anchor_ = Anchor{};
+  last_point_inliers_ = 0;
   if (dynamic_) {
     dynamic_->Reset();
     previous_frame_ = nullptr;

@@ -73,6 +73,8 @@ struct TrackingStats {
   int relocalisations = 0;
   int relocalisation_attempts = 0;
   int maps_started = 0;
+  int line_frames = 0;  ///< frames whose left lines were extracted (all with use_lines, unless
+                        ///< lines_on_demand)
 };
 
 const char* TrackingStateName(TrackingState state);
@@ -87,6 +89,23 @@ struct TrackerOptions {
   /// (StereoFrontendOptions::right_lines_on_keyframes; the tracker completes those frames):
   /// the same poses and map, about half the line work on the frames between keyframes
   bool right_lines_on_keyframes = true;
+  /// The left image's lines only for the frames that use them (StereoFrontendOptions::
+  /// left_lines_on_demand; the tracker completes those frames through Track's
+  /// `complete_left_lines`): a frame after one tracked with fewer than lines_on_demand_inliers
+  /// weighted inliers, a frame its points alone do not track (tracked again with its lines), a
+  /// keyframe (its lines matched to the local map from the pose its points gave, and the pose
+  /// optimised again with them), a frame that starts a map, and every frame while the tracker is
+  /// lost. The frames between keyframes of a well-textured stretch are tracked on their points:
+  /// no line detection and no LBD there (the largest part of a frame's front end with ORB).
+  /// Applies with right_lines_on_keyframes (without it both images' lines are extracted every
+  /// frame). Measured (benchmarks/README.md, 2026-11-27 h): five simulator seeds of the four
+  /// 600-frame sequences with the IMU, mean ATE dark dusty loop -16 %, hard junction -11 %,
+  /// bright loop +7 %, spin +6 %; about half the bright loop's frames skip their lines. Off:
+  /// every frame's lines
+  bool lines_on_demand = true;
+  /// With lines_on_demand: a frame after one tracked with fewer point inliers than this is
+  /// tracked with its lines from the start [-]
+  int lines_on_demand_inliers = 150;
   /// images noisier than this (Immerkaer's estimate, as orb.denoise_above_noise) reach line
   /// detection, line descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px
   /// (StereoFrontendOptions::denoise_above_noise); 0: never [gray levels]
@@ -206,6 +225,9 @@ struct TrackResult {
   double matching_ms = 0.0;        ///< local map projection and guided matching [ms]
   double optimisation_ms = 0.0;    ///< motion-only BA [ms]
   double mapping_ms = 0.0;         ///< keyframe insertion (+ local mapping in sequential mode) [ms]
+  int frame_lines = 0;             ///< the frame's left-image segments (use_lines; with
+                                   ///< lines_on_demand 0 unless it needed them)
+  double left_lines_ms = 0.0;      ///< its left lines extracted during Track (lines_on_demand) [ms]
 };
 
 struct MapExport {
@@ -231,9 +253,12 @@ class Tracker {
   // `left_image`: the left image as stereo matching saw it (StereoFrontend::Build's
   // `left_used`), for track_refine_window_px; empty: no refinement for this frame. Read during
   // the call only.
+  // `complete_left_lines` fills in the left image's lines of a frame built without them
+  // (StereoFrame::left_lines_pending, lines_on_demand), on a copy, when the frame needs them.
   TrackResult Track(std::shared_ptr<const StereoFrame> frame,
                     const StereoLineCompleter& complete_stereo_lines = {},
-                    const cv::Mat& left_image = cv::Mat());
+                    const cv::Mat& left_image = cv::Mat(),
+                    const StereoLineCompleter& complete_left_lines = {});
   // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
   // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
   // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
@@ -277,10 +302,17 @@ class Tracker {
   double Weighted(int points, int lines) const {
     return points + options_.line_inlier_weight * lines;
   }
+  // Track's work on one frame; `frame` is replaced by a completed copy when the frame takes its
+  // left lines on demand (lines_on_demand).
+  TrackResult TrackFrame(std::shared_ptr<const StereoFrame>& frame);
   bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
   // was given a completer.
   std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
+  // The frame with its left lines: itself, or a completed copy when they are pending
+  // (lines_on_demand) and Track was given a completer. Adds the time taken to `*ms`.
+  std::shared_ptr<const StereoFrame> WithLeftLines(std::shared_ptr<const StereoFrame> frame,
+                                                   double* ms = nullptr) const;
   // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
                       const std::vector<int>& point_matches,
@@ -303,9 +335,11 @@ class Tracker {
     cv::Mat line_descriptors;          ///< one row per line
     double ms = 0.0;                   ///< time taken to copy it
   };
-  // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling).
+  // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling); the
+  // points not when `points_visible` is false (a frame tracked again: they were counted).
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
-                                    const Rigid3d& pred_cam_from_world) const
+                                    const Rigid3d& pred_cam_from_world,
+                                    bool points_visible = true) const
       SLSLAM_REQUIRES(map.mutex());
   // No lock: guided matching of the snapshot in the frame and the motion-only BA. With
   // `refine_image` (the frame's left image, as stereo matching saw it) the matches are aligned
@@ -332,6 +366,12 @@ class Tracker {
   // map.mutex().
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
                       std::vector<int>* point_match, std::vector<int>* line_match)
+      SLSLAM_REQUIRES(map.mutex());
+  // The parts of AcceptTracking: the inlier points (marked found with `count_found`) and the
+  // inlier lines (marked found) into the per-feature matches.
+  void AcceptPoints(Map& map, const LocalTracking& tracking, std::vector<int>* point_match,
+                    bool count_found) SLSLAM_REQUIRES(map.mutex());
+  void AcceptLines(Map& map, const LocalTracking& tracking, std::vector<int>* line_match)
       SLSLAM_REQUIRES(map.mutex());
   // Tries the maps in `order`; on success switches to that map and fills the pose and tracking.
   bool Relocalise(const StereoFrame& frame, const std::vector<int>& order, TrackResult* result,
@@ -423,6 +463,9 @@ class Tracker {
   TrackingStats stats_;
   /// the completer given to the Track call in progress (null outside Track, or none given)
   const StereoLineCompleter* complete_stereo_lines_ = nullptr;
+  const StereoLineCompleter* complete_left_lines_ = nullptr;  ///< during Track only
+  /// point inliers of the last tracked frame (lines_on_demand); 0 after a loss
+  int last_point_inliers_ = 0;
 };
 
 }  // namespace slslam

@@ -25,7 +25,8 @@ using tracker_detail::SameKind;
 
 Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Map& map,
                                                     int reference_kf,
-                                                    const Rigid3d& pred_cam_from_world) const {
+                                                    const Rigid3d& pred_cam_from_world,
+                                                    bool points_visible) const {
   const PinholeCamera& camera = options_.rig.camera;
   const auto start = Clock::now();
   LocalMapSnapshot snap;
@@ -64,7 +65,7 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     }
     points.push_back(p);
     predicted.push_back(uv.cast<float>());
-    p->visible += 1;
+    if (points_visible) p->visible += 1;
   }
   const cv::Mat& frame_desc = frame.keypoints.descriptors;
   if (!points.empty() && frame.NumKeypoints() > 0) {

@@ -85,6 +85,7 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.lost_search_scale", lost_search_scale, 1.0f, 1000.0f);
   CheckInRange("tracking.weak_keyframe_inliers", weak_keyframe_inliers, 0, kMaxCount);
   CheckInRange("tracking.weak_keyframe_frames", weak_keyframe_frames, 1, kMaxCount);
+  CheckInRange("tracking.lines_on_demand_inliers", lines_on_demand_inliers, 0, kMaxCount);
 }
 
 }  // namespace slslam

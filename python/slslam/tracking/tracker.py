@@ -217,6 +217,7 @@ class MapStats:
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0
+    line_frames: int = 0  #: frames whose left lines were extracted (all, unless lines_on_demand)
     loop_keyframes_checked: int = 0
     loop_candidates_verified: int = 0
     loops_detected: int = 0  #: verified and plausible hypotheses (before consistency)
@@ -653,7 +654,7 @@ class Tracker:
         raw_left, left = left, self._smooth(left)
         lines = (
             self._lines_side.submit(self._core.extract_left_lines, left)
-            if self._lines_side is not None
+            if self._lines_side is not None and self._lines_ahead()
             else None
         )
         kl = self._detect_either(raw_left, left)
@@ -721,6 +722,23 @@ class Tracker:
         self.last_image, self.last_keypoints_uv = left, kl.uv
         self._results.append(result)
         return result
+
+    def _lines_ahead(self) -> bool:
+        """Whether the left image's lines are extracted beside the point front end: always,
+        unless ``tracking.lines_on_demand``; then when the core will likely ask for them (the
+        newest result known here was not tracked, a new map or a relocalisation, or had fewer
+        point inliers than ``lines_on_demand_inliers``). The guess decides time only: the core
+        asks for a frame's lines by its own rule, and lines extracted ahead are those it would
+        extract (the pipeline may guess from an older result than a sequential run)."""
+        tracking = self.config.tracking
+        if not tracking.lines_on_demand:
+            return True
+        last = self._results[-1] if self._results else None
+        return (
+            last is None
+            or last.state != "OK"
+            or last.counts.inlier_points < tracking.lines_on_demand_inliers
+        )
 
     # -- results -------------------------------------------------------------------------------
     @property

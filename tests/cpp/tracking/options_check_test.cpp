@@ -332,6 +332,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(lost_search_scale, "tracking.lost_search_scale", 1, 1000, "[]"),
        FIELD(weak_keyframe_inliers, "tracking.weak_keyframe_inliers", 0, 1e9, "[]"),
        FIELD(weak_keyframe_frames, "tracking.weak_keyframe_frames", 1, 1e9, "[]"),
+       FIELD(lines_on_demand_inliers, "tracking.lines_on_demand_inliers", 0, 1e9, "[]"),
        // nested structs, reached through the tracker's constructor
        FIELD(rig.baseline_m, "stereo baseline", 0, 1000, "(]"),
        FIELD(rig.camera.fx, "camera fx", 0, 1e7, "(]"),
