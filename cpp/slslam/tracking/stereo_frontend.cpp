@@ -93,6 +93,8 @@ void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
   Require(frame != nullptr, "CompleteLeftLines needs a frame");
   if (!frame->left_lines_pending) return;
   const LineFeatures lines = extracted != nullptr ? *extracted : ExtractLeftLines(left);
+  Require(lines.descriptors.rows == static_cast<int>(lines.segments.size()),
+          "left line descriptors do not match the segments");
   frame->lines = lines.segments;
   frame->line_descriptors = lines.descriptors;
   const int m = frame->NumLines();

@@ -297,17 +297,6 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
   mapper_->Insert(live, kf_id);
 }
 
-void Tracker::AcceptPoints(Map& map, const LocalTracking& tracking,
-                           std::vector<int>* point_match, bool count_found) {
-  for (size_t i = 0; i < tracking.point_ids.size(); ++i) {
-    if (!tracking.pose.point_inlier[i]) continue;
-    auto p = map.point(tracking.point_ids[i]);
-    if (!p || p->bad) continue;
-    if (count_found) p->found += 1;
-    (*point_match)[tracking.keypoints[i]] = tracking.point_ids[i];
-  }
-}
-
 void Tracker::AcceptLines(Map& map, const LocalTracking& tracking,
                           std::vector<int>* line_match) {
   for (size_t i = 0; i < tracking.line_ids.size(); ++i) {
@@ -324,7 +313,13 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const PoseOptimizerResult& pose = tracking.pose;
   // The map lock was released after matching: local mapping (threaded) may have culled a
   // landmark since, so each is looked up again.
-  AcceptPoints(map, tracking, point_match, /*count_found=*/true);
+  for (size_t i = 0; i < tracking.point_ids.size(); ++i) {
+    if (!pose.point_inlier[i]) continue;
+    auto p = map.point(tracking.point_ids[i]);
+    if (!p || p->bad) continue;
+    p->found += 1;
+    (*point_match)[tracking.keypoints[i]] = tracking.point_ids[i];
+  }
   AcceptLines(map, tracking, line_match);
   // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, as with local mapping idle: it is
   // in sequential mode, and in threaded mode the queue absorbs the keyframe, unless mapping_brake
@@ -411,6 +406,9 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
 
 TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   TrackResult result;
+  Require(!frame->left_lines_pending || (complete_left_lines_ && *complete_left_lines_),
+          "a frame built without its left lines (lines_on_demand) needs Track's "
+          "complete_left_lines");
   if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
     const cv::Mat& d = frame->keypoints.descriptors;
     SLSLAM_CHECK(d.type() == loaded_descriptor_type_ && d.cols == loaded_descriptor_cols_,
@@ -496,9 +494,14 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     track_local_map(scale, /*points_visible=*/true);
     tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
     if (!tracked && frame->left_lines_pending) {
-      // lines_on_demand: its points alone do not track it; again with its lines.
+      // lines_on_demand: its points alone do not track it; again with its lines (both passes
+      // timed).
       frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
+      const double first_matching_ms = tracking.matching_ms;
+      const double first_optimisation_ms = tracking.optimisation_ms;
       track_local_map(scale, /*points_visible=*/false);
+      tracking.matching_ms += first_matching_ms;
+      tracking.optimisation_ms += first_optimisation_ms;
       tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
     }
   }
@@ -547,31 +550,46 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     }
     if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
       // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
-      // from the pose its points gave, and the pose is optimised again with them; the keyframe
-      // takes that tracking's matches (its points were counted found already, and the keyframe
-      // is made either way).
+      // from the pose its points gave, and the pose is optimised again with them. The keyframe
+      // keeps its points' matches from the first tracking (the second, pulled by the lines,
+      // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/README.md
+      // 2026-11-27 h); its keypoints are refined as the second tracking aligned them (below),
+      // and it is made either way. The local map is copied again in the world the estimate is
+      // in (the anchor's): when a correction or a merge landed since (threaded mode), the
+      // keyframe goes in without matched lines rather than mix two worlds.
       frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
-      const LocalTracking points_only = tracking;
-      predicted = tracking.pose.cam_from_world;
-      track_local_map(1.0f, /*points_visible=*/false);
-      if (tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers) {
+      line_match.assign(frame->NumLines(), -1);
+      const Rigid3d points_pose = tracking.pose.cam_from_world;
+      LocalMapSnapshot local;
+      bool same_world = false;
+      {
         const std::unique_lock<Mutex> lock = LockActiveMap();
         Map& map = atlas_.map(active_);
         map.mutex().AssertHeld();  // locked by LockActiveMap
-        point_match.assign(frame->NumKeypoints(), -1);
-        line_match.assign(frame->NumLines(), -1);
-        AcceptPoints(map, tracking, &point_match, /*count_found=*/false);
-        AcceptLines(map, tracking, &line_match);
-      } else {
-        tracking = points_only;
-        line_match.assign(frame->NumLines(), -1);
+        same_world = anchor_.map == &map && anchor_.epoch == map.correction_epoch();
+        if (same_world) {
+          local = SnapshotLocalMap(*frame, map, last_keyframe_, points_pose,
+                                   /*points_visible=*/false);
+        }
       }
-      result.matched_lines = static_cast<int>(tracking.line_ids.size());
-      result.inlier_lines = tracking.pose.line_inliers;
-      result.inlier_points = tracking.pose.point_inliers;
-      result.weighted_inliers = tracking.weighted_inliers;
-      result.matching_ms += tracking.matching_ms;
-      result.optimisation_ms += tracking.optimisation_ms;
+      if (same_world) {
+        LocalTracking with_lines =
+            TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_);
+        result.matching_ms += with_lines.matching_ms;
+        result.optimisation_ms += with_lines.optimisation_ms;
+        if (with_lines.pose.success && with_lines.weighted_inliers >= options_.min_inliers) {
+          const std::unique_lock<Mutex> lock = LockActiveMap();
+          Map& map = atlas_.map(active_);
+          map.mutex().AssertHeld();  // locked by LockActiveMap
+          AcceptLines(map, with_lines, &line_match);
+          tracking = std::move(with_lines);
+          result.matched_points = static_cast<int>(tracking.point_ids.size());
+          result.matched_lines = static_cast<int>(tracking.line_ids.size());
+          result.inlier_points = tracking.pose.point_inliers;
+          result.inlier_lines = tracking.pose.line_inliers;
+          result.weighted_inliers = tracking.weighted_inliers;
+        }
+      }
     }
     last_point_inliers_ = tracking.pose.point_inliers;
     if (dynamic_) {

@@ -92,7 +92,7 @@ struct TrackerOptions {
   /// The left image's lines only for the frames that use them (StereoFrontendOptions::
   /// left_lines_on_demand; the tracker completes those frames through Track's
   /// `complete_left_lines`): a frame after one tracked with fewer than lines_on_demand_inliers
-  /// weighted inliers, a frame its points alone do not track (tracked again with its lines), a
+  /// point inliers, a frame its points alone do not track (tracked again with its lines), a
   /// keyframe (its lines matched to the local map from the pose its points gave, and the pose
   /// optimised again with them), a frame that starts a map, and every frame while the tracker is
   /// lost. The frames between keyframes of a well-textured stretch are tracked on their points:
@@ -367,10 +367,7 @@ class Tracker {
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
                       std::vector<int>* point_match, std::vector<int>* line_match)
       SLSLAM_REQUIRES(map.mutex());
-  // The parts of AcceptTracking: the inlier points (marked found with `count_found`) and the
-  // inlier lines (marked found) into the per-feature matches.
-  void AcceptPoints(Map& map, const LocalTracking& tracking, std::vector<int>* point_match,
-                    bool count_found) SLSLAM_REQUIRES(map.mutex());
+  // The line part of AcceptTracking: marks the inlier lines found and fills their matches.
   void AcceptLines(Map& map, const LocalTracking& tracking, std::vector<int>* line_match)
       SLSLAM_REQUIRES(map.mutex());
   // Tries the maps in `order`; on success switches to that map and fills the pose and tracking.
