@@ -149,12 +149,14 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
         dynamic_cells=Config().features.dynamic_cells,
         xfeat=Config().features.xfeat,
     )
-    # and keyframes at most every 6 frames while tracking is strong
+    # and keyframes at most every 6 frames while tracking is strong, every frame's lines
     assert config.tracking.keyframe_min_frames == 6
+    assert not config.tracking.lines_on_demand and Config().tracking.lines_on_demand
     tracking = dataclasses.replace(
         config.tracking,
         stereo_row_search=False,
         keyframe_min_frames=Config().tracking.keyframe_min_frames,
+        lines_on_demand=Config().tracking.lines_on_demand,
     )
     assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
 
