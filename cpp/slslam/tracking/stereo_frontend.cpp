@@ -92,14 +92,7 @@ void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
                                        const LineFeatures* extracted) const {
   Require(frame != nullptr, "CompleteLeftLines needs a frame");
   if (!frame->left_lines_pending) return;
-  const LineFeatures lines = extracted != nullptr ? *extracted : ExtractLeftLines(left);
-  Require(lines.descriptors.rows == static_cast<int>(lines.segments.size()),
-          "left line descriptors do not match the segments");
-  frame->lines = lines.segments;
-  frame->line_descriptors = lines.descriptors;
-  const int m = frame->NumLines();
-  frame->line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
-  frame->line_has_depth.assign(m, false);
+  SetLeftLines(extracted != nullptr ? *extracted : ExtractLeftLines(left), frame);
   frame->left_lines_pending = false;
 }
 

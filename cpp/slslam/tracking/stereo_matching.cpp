@@ -94,16 +94,21 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
   }
 
   if (left_lines) {
-    Require(left_lines->descriptors.rows == static_cast<int>(left_lines->segments.size()),
-            "left line descriptors do not match the segments");
-    frame.lines = left_lines->segments;
-    frame.line_descriptors = left_lines->descriptors;
-    const int m = frame.NumLines();
-    frame.line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
-    frame.line_has_depth.assign(m, false);
+    SetLeftLines(*left_lines, &frame);
     if (right_lines) MatchStereoLinesInto(*right_lines, rig, options, &frame);
   }
   return frame;
+}
+
+void SetLeftLines(const LineFeatures& left_lines, StereoFrame* frame) {
+  Require(frame != nullptr, "setting left lines needs a frame");
+  Require(left_lines.descriptors.rows == static_cast<int>(left_lines.segments.size()),
+          "left line descriptors do not match the segments");
+  frame->lines = left_lines.segments;
+  frame->line_descriptors = left_lines.descriptors;
+  const int m = frame->NumLines();
+  frame->line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+  frame->line_has_depth.assign(m, false);
 }
 
 void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,

@@ -51,6 +51,11 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
                             const LineFeatures* right_lines, const StereoRig& rig,
                             const StereoMatchOptions& options = {});
 
+// The frame's left-image line segments and descriptors, none with stereo depth yet
+// (MakeStereoFrame's first line step, also run on its own when the left image's lines are
+// extracted later, lines_on_demand).
+void SetLeftLines(const LineFeatures& left_lines, StereoFrame* frame);
+
 // Stereo matching and triangulation of the frame's (left) line segments with the right image's:
 // fills line_endpoints and line_has_depth (MakeStereoFrame's line step, also run on its own when
 // the right image's lines are extracted later, for keyframes only).

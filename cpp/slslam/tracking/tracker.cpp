@@ -18,6 +18,19 @@ namespace {
 // Threaded local mapping: keyframes that may wait for it (ORB-SLAM3's stereo limit). Past it
 // tracking goes on from the last keyframe until the queue shrinks.
 constexpr int kMaxQueuedKeyFrames = 3;
+
+// `frame` itself, or a copy completed by `completer` when the flag `pending` marks what it lacks
+// (the right image's lines, or the left image's) and a completer was given; the copy's flag
+// cleared.
+std::shared_ptr<const StereoFrame> Completed(std::shared_ptr<const StereoFrame> frame,
+                                             bool StereoFrame::*pending,
+                                             const Tracker::StereoLineCompleter* completer) {
+  if (!((*frame).*pending) || completer == nullptr || !*completer) return frame;
+  auto full = std::make_shared<StereoFrame>(*frame);
+  (*completer)(full.get());
+  (*full).*pending = false;
+  return full;
+}
 }  // namespace
 
 const char* TrackingStateName(TrackingState state) {
@@ -183,28 +196,17 @@ void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
 
 std::shared_ptr<const StereoFrame> Tracker::WithLeftLines(
     std::shared_ptr<const StereoFrame> frame, double* ms) const {
-  if (!frame->left_lines_pending || complete_left_lines_ == nullptr || !*complete_left_lines_) {
-    return frame;
-  }
   const auto start = Clock::now();
-  auto full = std::make_shared<StereoFrame>(*frame);
-  (*complete_left_lines_)(full.get());
-  full->left_lines_pending = false;
-  if (ms != nullptr) *ms += Ms(start);
-  return full;
+  const bool pending = frame->left_lines_pending;
+  frame = Completed(std::move(frame), &StereoFrame::left_lines_pending, complete_left_lines_);
+  if (pending && ms != nullptr) *ms += Ms(start);
+  return frame;
 }
 
 std::shared_ptr<const StereoFrame> Tracker::WithStereoLines(
     std::shared_ptr<const StereoFrame> frame) const {
   frame = WithLeftLines(std::move(frame));  // (stereo lines are matched to the left ones)
-  if (!frame->stereo_lines_pending || complete_stereo_lines_ == nullptr ||
-      !*complete_stereo_lines_) {
-    return frame;
-  }
-  auto full = std::make_shared<StereoFrame>(*frame);
-  (*complete_stereo_lines_)(full.get());
-  full->stereo_lines_pending = false;
-  return full;
+  return Completed(std::move(frame), &StereoFrame::stereo_lines_pending, complete_stereo_lines_);
 }
 
 bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world) {
