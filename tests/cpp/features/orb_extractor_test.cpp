@@ -112,6 +112,24 @@ TEST(OrbExtractor, NoiseEstimateMatchesTheAddedNoise) {
   EXPECT_LT(EstimateNoiseSigma(flat), 0.01);
 }
 
+// The estimate sums the mask's response in two integer passes; it must be the exact value of the
+// 3 x 3 mask filtered by OpenCV and its L1 norm (the definition), edges and odd sizes included.
+TEST(OrbExtractor, NoiseEstimateEqualsTheFilteredMasksNorm) {
+  cv::RNG rng(11);
+  for (const cv::Size size : {cv::Size(3, 3), cv::Size(4, 7), cv::Size(752, 480),
+                              cv::Size(257, 33)}) {
+    cv::Mat image(size, CV_8U);
+    rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+    const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+    cv::Mat response;
+    cv::filter2D(image, response, CV_32F, mask, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT_101);
+    const cv::Mat inner = response(cv::Rect(1, 1, size.width - 2, size.height - 2));
+    const double expected =
+        std::sqrt(CV_PI / 2.0) * cv::norm(inner, cv::NORM_L1) / (6.0 * inner.total());
+    EXPECT_DOUBLE_EQ(EstimateNoiseSigma(image), expected) << size;
+  }
+}
+
 // Fraction of keypoints of `a` with a keypoint of `b` within 2 px.
 double Repeatability(const Keypoints& a, const Keypoints& b) {
   int repeated = 0;
