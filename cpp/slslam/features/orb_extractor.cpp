@@ -201,16 +201,16 @@ double EstimateNoiseSigma(const cv::Mat& image) {
   int64_t sum_abs = 0;
   for (int y = 1; y + 1 < image.rows; ++y) {
     second_difference(y + 1, below);
-    int32_t row_sum = 0;  // <= 2040 * 750 per row of a 752-pixel frame; wide rows split below
-    for (int x = 0; x < width; ++x) {
-      const int32_t value = above[x] - 2 * middle[x] + below[x];
-      row_sum += value < 0 ? -value : value;
-      if ((x & 0xFFFF) == 0xFFFF) {  // a row wider than 65,536 px: flush before 32 bits overflow
-        sum_abs += row_sum;
-        row_sum = 0;
+    // 32-bit sums (vectorised) over chunks of 65,536 columns: |value| <= 2040 cannot overflow.
+    for (int x0 = 0; x0 < width; x0 += 65536) {
+      const int x1 = std::min(width, x0 + 65536);
+      int32_t chunk_sum = 0;
+      for (int x = x0; x < x1; ++x) {
+        const int32_t value = above[x] - 2 * middle[x] + below[x];
+        chunk_sum += value < 0 ? -value : value;
       }
+      sum_abs += chunk_sum;
     }
-    sum_abs += row_sum;
     std::swap(above, middle);
     std::swap(middle, below);
   }
