@@ -51,7 +51,7 @@ struct PoseOptimizerResult {
 };
 
 // Optimises cam_from_world from an initial guess. Observations of landmarks behind the camera at
-// the start count as outliers. Deterministic (single-threaded Ceres).
+// the start count as outliers. Deterministic (one thread).
 PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_world,
                                  const std::vector<PointObservation>& points,
                                  const std::vector<LineObservation>& lines,

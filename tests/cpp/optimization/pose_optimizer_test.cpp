@@ -1,10 +1,16 @@
 #include "slslam/optimization/pose_optimizer.h"
 
+#include <array>
 #include <random>
+#include <vector>
 
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 #include <gtest/gtest.h>
 
 #include "slslam/geometry/rotation.h"
+#include "slslam/optimization/cost_functions.h"
+#include "slslam/optimization/manifolds.h"
 #include "../test_support.h"
 
 namespace slslam {
@@ -139,6 +145,62 @@ TEST(PoseOptimizer, Deterministic) {
   const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
   EXPECT_EQ(a.cam_from_world.translation, b.cam_from_world.translation);
   EXPECT_EQ(a.cam_from_world.rotation, b.cam_from_world.rotation);
+}
+
+// The pose solver is our own Levenberg-Marquardt (Ceres' problem building cost more than the solve);
+// its last round has no robust kernel, so its pose must be the least-squares optimum over the
+// inliers it reports: here the one Ceres finds with the same costs, solved to convergence.
+TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
+  const StereoRig rig = EurocLikeRig();
+  const Scene s = MakeScene(120, 25, 0.15, 6);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const PoseOptimizerResult r = OptimizePose(rig, Rigid3d(R0, t0), s.points, s.lines);
+  ASSERT_TRUE(r.success);
+
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<double, kLineSize>> lines(s.lines.size());
+  for (const PointObservation& obs : s.points) points.push_back(obs.point_w);
+  ceres::Problem problem;
+  std::array<double, kPoseSize> pose;
+  PoseToParameters(Rigid3d(R0, t0), pose.data());
+  problem.AddParameterBlock(pose.data(), kPoseSize, new PoseManifold);
+  for (size_t i = 0; i < s.points.size(); ++i) {
+    if (!r.point_inlier[i]) continue;
+    const PointObservation& obs = s.points[i];
+    ceres::CostFunction* cost =
+        obs.stereo ? static_cast<ceres::CostFunction*>(
+                         new StereoPointCost(rig, obs.observed, obs.sigma_px))
+                   : new PointCost(rig.camera, obs.observed.head<2>(), obs.sigma_px);
+    problem.AddResidualBlock(cost, nullptr, pose.data(), points[i].data());
+    problem.SetParameterBlockConstant(points[i].data());
+  }
+  const PoseOptimizerOptions defaults;
+  for (size_t i = 0; i < s.lines.size(); ++i) {
+    if (!r.line_inlier[i]) continue;
+    const LineObservation& obs = s.lines[i];
+    LineToParameters(OrthonormalLine::FromPlucker(obs.line_w), lines[i].data());
+    problem.AddResidualBlock(new LineCost(rig.camera, obs.start_px, obs.end_px,
+                                          defaults.line_angle_weight, obs.sigma_px),
+                             nullptr, pose.data(), lines[i].data());
+    problem.SetParameterBlockConstant(lines[i].data());
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 100;
+  options.function_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-14;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  ASSERT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+  Rigid3d ceres_pose;
+  ParametersToPose(pose.data(), &ceres_pose);
+  EXPECT_LT((r.cam_from_world.translation - ceres_pose.translation).norm(), 1e-5);
+  EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, ceres_pose.rotation), 1e-4);
+  EXPECT_GT(r.point_inliers, 80);
+  EXPECT_GT(r.line_inliers, 15);
 }
 
 }  // namespace
