@@ -61,10 +61,7 @@ struct PoseTerm {
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-// The cost 1/2 sum weight * rho(|r|^2) at `pose` and its Gauss-Newton normal equations, each term
-// reweighted by weight * rho'(|r|^2): what Ceres builds for a Huber loss, whose rho'' <= 0 makes
-// its corrector a plain square-root reweighting. False when a term cannot be evaluated (a
-// landmark behind the camera).
+// The Gauss-Newton normal equations of the pose's 6-dim tangent, and the cost.
 struct PoseNormalEquations {
   Matrix6d information = Matrix6d::Zero();  ///< J^T W J
   Vector6d gradient = Vector6d::Zero();     ///< J^T W r
@@ -81,6 +78,10 @@ void AddToNormalEquations(const double* jacobian, const double* residual, double
   out->gradient.noalias() += weight * (tangent.transpose() * r);
 }
 
+// The cost 1/2 sum weight * rho(|r|^2) at `pose` and its normal equations, each term reweighted
+// by weight * rho'(|r|^2): what Ceres builds for a Huber loss, whose rho'' <= 0 makes its
+// corrector a plain square-root reweighting. False when a term cannot be evaluated (a landmark
+// behind the camera).
 bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, const double* pose,
                        PoseNormalEquations* out) {
   *out = PoseNormalEquations{};
