@@ -4,6 +4,7 @@
 #include <random>
 #include <vector>
 
+#include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <gtest/gtest.h>
@@ -147,9 +148,68 @@ TEST(PoseOptimizer, Deterministic) {
   EXPECT_EQ(a.cam_from_world.rotation, b.cam_from_world.rotation);
 }
 
-// The pose solver is our own Levenberg-Marquardt (Ceres' problem building cost more than the solve);
-// its last round has no robust kernel, so its pose must be the least-squares optimum over the
-// inliers it reports: here the one Ceres finds with the same costs, solved to convergence.
+// The same problem in Ceres, as OptimizePose built it before it had a solver of its own: every
+// observation flagged in `use`, Huber losses when `robust`, line terms scaled by `line_weight`.
+Rigid3d SolveWithCeres(const StereoRig& rig, const Scene& s, const Rigid3d& start,
+                       const std::vector<bool>& use_points, const std::vector<bool>& use_lines,
+                       bool robust, const PoseOptimizerOptions& o, int max_iterations,
+                       bool tight) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<double, kLineSize>> lines(s.lines.size());
+  for (const PointObservation& obs : s.points) points.push_back(obs.point_w);
+  ceres::Problem problem;
+  std::array<double, kPoseSize> pose;
+  PoseToParameters(start, pose.data());
+  problem.AddParameterBlock(pose.data(), kPoseSize, new PoseManifold);
+  for (size_t i = 0; i < s.points.size(); ++i) {
+    if (!use_points[i]) continue;
+    const PointObservation& obs = s.points[i];
+    ceres::CostFunction* cost =
+        obs.stereo ? static_cast<ceres::CostFunction*>(
+                         new StereoPointCost(rig, obs.observed, obs.sigma_px))
+                   : new PointCost(rig.camera, obs.observed.head<2>(), obs.sigma_px);
+    ceres::LossFunction* loss =
+        robust ? new ceres::HuberLoss(std::sqrt(obs.stereo ? o.chi2_stereo : o.chi2_mono))
+               : nullptr;
+    problem.AddResidualBlock(cost, loss, pose.data(), points[i].data());
+    problem.SetParameterBlockConstant(points[i].data());
+  }
+  for (size_t i = 0; i < s.lines.size(); ++i) {
+    if (!use_lines[i]) continue;
+    const LineObservation& obs = s.lines[i];
+    LineToParameters(OrthonormalLine::FromPlucker(obs.line_w), lines[i].data());
+    ceres::LossFunction* loss = robust ? new ceres::HuberLoss(std::sqrt(o.chi2_line)) : nullptr;
+    if (o.line_weight != 1.0) {
+      loss = new ceres::ScaledLoss(loss, o.line_weight, ceres::TAKE_OWNERSHIP);
+    }
+    problem.AddResidualBlock(
+        new LineCost(rig.camera, obs.start_px, obs.end_px, o.line_angle_weight, obs.sigma_px),
+        loss, pose.data(), lines[i].data());
+    problem.SetParameterBlockConstant(lines[i].data());
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = max_iterations;
+  if (tight) {
+    options.function_tolerance = 1e-14;
+    options.gradient_tolerance = 1e-14;
+    options.parameter_tolerance = 1e-14;
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+  Rigid3d solved;
+  ParametersToPose(pose.data(), &solved);
+  return solved;
+}
+
+double TranslationDifference(const Rigid3d& a, const Rigid3d& b) {
+  return (a.translation - b.translation).norm();
+}
+
+// The pose solver is our own Levenberg-Marquardt (building a Ceres problem cost more than solving
+// it). Its last round has no robust kernel and its inliers are stable here, so its pose must be
+// the least-squares optimum over the inliers it reports: the one Ceres finds, solved to the end.
 TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
   const StereoRig rig = EurocLikeRig();
   const Scene s = MakeScene(120, 25, 0.15, 6);
@@ -158,49 +218,48 @@ TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
   PerturbedStart(s, &R0, &t0);
   const PoseOptimizerResult r = OptimizePose(rig, Rigid3d(R0, t0), s.points, s.lines);
   ASSERT_TRUE(r.success);
-
-  std::vector<Eigen::Vector3d> points;
-  std::vector<std::array<double, kLineSize>> lines(s.lines.size());
-  for (const PointObservation& obs : s.points) points.push_back(obs.point_w);
-  ceres::Problem problem;
-  std::array<double, kPoseSize> pose;
-  PoseToParameters(Rigid3d(R0, t0), pose.data());
-  problem.AddParameterBlock(pose.data(), kPoseSize, new PoseManifold);
-  for (size_t i = 0; i < s.points.size(); ++i) {
-    if (!r.point_inlier[i]) continue;
-    const PointObservation& obs = s.points[i];
-    ceres::CostFunction* cost =
-        obs.stereo ? static_cast<ceres::CostFunction*>(
-                         new StereoPointCost(rig, obs.observed, obs.sigma_px))
-                   : new PointCost(rig.camera, obs.observed.head<2>(), obs.sigma_px);
-    problem.AddResidualBlock(cost, nullptr, pose.data(), points[i].data());
-    problem.SetParameterBlockConstant(points[i].data());
-  }
-  const PoseOptimizerOptions defaults;
-  for (size_t i = 0; i < s.lines.size(); ++i) {
-    if (!r.line_inlier[i]) continue;
-    const LineObservation& obs = s.lines[i];
-    LineToParameters(OrthonormalLine::FromPlucker(obs.line_w), lines[i].data());
-    problem.AddResidualBlock(new LineCost(rig.camera, obs.start_px, obs.end_px,
-                                          defaults.line_angle_weight, obs.sigma_px),
-                             nullptr, pose.data(), lines[i].data());
-    problem.SetParameterBlockConstant(lines[i].data());
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 100;
-  options.function_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-14;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  ASSERT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
-  Rigid3d ceres_pose;
-  ParametersToPose(pose.data(), &ceres_pose);
-  EXPECT_LT((r.cam_from_world.translation - ceres_pose.translation).norm(), 1e-5);
+  const Rigid3d ceres_pose = SolveWithCeres(rig, s, Rigid3d(R0, t0), r.point_inlier,
+                                            r.line_inlier, false, {}, 100, true);
+  EXPECT_LT(TranslationDifference(r.cam_from_world, ceres_pose), 1e-5);
   EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, ceres_pose.rotation), 1e-4);
   EXPECT_GT(r.point_inliers, 80);
   EXPECT_GT(r.line_inliers, 15);
+}
+
+// Step by step as Ceres: one round of 1 and of 3 Levenberg-Marquardt steps from 10 cm off, with
+// Huber losses over points and lines with 20 % gross outliers (the reweighting, the Jacobi scaling,
+// the damping and the trust region's growth), and a non-robust round with the lines' cost scaled
+// by 0.3 (ScaledLoss before), where the third step's candidate meets the function tolerance and
+// is not taken. The poses must agree to round-off.
+TEST(PoseOptimizer, StepsEqualCeresWithHuberAndScaledLines) {
+  const StereoRig rig = EurocLikeRig();
+  const Scene s = MakeScene(100, 30, 0.2, 8);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  const Rigid3d start(R0, t0);
+  const std::vector<bool> all_points(s.points.size(), true), all_lines(s.lines.size(), true);
+  for (const bool robust : {true, false}) {
+    PoseOptimizerOptions o;
+    o.rounds = 1;
+    o.robust_rounds = robust ? 1 : 0;
+    o.line_weight = robust ? 1.0 : 0.3;
+    for (const int steps : {1, 3}) {
+      o.iterations_per_round = steps;
+      const PoseOptimizerResult r = OptimizePose(rig, start, s.points, s.lines, o);
+      ASSERT_TRUE(r.success);
+      const Rigid3d ceres_pose =
+          SolveWithCeres(rig, s, start, all_points, all_lines, robust, o, steps, false);
+      const double tolerance_m = 1e-9;
+      EXPECT_LT(TranslationDifference(r.cam_from_world, ceres_pose), tolerance_m)
+          << "robust " << robust << ", steps " << steps;
+      EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, ceres_pose.rotation),
+                tolerance_m * 10.0)
+          << "robust " << robust << ", steps " << steps;
+      // Not already at the optimum after one step: the comparison measures a step.
+      if (steps == 1) EXPECT_GT(TranslationDifference(r.cam_from_world, start), 0.01);
+    }
+  }
 }
 
 }  // namespace
