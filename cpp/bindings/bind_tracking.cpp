@@ -279,6 +279,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("iterations_per_round", &PoseOptimizerOptions::iterations_per_round)
       .def_readwrite("line_angle_weight", &PoseOptimizerOptions::line_angle_weight)
       .def_readwrite("line_weight", &PoseOptimizerOptions::line_weight)
+      .def_readwrite("own_solver", &PoseOptimizerOptions::own_solver)
       .def("check", &PoseOptimizerOptions::Check);
   py::class_<BundleAdjustmentOptions>(m, "BundleAdjustmentOptions", "Local bundle adjustment.")
       .def(py::init<>())

@@ -794,6 +794,7 @@ class PoseOptimizerOptions:
     """
     Motion-only bundle adjustment.
     """
+    own_solver: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:

@@ -8,6 +8,9 @@
 #include <vector>
 
 #include <ceres/cost_function.h>
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 #include <Eigen/Cholesky>
 
 #include "slslam/core/check.h"
@@ -56,6 +59,7 @@ struct PoseTerm {
   int rows = 0;
   double huber = 0.0;   ///< Huber threshold on the whitened residual's norm [-]
   double weight = 1.0;  ///< scale of the term's cost [-]
+  bool line = false;    ///< the landmark is a line (orthonormal parameters)
 };
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -119,9 +123,10 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
 // 1e-10 or a step of 1e-8 relative to the parameters (both in the 6-dim tangent; Ceres measures
 // them in the 7 parameters), after a step that lowered the cost by at most 1e-6 of it (below), or
 // after `max_iterations` steps, rejected ones included.
-// Ceres solved this until 2026-11-27: on a 6-parameter problem 70 % of its time went to building
-// the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3 against 0.7 ms
-// here, on every frame's tracking. Ceres solved by QR of the Jacobian, this by the normal
+// Opt-in (PoseOptimizerOptions::own_solver): on a 6-parameter problem 70 % of Ceres' time went to
+// building the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3
+// against 0.7 ms here, on every frame's tracking; its accuracy on the long dark sequences is not
+// yet told apart from Ceres' (benchmarks/README.md, 2026-11-27 i). Ceres solved by QR of the Jacobian, this by the normal
 // equations, so steps differ in the last digits (pose_optimizer_test compares steps with Huber
 // losses and with scaled lines, and the whole outlier rounds, with Ceres). When the starting pose
 // cannot be evaluated the pose stays as given, as Ceres' failed solve left it.
@@ -174,6 +179,35 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
       if (radius < 1e-32) return;
     }
   }
+}
+
+// The same problem solved by Ceres (DENSE_QR), as every release before 2026-11-27 did; the default
+// (PoseOptimizerOptions::own_solver). The terms' costs stay theirs; the problem owns the losses.
+void SolvePoseCeres(const std::vector<const PoseTerm*>& terms, bool robust, int max_iterations,
+                    double* pose) {
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  problem.AddParameterBlock(pose, kPoseSize, new PoseManifold);
+  for (const PoseTerm* term : terms) {
+    ceres::LossFunction* loss = robust ? new ceres::HuberLoss(term->huber) : nullptr;
+    if (term->weight != 1.0) {
+      loss = new ceres::ScaledLoss(loss, term->weight, ceres::TAKE_OWNERSHIP);
+    }
+    // (the landmark is constant; Ceres only reads it)
+    double* landmark = const_cast<double*>(term->landmark);
+    problem.AddResidualBlock(term->cost.get(), loss, pose, landmark);
+    problem.SetParameterBlockConstant(landmark);
+    if (term->line) problem.SetManifold(landmark, new LineManifold);
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
 }
 
 }  // namespace
@@ -242,6 +276,7 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
     term.rows = 3;
     term.huber = std::sqrt(options.chi2_line);
     term.weight = options.line_weight;
+    term.line = true;
     term.landmark = line_params[i].data();
   }
 
@@ -262,7 +297,11 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
       if (round == 0) return result;  // success stays false, pose stays the initial guess
       break;
     }
-    SolvePoseLevenbergMarquardt(active, robust, options.iterations_per_round, pose.data());
+    if (options.own_solver) {
+      SolvePoseLevenbergMarquardt(active, robust, options.iterations_per_round, pose.data());
+    } else {
+      SolvePoseCeres(active, robust, options.iterations_per_round, pose.data());
+    }
 
     Rigid3d solved;
     ParametersToPose(pose.data(), &solved);

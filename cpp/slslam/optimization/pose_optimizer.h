@@ -37,6 +37,10 @@ struct PoseOptimizerOptions {
   double chi2_line = 5.991;       ///< inlier bound on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< scale of the bounded angle term e3 [px]
   double line_weight = 1.0;         ///< weight of the line terms against the point terms [-]
+  /// true: each round solved by this library's 6-parameter Levenberg-Marquardt (Ceres' rules on
+  /// the same costs, 3-4x faster: no problem to build); false: by Ceres. Off until its accuracy
+  /// on the long dark sequences is told apart from Ceres' (benchmarks/README.md, 2026-11-27 i).
+  bool own_solver = false;
 
   void Check() const;
 };

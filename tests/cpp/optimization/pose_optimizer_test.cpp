@@ -148,6 +148,24 @@ TEST(PoseOptimizer, Deterministic) {
   EXPECT_EQ(a.cam_from_world.rotation, b.cam_from_world.rotation);
 }
 
+// Both solvers recover the pose, flag the outliers and agree with each other.
+TEST(PoseOptimizer, OwnSolverAgreesWithCeres) {
+  const Scene s = MakeScene(150, 30, 0.2, 9);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  PerturbedStart(s, &R0, &t0);
+  PoseOptimizerOptions own;
+  own.own_solver = true;
+  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
+  const PoseOptimizerResult b =
+      OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines, own);
+  ASSERT_TRUE(a.success && b.success);
+  EXPECT_EQ(a.point_inlier, b.point_inlier);
+  EXPECT_EQ(a.line_inlier, b.line_inlier);
+  EXPECT_LT((a.cam_from_world.translation - b.cam_from_world.translation).norm(), 1e-5);
+  EXPECT_LT((b.cam_from_world.translation - s.t).norm(), 0.01);
+}
+
 // The same problem in Ceres, as OptimizePose built it before it had a solver of its own: every
 // observation flagged in `use`, Huber losses when `robust`, line terms scaled by `line_weight`.
 Rigid3d SolveWithCeres(const StereoRig& rig, const Scene& s, const Rigid3d& start,
@@ -216,7 +234,9 @@ TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   PerturbedStart(s, &R0, &t0);
-  const PoseOptimizerResult r = OptimizePose(rig, Rigid3d(R0, t0), s.points, s.lines);
+  PoseOptimizerOptions own;
+  own.own_solver = true;
+  const PoseOptimizerResult r = OptimizePose(rig, Rigid3d(R0, t0), s.points, s.lines, own);
   ASSERT_TRUE(r.success);
   const Rigid3d ceres_pose = SolveWithCeres(rig, s, Rigid3d(R0, t0), r.point_inlier,
                                             r.line_inlier, false, {}, 100, true);
@@ -242,6 +262,7 @@ TEST(PoseOptimizer, StepsEqualCeresWithHuberAndScaledLines) {
   const std::vector<bool> all_points(s.points.size(), true), all_lines(s.lines.size(), true);
   for (const bool robust : {true, false}) {
     PoseOptimizerOptions o;
+    o.own_solver = true;
     o.rounds = 1;
     o.robust_rounds = robust ? 1 : 0;
     o.line_weight = robust ? 1.0 : 0.3;
