@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-
 #include <memory>
 #include <vector>
 
@@ -56,7 +55,6 @@ double LineChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
 struct PoseTerm {
   std::unique_ptr<ceres::CostFunction> cost;
   const double* landmark = nullptr;
-  int rows = 0;
   double huber = 0.0;   ///< Huber threshold on the whitened residual's norm [-]
   double weight = 1.0;  ///< scale of the term's cost [-]
   bool line = false;    ///< the landmark is a line (orthonormal parameters)
@@ -95,7 +93,7 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
     const double* parameters[2] = {pose, term->landmark};
     double* jacobians[2] = {jacobian, nullptr};
     if (!term->cost->Evaluate(parameters, residual, jacobians)) return false;
-    const int rows = term->rows;  // 2 or 3
+    const int rows = term->cost->num_residuals();  // 2 or 3
     double squared = 0.0;
     for (int r = 0; r < rows; ++r) squared += residual[r] * residual[r];
     double rho = squared, rho1 = 1.0;
@@ -126,10 +124,11 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
 // Opt-in (PoseOptimizerOptions::own_solver): on a 6-parameter problem 70 % of Ceres' time went to
 // building the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3
 // against 0.7 ms here, on every frame's tracking; its accuracy on the long dark sequences is not
-// yet told apart from Ceres' (benchmarks/README.md, 2026-11-27 i). Ceres solved by QR of the Jacobian, this by the normal
-// equations, so steps differ in the last digits (pose_optimizer_test compares steps with Huber
-// losses and with scaled lines, and the whole outlier rounds, with Ceres). When the starting pose
-// cannot be evaluated the pose stays as given, as Ceres' failed solve left it.
+// yet told apart from Ceres' (benchmarks/README.md, 2026-11-27 i). Ceres solves by QR of the
+// Jacobian, this by the normal equations, so steps differ in the last digits (pose_optimizer_test
+// compares steps with Huber losses and with scaled lines, and the whole outlier rounds, with
+// Ceres). When the starting pose cannot be evaluated the pose stays as given, as Ceres' failed
+// solve leaves it.
 void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool robust,
                                  int max_iterations, double* pose) {
   PoseNormalEquations current;
@@ -250,7 +249,6 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
   for (size_t i = 0; i < lines.size(); ++i) {
     LineToParameters(OrthonormalLine::FromPlucker(lines[i].line_w), line_params[i].data());
   }
-  const double line_scale = std::sqrt(std::max(options.line_weight, 0.0));
   // One term per observation, built once for all rounds (the same analytic costs as local BA).
   std::vector<PoseTerm> point_terms(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
@@ -258,22 +256,20 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
     PoseTerm& term = point_terms[i];
     if (obs.stereo) {
       term.cost = std::make_unique<StereoPointCost>(rig, obs.observed, obs.sigma_px);
-      term.rows = 3;
       term.huber = std::sqrt(options.chi2_stereo);
     } else {
       term.cost = std::make_unique<PointCost>(rig.camera, obs.observed.head<2>(), obs.sigma_px);
-      term.rows = 2;
       term.huber = std::sqrt(options.chi2_mono);
     }
     term.landmark = point_params[i].data();
   }
-  std::vector<PoseTerm> line_terms(line_scale == 0.0 ? 0 : lines.size());
+  // (a line weight of 0 leaves the lines out of the problem; they are still classified)
+  std::vector<PoseTerm> line_terms(options.line_weight > 0.0 ? lines.size() : 0);
   for (size_t i = 0; i < line_terms.size(); ++i) {
     const LineObservation& obs = lines[i];
     PoseTerm& term = line_terms[i];
     term.cost = std::make_unique<LineCost>(rig.camera, obs.start_px, obs.end_px,
                                            options.line_angle_weight, obs.sigma_px);
-    term.rows = 3;
     term.huber = std::sqrt(options.chi2_line);
     term.weight = options.line_weight;
     term.line = true;

@@ -84,6 +84,17 @@ void PerturbedStart(const Scene& s, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
   *t = perturbed.translation;
 }
 
+Rigid3d PerturbedStartPose(const Scene& s) {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  PerturbedStart(s, &R, &t);
+  return Rigid3d(R, t);
+}
+
+double TranslationDifference(const Rigid3d& a, const Rigid3d& b) {
+  return (a.translation - b.translation).norm();
+}
+
 TEST(PoseOptimizer, PointsWithOutliersRecoverPoseAndFlagOutliers) {
   const Scene s = MakeScene(150, 0, 0.2, 1);
   Eigen::Matrix3d R0;
@@ -151,18 +162,15 @@ TEST(PoseOptimizer, Deterministic) {
 // Both solvers recover the pose, flag the outliers and agree with each other.
 TEST(PoseOptimizer, OwnSolverAgreesWithCeres) {
   const Scene s = MakeScene(150, 30, 0.2, 9);
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d t0;
-  PerturbedStart(s, &R0, &t0);
+  const Rigid3d start = PerturbedStartPose(s);
   PoseOptimizerOptions own;
   own.own_solver = true;
-  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines);
-  const PoseOptimizerResult b =
-      OptimizePose(EurocLikeRig(), Rigid3d(R0, t0), s.points, s.lines, own);
+  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), start, s.points, s.lines);
+  const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), start, s.points, s.lines, own);
   ASSERT_TRUE(a.success && b.success);
   EXPECT_EQ(a.point_inlier, b.point_inlier);
   EXPECT_EQ(a.line_inlier, b.line_inlier);
-  EXPECT_LT((a.cam_from_world.translation - b.cam_from_world.translation).norm(), 1e-5);
+  EXPECT_LT(TranslationDifference(a.cam_from_world, b.cam_from_world), 1e-5);
   EXPECT_LT((b.cam_from_world.translation - s.t).norm(), 0.01);
 }
 
@@ -221,25 +229,19 @@ Rigid3d SolveWithCeres(const StereoRig& rig, const Scene& s, const Rigid3d& star
   return solved;
 }
 
-double TranslationDifference(const Rigid3d& a, const Rigid3d& b) {
-  return (a.translation - b.translation).norm();
-}
-
 // The pose solver is our own Levenberg-Marquardt (building a Ceres problem cost more than solving
 // it). Its last round has no robust kernel and its inliers are stable here, so its pose must be
 // the least-squares optimum over the inliers it reports: the one Ceres finds, solved to the end.
 TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
   const StereoRig rig = EurocLikeRig();
   const Scene s = MakeScene(120, 25, 0.15, 6);
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d t0;
-  PerturbedStart(s, &R0, &t0);
+  const Rigid3d start = PerturbedStartPose(s);
   PoseOptimizerOptions own;
   own.own_solver = true;
-  const PoseOptimizerResult r = OptimizePose(rig, Rigid3d(R0, t0), s.points, s.lines, own);
+  const PoseOptimizerResult r = OptimizePose(rig, start, s.points, s.lines, own);
   ASSERT_TRUE(r.success);
-  const Rigid3d ceres_pose = SolveWithCeres(rig, s, Rigid3d(R0, t0), r.point_inlier,
-                                            r.line_inlier, false, {}, 100, true);
+  const Rigid3d ceres_pose =
+      SolveWithCeres(rig, s, start, r.point_inlier, r.line_inlier, false, {}, 100, true);
   EXPECT_LT(TranslationDifference(r.cam_from_world, ceres_pose), 1e-5);
   EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, ceres_pose.rotation), 1e-4);
   EXPECT_GT(r.point_inliers, 80);
@@ -255,10 +257,7 @@ TEST(PoseOptimizer, FinalPoseIsCeresLeastSquaresOptimumOverTheInliers) {
 TEST(PoseOptimizer, StepsEqualCeresWithHuberAndScaledLines) {
   const StereoRig rig = EurocLikeRig();
   const Scene s = MakeScene(100, 30, 0.2, 8);
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d t0;
-  PerturbedStart(s, &R0, &t0);
-  const Rigid3d start(R0, t0);
+  const Rigid3d start = PerturbedStartPose(s);
   const std::vector<bool> all_points(s.points.size(), true), all_lines(s.lines.size(), true);
   for (const bool robust : {true, false}) {
     PoseOptimizerOptions o;
