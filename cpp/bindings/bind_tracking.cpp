@@ -418,6 +418,9 @@ void BindTracking(py::module_& m) {
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
+      .def_readwrite("lost_reentry_min_point_ratio",
+                     &TrackerOptions::lost_reentry_min_point_ratio)
+      .def_readwrite("new_map_after_lost_frames", &TrackerOptions::new_map_after_lost_frames)
       .def_readwrite("lost_velocity_decay", &TrackerOptions::lost_velocity_decay)
       .def_readwrite("lost_search_scale", &TrackerOptions::lost_search_scale)
       .def_readwrite("weak_keyframe_inliers", &TrackerOptions::weak_keyframe_inliers)

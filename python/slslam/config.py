@@ -143,6 +143,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "recently_lost_frames",
         "lost_velocity_decay",
         "lost_search_scale",
+        "lost_reentry_min_point_ratio",
+        "new_map_after_lost_frames",
         "weak_keyframe_inliers",
         "weak_keyframe_frames",
     )
@@ -160,6 +162,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
     "local_ba_line_prior_weight": ("mapping.ba.line_prior_weight",),
     "local_ba_dogleg": ("mapping.ba.dogleg_with_lines",),
+    "own_pose_solver": ("pose.own_solver",),
     "local_ba_line_min_information_per_rad2": ("mapping.ba.line_min_information_per_rad2",),
 }
 LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
@@ -415,6 +418,10 @@ class TrackingConfig:
     # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
     # no linear solve); needs local_ba_line_prior_weight > 0
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
+    # motion-only BA by slslam's own 6-parameter Levenberg-Marquardt instead of a Ceres problem
+    # per outlier round (the same costs and trust-region rules; about 3x faster, 2.28 -> 0.72 ms on
+    # 400 stereo points; benchmarks/README.md, 2026-11-27 i)
+    own_pose_solver: bool = _tracking("own_pose_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
     # (0: free in all four; 1: less drift in the dark with the IMU over five simulator seeds,
@@ -482,6 +489,12 @@ class TrackingConfig:
     lost_velocity_decay: float = _tracking("lost_velocity_decay", "[0, 1]")
     # guided-matching window factor while recently lost
     lost_search_scale: float = _tracking("lost_search_scale", "[1, 100]")
+    # lost: a re-entry along the motion before the loss needs this share of its point matches
+    # as inliers (lines do not count: a wrong pose gathers line inliers along the lines)
+    lost_reentry_min_point_ratio: float = _tracking("lost_reentry_min_point_ratio", "[0, 1]")
+    # lost: frames that could start a map which must fail to come back into the old maps before
+    # a new map starts (black frames do not count) [frames]
+    new_map_after_lost_frames: int = _tracking("new_map_after_lost_frames", "[0, 100000]")
     # weighted inliers below this: a keyframe every weak_keyframe_frames (thin tracking)
     weak_keyframe_inliers: int = _tracking("weak_keyframe_inliers", "[0, 100000]")
     weak_keyframe_frames: int = _tracking("weak_keyframe_frames", "[1, 100000]")  # [frames]

@@ -209,20 +209,27 @@ std::shared_ptr<const StereoFrame> Tracker::WithStereoLines(
   return Completed(std::move(frame), &StereoFrame::stereo_lines_pending, complete_stereo_lines_);
 }
 
-bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world) {
-  int stereo_points = 0, stereo_lines = 0;
-  for (double d : frame->depth) stereo_points += d > 0.0;
+int Tracker::StereoPoints(const StereoFrame& frame) {
+  int stereo_points = 0;
+  for (double d : frame.depth) stereo_points += d > 0.0;
+  return stereo_points;
+}
+
+bool Tracker::CouldStartMap(const StereoFrame& frame) const {
   // (too few points already: the right image's lines cannot start a map)
-  if (stereo_points < std::min(options_.min_init_points, 15)) return false;
+  return StereoPoints(frame) >= std::min(options_.min_init_points, 15);
+}
+
+bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world) {
+  if (!CouldStartMap(*frame)) return false;
+  const int stereo_points = StereoPoints(*frame);
+  int stereo_lines = 0;
   if (options_.use_lines) {
     frame = WithStereoLines(std::move(frame));
     for (bool has : frame->line_has_depth) stereo_lines += has;
   }
   // A map needs some points: lines alone leave the first keyframe's pose weakly constrained.
-  if (stereo_points < std::min(options_.min_init_points, 15) ||
-      Weighted(stereo_points, stereo_lines) < options_.min_init_points) {
-    return false;
-  }
+  if (Weighted(stereo_points, stereo_lines) < options_.min_init_points) return false;
   active_ = atlas_.AddMap();
   ++stats_.maps_started;
   InsertKeyFrame(frame, cam_from_world, std::vector<int>(frame->NumKeypoints(), -1),
@@ -616,6 +623,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     BridgePose(*frame, tracking.pose.cam_from_world);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
+    lost_map_candidates_ = 0;
     if (options_.localise_only) {
       // No keyframes are made: the reference keyframe (centre of the local map) moves to the
       // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
@@ -697,11 +705,17 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   velocity_ = Rigid3d();
   result.cam_from_world = last_cam_from_world_;
   const auto start = Clock::now();
-  if (!options_.localise_only && StartMap(frame, last_cam_from_world_)) {
+  // A new map only after new_map_after_lost_frames frames that could have started one failed to
+  // come back into the old maps (a black frame does not count).
+  const bool may_start =
+      !options_.localise_only &&
+      (!CouldStartMap(*frame) || ++lost_map_candidates_ > options_.new_map_after_lost_frames);
+  if (may_start && StartMap(frame, last_cam_from_world_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;
     mode_ = Mode::kTracking;
     lost_count_ = 0;
+    lost_map_candidates_ = 0;
     RecordFrame(*frame, /*keyframe=*/true);
     BridgePose(*frame, last_cam_from_world_);
   } else {

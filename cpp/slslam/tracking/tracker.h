@@ -177,6 +177,18 @@ struct TrackerOptions {
   double lost_velocity_decay = 0.6;     ///< per-frame factor on the predicted motion while
                                         ///< recently lost (rotation angle and translation) [-]
   float lost_search_scale = 2.0f;       ///< guided-matching window factor while recently lost [-]
+  /// Lost, the local map tracked from a pose along the motion before the loss is taken only where
+  /// at least this share of its point matches are inliers [-]. Lines do not count here: a line
+  /// constrains a pose little along itself, and on the camera-only blackout of the simulated
+  /// junction at light 0.5 the wrong re-entries kept 12-13 % of their point matches and made up
+  /// the rest with line inliers, the right ones kept 38-48 % (benchmarks/README.md, 2026-11-28).
+  /// 0: any share
+  double lost_reentry_min_point_ratio = 0.25;
+  /// Lost: frames with enough stereo points to start a map that must fail relocalisation and the
+  /// re-entry along the loss motion before a new map is started there [frames]. The first lit
+  /// frame after a blackout often fails both where the next ones do not; a new map is merged
+  /// back only when place recognition links it. 0: the first such frame starts one
+  int new_map_after_lost_frames = 5;
   int weak_keyframe_inliers = 60;       ///< weighted inliers below this: a keyframe every
                                         ///< `weak_keyframe_frames`, to keep a thin map alive [-]
   int weak_keyframe_frames = 3;         ///< [frames]
@@ -306,6 +318,8 @@ class Tracker {
   // left lines on demand (lines_on_demand).
   TrackResult TrackFrame(std::shared_ptr<const StereoFrame>& frame);
   bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
+  static int StereoPoints(const StereoFrame& frame);  ///< keypoints with a stereo depth
+  bool CouldStartMap(const StereoFrame& frame) const;  ///< enough stereo points for StartMap
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
   // was given a completer.
   std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
@@ -411,6 +425,7 @@ class Tracker {
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
   int lost_count_ = 0;          ///< frames since tracking failed
+  int lost_map_candidates_ = 0;  ///< lost frames since tracking failed that could start a map
   bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)

@@ -346,11 +346,35 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
               results[15 + recently].cam_from_world.translation)
         << k;
   }
-  // No vocabulary: no relocalisation; the first frame with features starts map 2 at the frozen
-  // pose, and tracking goes on there.
+  // No vocabulary: no relocalisation. The first new_map_after_lost_frames frames with features
+  // still try the old map (and stay lost, frozen); the next one starts map 2 at the frozen pose,
+  // and tracking goes on there.
+  const int wait = TrackerOptions{}.new_map_after_lost_frames;
+  ASSERT_GT(wait, 0);
+  for (int k = 40; k < 40 + wait; ++k) {
+    EXPECT_EQ(results[k].state, TrackingState::kLost) << k;
+    EXPECT_EQ(results[k].cam_from_world.translation, results[39].cam_from_world.translation) << k;
+  }
+  EXPECT_EQ(results[40 + wait].state, TrackingState::kNewMap);
+  EXPECT_EQ(results[40 + wait].cam_from_world.translation,
+            results[39].cam_from_world.translation);
+  for (int k = 41 + wait; k < 50; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+  EXPECT_EQ(tracker.num_maps(), 2);
+}
+
+TEST(TrackerTest, WithoutAWaitTheFirstLitFrameAfterALongBlackoutStartsANewMap) {
+  const Scene scene, elsewhere(99);
+  TrackerOptions options = Options(true, /*lines=*/false);
+  options.new_map_after_lost_frames = 0;
+  Tracker tracker(options);
+  std::vector<TrackResult> results;
+  for (int k = 0; k < 45; ++k) {
+    const bool blind = k >= 15 && k < 40;
+    results.push_back(tracker.Track(Render(k < 40 ? scene : elsewhere, k, 0.5, blind)));
+  }
+  EXPECT_EQ(results[39].state, TrackingState::kLost);
   EXPECT_EQ(results[40].state, TrackingState::kNewMap);
-  EXPECT_EQ(results[40].cam_from_world.translation, results[39].cam_from_world.translation);
-  for (int k = 41; k < 50; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+  for (int k = 41; k < 45; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
   EXPECT_EQ(tracker.num_maps(), 2);
 }
 
@@ -467,6 +491,7 @@ void ExpectASecondMapMergedIntoTheFirst(bool sequential, bool global_ba = true,
   options.loop_closing.global_ba = global_ba;
   options.vocabulary_path = SceneVocabulary(scene);
   options.relocalisation.min_inliers = 1e9;
+  options.new_map_after_lost_frames = 0;  // the first lit frame starts the second map
   Tracker tracker(options);
   for (int i = 0; i < 30; ++i) {
     ASSERT_EQ(tracker.Track(RenderAt(scene, 60 + i, i, 0.5)).state, TrackingState::kOk) << i;
