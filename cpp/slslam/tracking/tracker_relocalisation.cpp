@@ -123,9 +123,11 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
       return weighted > o.weighted;
     }
   };
+  // (a pose held by lines alone never comes back: they leave it free along the roadway)
   const auto points_agree = [&](const LocalTracking& attempt) {
     const double point_matches = static_cast<double>(attempt.point_ids.size());
-    return attempt.pose.point_inliers >= options_.lost_reentry_min_point_ratio * point_matches;
+    return attempt.pose.point_inliers > 0 &&
+           attempt.pose.point_inliers >= options_.lost_reentry_min_point_ratio * point_matches;
   };
   std::vector<std::pair<Rank, LocalTracking>> attempts;
   for (const Rigid3d& hypothesis : hypotheses) {
