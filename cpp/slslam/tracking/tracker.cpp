@@ -705,11 +705,12 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   velocity_ = Rigid3d();
   result.cam_from_world = last_cam_from_world_;
   const auto start = Clock::now();
-  // A new map only after new_map_after_lost_frames frames that could have started one failed to
-  // come back into the old maps (a black frame does not count).
-  const bool may_start =
-      !options_.localise_only &&
-      (!CouldStartMap(*frame) || ++lost_map_candidates_ > options_.new_map_after_lost_frames);
+  // A new map only after new_map_after_lost_frames lit frames failed to come back into the old
+  // maps (a black frame does not count, and StartMap refuses it).
+  const bool lit = CouldStartMap(*frame);
+  if (lit) ++lost_map_candidates_;
+  const bool may_start = !options_.localise_only && lit &&
+                         lost_map_candidates_ > options_.new_map_after_lost_frames;
   if (may_start && StartMap(frame, last_cam_from_world_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;

@@ -182,12 +182,13 @@ struct TrackerOptions {
   /// constrains a pose little along itself, and on the camera-only blackout of the simulated
   /// junction at light 0.5 the wrong re-entries kept 12-13 % of their point matches and made up
   /// the rest with line inliers, the right ones kept 38-48 % (benchmarks/README.md, 2026-11-28).
-  /// 0: any share
+  /// 0: any share above none (a pose held by lines alone is never taken)
   double lost_reentry_min_point_ratio = 0.25;
-  /// Lost: frames with enough stereo points to start a map that must fail relocalisation and the
-  /// re-entry along the loss motion before a new map is started there [frames]. The first lit
-  /// frame after a blackout often fails both where the next ones do not; a new map is merged
-  /// back only when place recognition links it. 0: the first such frame starts one
+  /// Lost: lit frames (at least min(min_init_points, 15) stereo points, StartMap's first check;
+  /// a black frame has none) that must fail relocalisation and the re-entry along the loss
+  /// motion before one starts a new map [frames]. The first lit frame after a blackout often
+  /// fails both where the next ones do not; a new map is merged back only when place recognition
+  /// links it. 0: the first lit frame starts one (where StartMap's other checks pass)
   int new_map_after_lost_frames = 5;
   int weak_keyframe_inliers = 60;       ///< weighted inliers below this: a keyframe every
                                         ///< `weak_keyframe_frames`, to keep a thin map alive [-]
@@ -319,7 +320,8 @@ class Tracker {
   TrackResult TrackFrame(std::shared_ptr<const StereoFrame>& frame);
   bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
   static int StereoPoints(const StereoFrame& frame);  ///< keypoints with a stereo depth
-  bool CouldStartMap(const StereoFrame& frame) const;  ///< enough stereo points for StartMap
+  /// StartMap's first check: at least min(min_init_points, 15) stereo points (a lit frame)
+  bool CouldStartMap(const StereoFrame& frame) const;
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
   // was given a completer.
   std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
@@ -392,7 +394,10 @@ class Tracker {
                        const FeatureVector& features, int map_index, LocalTracking* tracking,
                        int* keyframe_id);
   // Lost: the local map tracked from poses along the motion before the loss and from the frozen
-  // pose; the best-supported attempt (the caller decides whether it is enough).
+  // pose, ranked by point inliers with a stereo depth: the best-ranked attempt with
+  // lost_reentry_min_point_ratio of its point matches as inliers, else the local map searched
+  // again from the best-ranked pose if that one has them, else none (pose.success false). The
+  // caller takes it with twice min_inliers.
   LocalTracking TrackAlongLossMotion(const StereoFrame& frame,
                                      const Rigid3d& frozen_cam_from_world);
   // The pose predicted for the next frame from the current motion model.
@@ -425,7 +430,7 @@ class Tracker {
   int active_ = -1;  ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
   int lost_count_ = 0;          ///< frames since tracking failed
-  int lost_map_candidates_ = 0;  ///< lost frames since tracking failed that could start a map
+  int lost_map_candidates_ = 0;  ///< lit lost frames since tracking failed (CouldStartMap)
   bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)

@@ -84,7 +84,8 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
                                                      const Rigid3d& frozen_cam_from_world) {
   // The robot most likely kept moving through the dark as before the loss: the local map is
   // tried from poses along the pre-loss motion (a fraction of the frames since the last
-  // estimate) and from the frozen pose, with a wide window; the best-ranked attempt (below) wins.
+  // estimate) and from the frozen pose, with a wide window; the best-ranked attempt (below) whose
+  // points agree is offered to the caller.
   const int since = lost_count_ + 1;  // frames since the last estimated pose
   std::vector<Rigid3d> hypotheses = {frozen_cam_from_world};  // cam_from_world each
   // With the full pre-loss motion, and with its translation only: one frame's rotation may be
@@ -111,8 +112,8 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // (benchmarks/README.md, 2026-11-28), dark: the frozen pose, 1 m behind the truth, kept 28-32
   // line inliers and 12-22 point inliers, 1-7 of them with a depth; the poses along the motion
   // 4-15 cm off 13-24 points, 7-11 with a depth, and fewer lines. A wrong pose may also gather a
-  // few points among the wide window's many matches, so only an attempt that keeps a share of
-  // its point matches is taken.
+  // few points among the wide window's many matches, so an attempt must keep a share of its
+  // point matches.
   struct Rank {
     int stereo_points = 0;
     int points = 0;
@@ -123,10 +124,11 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
       return weighted > o.weighted;
     }
   };
-  // (a pose held by lines alone never comes back: they leave it free along the roadway)
+  // A share of the point matches as inliers (a pose held by lines alone never: they leave it free
+  // along the roadway).
   const auto points_agree = [&](const LocalTracking& attempt) {
     const double point_matches = static_cast<double>(attempt.point_ids.size());
-    return attempt.pose.point_inliers > 0 &&
+    return attempt.pose.success && attempt.pose.point_inliers > 0 &&
            attempt.pose.point_inliers >= options_.lost_reentry_min_point_ratio * point_matches;
   };
   std::vector<std::pair<Rank, LocalTracking>> attempts;
@@ -150,21 +152,26 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // (stable: among equals the earlier hypothesis, as the frozen pose first)
   std::stable_sort(attempts.begin(), attempts.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
+  // Only the best-ranked attempt whose points agree is offered (the caller takes it with twice
+  // min_inliers). Looking further down for one with more weighted inliers re-entered the old map
+  // in tracker_test's kidnapping (ASecondMapIsMergedIntoTheFirstWhereTheyOverlap: the robot put
+  // back 4.5 m behind the frozen pose, every pose tried starting 4.5 m or more from it).
   for (auto& ranked : attempts) {
     if (points_agree(ranked.second)) return std::move(ranked.second);
   }
   if (!attempts.empty() && attempts.front().first.points > 0) {
     // None agrees, but the pose optimised from the best-ranked one may be near: its matches
-    // searched again from there in the normal window (the bright camera-only blackout, seed 0:
-    // 15 of 112 point matches there, 42 of 112 searched again one frame later).
+    // searched again from there in the normal window. The bright camera-only blackout, seed 0:
+    // the best-ranked pose held 15 of 112 point matches at the first lit frame, searched again 27
+    // of 111 (under the share); at the next frame 42 of 112, taken.
     const std::unique_lock<Mutex> lock = LockActiveMap();
     Map& map = atlas_.map(active_);
     map.mutex().AssertHeld();  // locked by LockActiveMap
     const Rigid3d& top = attempts.front().second.pose.cam_from_world;
     LocalTracking again = TrackLocalMap(frame, map, last_keyframe_, top, 1.0f);
-    if (again.pose.success && points_agree(again)) return again;
+    if (points_agree(again)) return again;
   }
-  return {};
+  return {};  // none agrees
 }
 
 }  // namespace slslam

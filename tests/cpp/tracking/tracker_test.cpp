@@ -329,13 +329,14 @@ TEST(TrackerTest, AShortBlackoutIsRecentlyLostThenTrackingResumesInTheSameMap) {
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   // After the blackout the camera sees another place (other landmarks): nothing to recover.
   const Scene scene, elsewhere(99);
-  Tracker tracker(Options(true, /*lines=*/false));
+  const TrackerOptions options = Options(true, /*lines=*/false);
+  Tracker tracker(options);
   std::vector<TrackResult> results;
   for (int k = 0; k < 50; ++k) {
     const bool blind = k >= 15 && k < 40;
     results.push_back(tracker.Track(Render(k < 40 ? scene : elsewhere, k, 0.5, blind)));
   }
-  const int recently = TrackerOptions{}.recently_lost_frames;
+  const int recently = options.recently_lost_frames;
   for (int k = 15; k < 15 + recently; ++k) {
     EXPECT_EQ(results[k].state, TrackingState::kRecentlyLost) << k;
   }
@@ -349,8 +350,8 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   // No vocabulary: no relocalisation. The first new_map_after_lost_frames frames with features
   // still try the old map (and stay lost, frozen); the next one starts map 2 at the frozen pose,
   // and tracking goes on there.
-  const int wait = TrackerOptions{}.new_map_after_lost_frames;
-  ASSERT_GT(wait, 0);
+  const int wait = options.new_map_after_lost_frames;
+  ASSERT_TRUE(wait > 0 && 40 + wait < 49) << wait;
   for (int k = 40; k < 40 + wait; ++k) {
     EXPECT_EQ(results[k].state, TrackingState::kLost) << k;
     EXPECT_EQ(results[k].cam_from_world.translation, results[39].cam_from_world.translation) << k;
