@@ -478,8 +478,11 @@ void BindTracking(py::module_& m) {
           frame = MakeStereoFrame(0, 0.0, kl, kr, nullptr, nullptr, rig, options);
           SearchAndRefineStereoPoints(left, right, rig, options, &frame);
         }
-        return py::make_tuple(Eigen::VectorXd::Map(frame.u_right.data(), frame.u_right.size()),
-                              Eigen::VectorXd::Map(frame.depth.data(), frame.depth.size()));
+        // Copies: a Map would hand Python a view of `frame`, which dies on return.
+        const Eigen::VectorXd u_right =
+            Eigen::VectorXd::Map(frame.u_right.data(), frame.u_right.size());
+        const Eigen::VectorXd depth = Eigen::VectorXd::Map(frame.depth.data(), frame.depth.size());
+        return py::make_tuple(u_right, depth);
       },
       py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
       py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),

@@ -157,6 +157,22 @@ SLSLAM_AVX2_CLONES void AccumulateRowSearchCosts(const float* patch, int side, c
   }
 }
 
+// sad[k] += sum over the patch of |a - (r[k] - mean_right[k])|, the subpixel refinement's costs
+// for all its columns at once (a: the left patch minus its mean). Each sad[k] is summed in the
+// patch's row-major order, as one column at a time summed it, so the floats are the same.
+SLSLAM_AVX2_CLONES void AccumulateSubpixelCosts(const float* patch, int side, const float* strip,
+                                                int width, const float* mean_right, int count,
+                                                float* sad) {
+  for (int dy = 0; dy < side; ++dy) {
+    const float* row = strip + static_cast<size_t>(dy) * width;
+    for (int dx = 0; dx < side; ++dx) {
+      const float a = patch[dy * side + dx];
+      const float* r = row + dx;
+      for (int k = 0; k < count; ++k) sad[k] += std::abs(a - (r[k] - mean_right[k]));
+    }
+  }
+}
+
 }  // namespace
 
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
@@ -274,7 +290,13 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
   if (w <= 0) return;
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
   const int n = frame->NumKeypoints();
-  std::vector<float> sad(2 * L + 1);
+  const int side = 2 * w + 1;
+  const int count = 2 * L + 1;      // columns tried
+  const int width = count + 2 * w;  // right columns their patches cover
+  const float area = static_cast<float>(side * side);
+  std::vector<float> sad(count), patch(side * side), strip(static_cast<size_t>(side) * width);
+  std::vector<float> mean_right(count);
+  std::vector<int> column_sum(width);
   for (int i = 0; i < n; ++i) {
     if (frame->u_right[i] < 0.0) continue;
     const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
@@ -284,32 +306,39 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
         ur0 + L + w >= right.cols) {
       continue;  // too close to the border to refine: keep the descriptor match
     }
-    auto patch_mean = [w, v](const cv::Mat& image, int u) {
-      int sum = 0;
-      for (int dy = -w; dy <= w; ++dy) {
-        const uchar* row = image.ptr<uchar>(v + dy);
-        for (int dx = -w; dx <= w; ++dx) sum += row[u + dx];
+    // Patch means from integer sums (the same floats as summing each patch on its own).
+    int left_sum = 0;
+    for (int dy = -w; dy <= w; ++dy) {
+      const uchar* row = left.ptr<uchar>(v + dy);
+      for (int dx = -w; dx <= w; ++dx) left_sum += row[ul + dx];
+    }
+    const float mean_left = static_cast<float>(left_sum) / area;
+    std::fill(column_sum.begin(), column_sum.end(), 0);
+    for (int dy = 0; dy < side; ++dy) {
+      const uchar* row_l = left.ptr<uchar>(v - w + dy) + (ul - w);
+      const uchar* row_r = right.ptr<uchar>(v - w + dy) + (ur0 - L - w);
+      for (int dx = 0; dx < side; ++dx) patch[dy * side + dx] = row_l[dx] - mean_left;
+      float* out = strip.data() + static_cast<size_t>(dy) * width;
+      for (int x = 0; x < width; ++x) {
+        out[x] = row_r[x];
+        column_sum[x] += row_r[x];
       }
-      return static_cast<float>(sum) / static_cast<float>((2 * w + 1) * (2 * w + 1));
-    };
-    const float mean_left = patch_mean(left, ul);
+    }
+    int window_sum = 0;
+    for (int x = 0; x < side; ++x) window_sum += column_sum[x];
+    for (int k = 0; k < count; ++k) {
+      if (k > 0) window_sum += column_sum[k + side - 1] - column_sum[k - 1];
+      mean_right[k] = static_cast<float>(window_sum) / area;
+    }
+    std::fill(sad.begin(), sad.end(), 0.0f);
+    AccumulateSubpixelCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
+                            sad.data());
     int best = -1;
     float best_sad = std::numeric_limits<float>::max();
-    for (int k = -L; k <= L; ++k) {
-      const int ur = ur0 + k;
-      const float mean_right = patch_mean(right, ur);
-      float sum = 0.0f;
-      for (int dy = -w; dy <= w; ++dy) {
-        const uchar* row_l = left.ptr<uchar>(v + dy);
-        const uchar* row_r = right.ptr<uchar>(v + dy);
-        for (int dx = -w; dx <= w; ++dx) {
-          sum += std::abs((row_l[ul + dx] - mean_left) - (row_r[ur + dx] - mean_right));
-        }
-      }
-      sad[k + L] = sum;
-      if (sum < best_sad) {
-        best_sad = sum;
-        best = k + L;
+    for (int k = 0; k < count; ++k) {
+      if (sad[k] < best_sad) {
+        best_sad = sad[k];
+        best = k;
       }
     }
     if (best <= 0 || best >= 2 * L) {  // minimum on the edge: unreliable
