@@ -173,6 +173,35 @@ SLSLAM_AVX2_CLONES void AccumulateSubpixelCosts(const float* patch, int side, co
   }
 }
 
+// The 2w+1 right rows around row v over columns [x0, x0 + count + 2w) as float (`strip`, row-major,
+// width count + 2w), and the mean of each of the `count` (2w+1)^2 patches centred on columns
+// x0 + w + k. The means come from column sums and a sliding window: O(width) per row, not
+// O(side * count), and integer sums, so they are the same floats as summing every pixel. The row
+// search and the subpixel refinement both take their right patches from here.
+void RightStrip(const cv::Mat& right, int v, int w, int x0, int count, std::vector<float>* strip,
+                std::vector<int>* column_sum, std::vector<float>* mean_right) {
+  const int side = 2 * w + 1;
+  const int width = count + 2 * w;
+  const float area = static_cast<float>(side * side);
+  strip->resize(static_cast<size_t>(side) * width);
+  column_sum->assign(width, 0);
+  for (int dy = 0; dy < side; ++dy) {
+    const uchar* row = right.ptr<uchar>(v - w + dy) + x0;
+    float* out = strip->data() + static_cast<size_t>(dy) * width;
+    for (int x = 0; x < width; ++x) {
+      out[x] = row[x];
+      (*column_sum)[x] += row[x];
+    }
+  }
+  mean_right->resize(count);
+  int window_sum = 0;
+  for (int x = 0; x < side; ++x) window_sum += (*column_sum)[x];
+  for (int k = 0; k < count; ++k) {
+    if (k > 0) window_sum += (*column_sum)[k + side - 1] - (*column_sum)[k - 1];
+    (*mean_right)[k] = static_cast<float>(window_sum) / area;
+  }
+}
+
 }  // namespace
 
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
@@ -222,25 +251,7 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
     if (deviation < options.row_search_min_texture * area) continue;  // flat: no reliable match
     // The strip: 2w+1 right rows over columns [lo - w, hi + w].
     const int width = count + 2 * w;
-    strip.resize(static_cast<size_t>(side) * width);
-    // Patch means from column sums and a sliding window: O(width) per row, not O(side * count)
-    // (integer sums, so the means are the same floats as summing every pixel).
-    column_sum.assign(width, 0);
-    for (int dy = 0; dy < side; ++dy) {
-      const uchar* row = right.ptr<uchar>(v - w + dy) + (lo - w);
-      float* out = strip.data() + static_cast<size_t>(dy) * width;
-      for (int x = 0; x < width; ++x) {
-        out[x] = row[x];
-        column_sum[x] += row[x];
-      }
-    }
-    mean_right.resize(count);
-    int window_sum = 0;
-    for (int x = 0; x < side; ++x) window_sum += column_sum[x];
-    for (int k = 0; k < count; ++k) {
-      if (k > 0) window_sum += column_sum[k + side - 1] - column_sum[k - 1];
-      mean_right[k] = static_cast<float>(window_sum) / area;
-    }
+    RightStrip(right, v, w, lo - w, count, &strip, &column_sum, &mean_right);
     cost.assign(count, 0.0f);
     AccumulateRowSearchCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
                              cost.data());
@@ -294,9 +305,8 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
   const int count = 2 * L + 1;      // columns tried
   const int width = count + 2 * w;  // right columns their patches cover
   const float area = static_cast<float>(side * side);
-  std::vector<float> sad(count), patch(side * side), strip(static_cast<size_t>(side) * width);
-  std::vector<float> mean_right(count);
-  std::vector<int> column_sum(width);
+  std::vector<float> sad(count), patch(side * side), strip, mean_right;
+  std::vector<int> column_sum;
   for (int i = 0; i < n; ++i) {
     if (frame->u_right[i] < 0.0) continue;
     const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
@@ -306,30 +316,18 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
         ur0 + L + w >= right.cols) {
       continue;  // too close to the border to refine: keep the descriptor match
     }
-    // Patch means from integer sums (the same floats as summing each patch on its own).
+    // The left patch's mean from an integer sum, as RightStrip's.
     int left_sum = 0;
     for (int dy = -w; dy <= w; ++dy) {
       const uchar* row = left.ptr<uchar>(v + dy);
       for (int dx = -w; dx <= w; ++dx) left_sum += row[ul + dx];
     }
     const float mean_left = static_cast<float>(left_sum) / area;
-    std::fill(column_sum.begin(), column_sum.end(), 0);
     for (int dy = 0; dy < side; ++dy) {
       const uchar* row_l = left.ptr<uchar>(v - w + dy) + (ul - w);
-      const uchar* row_r = right.ptr<uchar>(v - w + dy) + (ur0 - L - w);
       for (int dx = 0; dx < side; ++dx) patch[dy * side + dx] = row_l[dx] - mean_left;
-      float* out = strip.data() + static_cast<size_t>(dy) * width;
-      for (int x = 0; x < width; ++x) {
-        out[x] = row_r[x];
-        column_sum[x] += row_r[x];
-      }
     }
-    int window_sum = 0;
-    for (int x = 0; x < side; ++x) window_sum += column_sum[x];
-    for (int k = 0; k < count; ++k) {
-      if (k > 0) window_sum += column_sum[k + side - 1] - column_sum[k - 1];
-      mean_right[k] = static_cast<float>(window_sum) / area;
-    }
+    RightStrip(right, v, w, ur0 - L - w, count, &strip, &column_sum, &mean_right);
     std::fill(sad.begin(), sad.end(), 0.0f);
     AccumulateSubpixelCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
                             sad.data());
