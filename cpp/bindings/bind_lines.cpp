@@ -99,7 +99,7 @@ void BindLines(py::module_& m) {
           [](LineExtractorOptions& o, const std::string& name) {
             o.descriptor = ParseLineDescriptor(name);
           },
-          "lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor)")
+          "lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor's bytes)")
       .def_readwrite("lbd", &LineExtractorOptions::lbd)
       .def("check", &LineExtractorOptions::Check);
 

@@ -746,7 +746,7 @@ class LineExtractorOptions:
     @property
     def descriptor(self) -> str:
         """
-        lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor)
+        lbd (ours) or opencv_lbd (OpenCV's BinaryDescriptor's bytes)
         """
     @descriptor.setter
     def descriptor(self, arg1: str) -> None:

@@ -474,9 +474,10 @@ class TrackingConfig:
     line_detection_scale: float = _lines("line_detection_scale", "[0.1, 1]")
     # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
     line_detector: Literal["lsd", "fld"] = _lines("line_detector")
-    # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor, about 60 us a segment) or lbd
-    # (ours, from the LBD paper, about 10 us a segment; less accurate tracking so far, see
-    # benchmarks/README.md); a saved map keeps the kind it was made with
+    # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor's bytes, computed here at about
+    # 20 us a segment with AVX2) or lbd (ours, from the LBD paper, about 10 us a segment on the
+    # half-size image; less accurate tracking so far, see benchmarks/README.md); a saved map
+    # keeps the kind it was made with
     line_descriptor: Literal["opencv_lbd", "lbd"] = _lines("line_descriptor")
     # keep at most this many segments per image after preprocessing, the longest (0: all)
     max_lines: int = _lines("max_lines", "[0, 100000]")

@@ -17,7 +17,8 @@
 // the central band), so a segment and its reversal get the same descriptor. Long segments are
 // sampled at `max_samples_along` points along their length, so the cost per segment is bounded.
 // Why: OpenCV's BinaryDescriptor took 57-67 us per segment (10 ms for the 150 segments of a
-// 752 x 480 mine frame, the largest cost of the line front end). The line front end computes
+// 752 x 480 mine frame, the largest cost of the line front end; its bytes now come from
+// features/opencv_lbd.h at about 20 us a segment). The line front end computes
 // this one on the half-size image LSD ran on, about 7x cheaper. It is not the default: it
 // matched as well in isolation but degraded faster as the views moved apart, and the tracker
 // was less accurate with it (benchmarks/README.md).
@@ -40,7 +41,8 @@ struct LbdOptions {
 };
 
 /// Which line descriptor the line front end computes: "lbd" (this file's) or "opencv_lbd"
-/// (OpenCV contrib's BinaryDescriptor, the one used before; kept for comparisons). Both are 256
+/// (OpenCV contrib's BinaryDescriptor's bytes, computed by features/opencv_lbd.h; the default).
+/// Both are 256
 /// bits, but their bits differ: descriptors of one kind never match the other's.
 enum class LineDescriptor { kLbd, kOpenCvLbd };
 

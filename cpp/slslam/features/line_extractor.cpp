@@ -3,43 +3,14 @@
 #include <algorithm>
 
 #include <opencv2/imgproc.hpp>
-#include <opencv2/line_descriptor.hpp>
 #include <opencv2/ximgproc/fast_line_detector.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/features/opencv_lbd.h"
 
 namespace slslam {
 
-namespace ld = cv::line_descriptor;
-
 namespace {
-
-cv::Mat ComputeOpenCvLbd(const cv::Mat& image, const Segments& segments) {
-  if (segments.empty()) return cv::Mat(0, 32, CV_8U);
-  std::vector<ld::KeyLine> keylines(segments.size());
-  const float max_side = static_cast<float>(std::max(image.cols, image.rows));
-  for (size_t i = 0; i < segments.size(); ++i) {
-    const LineSegment& s = segments[i];
-    ld::KeyLine& k = keylines[i];
-    k.startPointX = k.sPointInOctaveX = s.start.x();
-    k.startPointY = k.sPointInOctaveY = s.start.y();
-    k.endPointX = k.ePointInOctaveX = s.end.x();
-    k.endPointY = k.ePointInOctaveY = s.end.y();
-    k.lineLength = s.Length();
-    k.angle = std::atan2(s.end.y() - s.start.y(), s.end.x() - s.start.x());
-    k.pt = cv::Point2f(0.5f * (s.start.x() + s.end.x()), 0.5f * (s.start.y() + s.end.y()));
-    k.octave = 0;
-    k.class_id = static_cast<int>(i);
-    k.response = k.lineLength / max_side;
-    k.size = k.lineLength;
-    k.numOfPixels = static_cast<int>(k.lineLength);
-  }
-  cv::Mat descriptors;
-  ld::BinaryDescriptor::createBinaryDescriptor()->compute(image, keylines, descriptors);
-  Require(descriptors.rows == static_cast<int>(segments.size()),
-          "LBD dropped segments; give segments inside the image");
-  return descriptors;
-}
 
 // FastLineDetector settings: OpenCV's defaults (segments from 10 px, 1.414 px off the fit line,
 // Canny 50 / 50 with a 3 x 3 Sobel) without its merging step, which compares every pair of
@@ -66,7 +37,7 @@ cv::Mat ComputeLineDescriptors(const cv::Mat& image, const Segments& segments,
                                LineDescriptor descriptor, const LbdOptions& lbd) {
   Require(!image.empty() && image.type() == CV_8UC1, "LBD needs a non-empty 8-bit gray image");
   if (descriptor == LineDescriptor::kLbd) return ComputeBandDescriptors(image, segments, lbd);
-  return ComputeOpenCvLbd(image, segments);
+  return ComputeOpenCvCompatibleLbd(image, segments);
 }
 
 LineDetector ParseLineDetector(const std::string& name) {

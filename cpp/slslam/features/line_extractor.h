@@ -38,11 +38,12 @@ struct LineExtractorOptions {
   /// benchmarks/tracking_recovery.py (benchmarks/README.md) [-], (0, 1]
   float detection_scale = 0.5f;
   LineDetector detector = LineDetector::kLsd;
-  /// Keep at most this many segments after preprocessing, the longest (0: all). OpenCV's LBD
-  /// costs about 60 us per segment (a 752 x 480 mine frame gives 250 after preprocessing) [-],
-  /// >= 0
+  /// Keep at most this many segments after preprocessing, the longest (0: all). The LBD costs
+  /// about 20 us per segment with AVX2, 65 us without (a 752 x 480 mine frame gives 250 after
+  /// preprocessing) [-], >= 0
   int max_lines = 150;
-  /// Descriptor of the segments: OpenCV's BinaryDescriptor at full resolution, or our LBD
+  /// Descriptor of the segments: OpenCV's BinaryDescriptor's bytes at full resolution
+  /// (computed by features/opencv_lbd.h, the same bytes three times faster), or our LBD
   /// (features/lbd.h) on the image LSD ran on (the detection scale): about 7x cheaper, but it
   /// tracked less accurately on the simulated sequences so far (benchmarks/README.md).
   LineDescriptor descriptor = LineDescriptor::kOpenCvLbd;
@@ -56,7 +57,7 @@ struct LineExtractorOptions {
 LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& options = {});
 
 // Descriptors (32 bytes each) of given segments on an image: ours (ComputeBandDescriptors) or
-// OpenCV's BinaryDescriptor.
+// OpenCV's BinaryDescriptor's (ComputeOpenCvCompatibleLbd).
 cv::Mat ComputeLineDescriptors(const cv::Mat& image, const Segments& segments,
                                LineDescriptor descriptor, const LbdOptions& lbd = {});
 
