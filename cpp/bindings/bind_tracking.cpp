@@ -48,6 +48,16 @@ struct LeftLines {
   double extraction_ms = 0.0;
 };
 
+// A frame whose stereo matching ran ahead of the tracker (TrackerCore.prepare), opaque to
+// Python: the frame, the images it was built from (copies) and the lines extracted beside it.
+struct PreparedFrame {
+  cv::Mat left, right, left_used;
+  std::shared_ptr<StereoFrame> frame;
+  std::shared_ptr<LeftLines> left_lines;
+  StereoFrontendTiming timing;
+  mutable bool used = false;  // tracked (under the session's lock): a frame is tracked once
+};
+
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
 // The tracker's options with the line front end's descriptor kind (for map files).
 TrackerOptions WithLineDescriptor(TrackerOptions options, LineDescriptor descriptor) {
@@ -70,31 +80,60 @@ class TrackerSession {
                     const py::array& left_descriptors, const PixelArray& right_uv,
                     const py::array& right_descriptors,
                     const std::shared_ptr<LeftLines>& left_lines) {
+    return TrackPrepared(*Prepare(index, timestamp, left_image, right_image, left_uv,
+                                  left_descriptors, right_uv, right_descriptors, left_lines));
+  }
+
+  // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
+  // session's lock: it reads no state of the tracker, so a pipeline's worker runs it for frame
+  // k + 1 while the core tracks frame k. The images are copied (the frame outlives the arrays).
+  std::shared_ptr<PreparedFrame> Prepare(int index, double timestamp,
+                                         const py::array& left_image,
+                                         const py::array& right_image, const PixelArray& left_uv,
+                                         const py::array& left_descriptors,
+                                         const PixelArray& right_uv,
+                                         const py::array& right_descriptors,
+                                         const std::shared_ptr<LeftLines>& left_lines) const {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
-    Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
-    Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
+    const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
+    const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
+    auto p = std::make_shared<PreparedFrame>();
+    p->left_lines = left_lines;
+    py::gil_scoped_release release;
+    p->left = left.clone();
+    p->right = right.clone();
+    // lines_on_demand: lines extracted ahead are the completer's to hand over if the tracker
+    // asks (the same lines it would extract: only the time differs).
+    const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
+    p->frame = frontend_.Build(index, timestamp, p->left, p->right, kl, kr, &p->timing,
+                               frontend_.options().left_lines_on_demand ? nullptr : ahead,
+                               &p->left_used);
+    return p;
+  }
+
+  // Track's second part: the tracker (and local mapping) on a prepared frame, one call at a
+  // time and in frame order.
+  FrameOutput TrackPrepared(const PreparedFrame& p) {
     FrameOutput out;
+    static_cast<StereoFrontendTiming&>(out) = p.timing;
+    const LineFeatures* ahead = p.left_lines ? &p.left_lines->features : nullptr;
+    if (p.left_lines) out.line_extraction_ms = p.left_lines->extraction_ms;
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      cv::Mat left_used;  // as stereo matching saw it, for the tracker's keypoint refinement
-      // lines_on_demand: lines extracted ahead are the completer's to hand over if the tracker
-      // asks (the same lines it would extract: only the time differs).
-      const bool on_demand = frontend_.options().left_lines_on_demand;
-      const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
-      auto frame = frontend_.Build(index, timestamp, left, right, kl, kr, &out,
-                                   on_demand ? nullptr : ahead, &left_used);
-      if (left_lines) out.line_extraction_ms = left_lines->extraction_ms;
+      SLSLAM_CHECK(!p.used, "a prepared frame is tracked once");
+      p.used = true;
       // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
-        frontend_.CompleteStereoLines(right, f);
+        frontend_.CompleteStereoLines(p.right, f);
       };
       // (lines_on_demand: the left image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete_left = [&](StereoFrame* f) {
-        frontend_.CompleteLeftLines(left, f, ahead);
+        frontend_.CompleteLeftLines(p.left, f, ahead);
       };
-      static_cast<TrackResult&>(out) = tracker_.Track(frame, complete, left_used, complete_left);
+      static_cast<TrackResult&>(out) = tracker_.Track(p.frame, complete, p.left_used,
+                                                      complete_left);
       out.lines = out.frame_lines;
       if (!ahead) out.line_extraction_ms += out.left_lines_ms;
     }
@@ -493,6 +532,10 @@ void BindTracking(py::module_& m) {
       "search with options.row_search, then subpixel refinement. (u_right, depth) per left "
       "keypoint, -1 where unmatched.");
 
+  py::class_<PreparedFrame, std::shared_ptr<PreparedFrame>>(
+      m, "PreparedFrame", "A frame whose stereo matching ran ahead (TrackerCore.prepare).")
+      .def_property_readonly(
+          "stereo_matching_ms", [](const PreparedFrame& p) { return p.timing.stereo_matching_ms; });
   py::class_<LeftLines, std::shared_ptr<LeftLines>>(
       m, "LeftLines", "A left image's lines extracted ahead (TrackerCore.extract_left_lines).")
       .def_property_readonly("count",
@@ -511,6 +554,16 @@ void BindTracking(py::module_& m) {
            py::arg("left_lines") = nullptr,
            "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
            "image's lines from extract_left_lines on this left image (None: extracted here).")
+      .def("prepare", &TrackerSession::Prepare, py::arg("index"), py::arg("timestamp"),
+           py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
+           py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
+           py::arg("left_lines") = nullptr,
+           "track's first part without the session's lock: the frame's stereo matching (and "
+           "its lines unless left_lines or lines on demand), for a thread ahead of the core. "
+           "track(...) equals track_prepared(prepare(...)).")
+      .def("track_prepared", &TrackerSession::TrackPrepared, py::arg("frame"),
+           "track's second part on a frame from prepare (once, in frame order): the tracker and "
+           "local mapping; returns its FrameOutput.")
       .def("extract_left_lines", &TrackerSession::ExtractLeftLines, py::arg("left_image"),
            "The left image's lines as track extracts them (smoothed when noisy), without the "
            "session's lock: for a thread beside the point front end. Needs use_lines and "

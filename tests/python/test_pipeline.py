@@ -71,6 +71,28 @@ def test_pipelined_stream_gives_the_poses_of_a_plain_loop(sequence, frames_ahead
     assert max(ahead) == frames_ahead
 
 
+def test_stereo_matching_runs_ahead_of_the_core_and_a_frame_is_tracked_once(sequence):
+    """The worker's part ends with the frame's stereo matching (TrackerCore.prepare, no lock):
+    frame 1 is prepared before frame 0 is tracked, and the poses are those of track()."""
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        for left, right, t in frames_of(sequence):
+            tracker.track(left, right, t)
+            if len(tracker.results) == 2:
+                break
+        _, expected, _ = tracker.trajectory()
+    with Tracker(sequence.camera, orb_lines()) as tracker:
+        f0, f1 = sequence[0], sequence[1]
+        first = tracker._prepare(0, f0.left, f0.right, f0.t_ns * 1e-9, None)
+        second = tracker._prepare(1, f1.left, f1.right, f1.t_ns * 1e-9, f0.t_ns * 1e-9)
+        assert first.stereo.stereo_matching_ms > 0.0
+        tracker._track_prepared(first)
+        tracker._track_prepared(second)
+        with pytest.raises(ValueError, match="tracked once"):
+            tracker._core.track_prepared(first.stereo)
+        _, poses, _ = tracker.trajectory()
+    assert np.array_equal(poses, expected)
+
+
 def test_overlapped_local_mapping_through_the_pipeline_is_reproducible(sequence):
     """tracking.mapping_overlap reaches the core (the poses differ from inline mapping's) and
     keeps the run exactly reproducible: the pipeline with a queue gives the poses of a plain

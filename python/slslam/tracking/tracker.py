@@ -182,6 +182,8 @@ class _Prepared:
     inference_ms: float  #: point front end, both images (wall)
     left_lines: _core.LeftLines | None  #: extracted beside it; None: the core extracts them
     front_ms: float  #: the whole front-end step (wall): points and lines side by side
+    #: stereo matching done (TrackerCore.prepare): what the core tracks
+    stereo: _core.PreparedFrame
 
 
 _END = object()  # the pipeline's worker has read every frame
@@ -541,8 +543,8 @@ class Tracker:
     ) -> Iterator[TrackResult]:
         """Tracks (left, right, timestamp) triples in order, yielding each frame's result.
 
-        With ``pipeline`` the point front end of the next frames (and reading them from
-        ``frames``) runs on a worker thread while the core tracks frame k: at most
+        With ``pipeline`` the point front end and the stereo matching of the next frames (and
+        reading them from ``frames``) run on a worker thread while the core tracks frame k: at most
         ``frames_ahead`` frames prepared and not yet taken by the core (default
         ``tracking.pipeline_frames_ahead``; 1: frame k+1 only), results in input order and
         equal to ``track`` in a loop. More than one lets the front end go on while the core
@@ -621,8 +623,9 @@ class Tracker:
         timestamp: float,
         previous: float | None,
     ) -> _Prepared:
-        """Checks one frame and runs the point front end on both images, or on the left one with
-        ``tracking.stereo_row_search`` (thread-safe: no state of the tracker is written)."""
+        """Checks one frame, runs the point front end on both images, or on the left one with
+        ``tracking.stereo_row_search``, and the stereo matching (thread-safe: no state of the
+        tracker is written)."""
         where = f"frame {index}"
         try:
             left = check_gray_image(self._to_gray.convert(left, "left image"))
@@ -668,30 +671,33 @@ class Tracker:
             left_lines = lines.result() if lines is not None else None
         except (ValueError, RuntimeError) as exc:  # named with its frame, as the core's errors
             raise RuntimeError(f"{where}: line extraction: {exc}") from exc
-        front_ms = (time.perf_counter() - start) * 1e3
-        return _Prepared(
-            index, float(timestamp), left, right, kl, kr, inference_ms, left_lines, front_ms
-        )
-
-    def _track_prepared(self, frame: _Prepared) -> TrackResult:
-        """The core's part of one frame (GIL released inside): stereo, tracking (and the left
-        image's lines when no lines thread extracted them)."""
-        index, where = frame.index, f"frame {frame.index}"
-        left, right, kl, kr = frame.left, frame.right, frame.left_keypoints, frame.right_keypoints
-        timestamp, inference_ms = frame.timestamp, frame.inference_ms
-        self._feed_imu(timestamp)
-        start = time.perf_counter()
-        out = self._core.track(
+        # Stereo matching here, not in the core: in a pipeline it runs ahead, beside the core's
+        # tracking of the frame before (the same frame either way; TrackerCore.prepare).
+        stereo = self._core.prepare(
             index,
-            timestamp,
+            float(timestamp),
             left,
             right,
             np.ascontiguousarray(kl.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kl.descriptors),
             np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kr.descriptors),
-            frame.left_lines,
+            left_lines,
         )
+        front_ms = (time.perf_counter() - start) * 1e3
+        return _Prepared(
+            index, float(timestamp), left, right, kl, kr, inference_ms, left_lines, front_ms, stereo
+        )
+
+    def _track_prepared(self, frame: _Prepared) -> TrackResult:
+        """The core's part of one frame (GIL released inside): tracking and local mapping (and
+        the left image's lines when no lines thread extracted them)."""
+        index, where = frame.index, f"frame {frame.index}"
+        kl = frame.left_keypoints
+        timestamp, inference_ms = frame.timestamp, frame.inference_ms
+        self._feed_imu(timestamp)
+        start = time.perf_counter()
+        out = self._core.track_prepared(frame.stereo)
         T_world_cam = np.linalg.inv(out.cam_from_world)
         if not np.all(np.isfinite(T_world_cam)):  # never hand out a NaN pose
             raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
@@ -719,7 +725,7 @@ class Tracker:
             masked_keypoints=out.masked_keypoints,
         )
         result = TrackResult(index, timestamp, out.state, T_world_cam, timings, counts)
-        self.last_image, self.last_keypoints_uv = left, kl.uv
+        self.last_image, self.last_keypoints_uv = frame.left, kl.uv
         self._results.append(result)
         return result
 
