@@ -459,6 +459,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
       .def_readwrite("lost_reentry_min_point_ratio",
                      &TrackerOptions::lost_reentry_min_point_ratio)
+      .def_readwrite("lost_reentry_confirm_m", &TrackerOptions::lost_reentry_confirm_m)
       .def_readwrite("new_map_after_lost_frames", &TrackerOptions::new_map_after_lost_frames)
       .def_readwrite("lost_velocity_decay", &TrackerOptions::lost_velocity_decay)
       .def_readwrite("lost_search_scale", &TrackerOptions::lost_search_scale)

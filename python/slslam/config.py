@@ -144,6 +144,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "lost_velocity_decay",
         "lost_search_scale",
         "lost_reentry_min_point_ratio",
+        "lost_reentry_confirm_m",
         "new_map_after_lost_frames",
         "weak_keyframe_inliers",
         "weak_keyframe_frames",
@@ -494,6 +495,10 @@ class TrackingConfig:
     # lost: a re-entry along the motion before the loss needs this share of its point matches
     # as inliers (lines do not count: a wrong pose gathers line inliers along the lines)
     lost_reentry_min_point_ratio: float = _tracking("lost_reentry_min_point_ratio", "[0, 1]")
+    # lost: a re-entry short of twice min_inliers is taken (with min_inliers) where the previous
+    # frame's attempt, moved one step along the loss motion, lies within this distance (and 5
+    # degrees) of it; 0: off [m]
+    lost_reentry_confirm_m: float = _tracking("lost_reentry_confirm_m", "[0, 100]")
     # lost: frames that could start a map which must fail to come back into the old maps before
     # a new map starts (black frames do not count) [frames]
     new_map_after_lost_frames: int = _tracking("new_map_after_lost_frames", "[0, 100000]")

@@ -525,8 +525,11 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     relocalised = Relocalise(*frame, order, &result, &tracking);
   }
   if (!tracked && !relocalised && mode_ == Mode::kLost && have_pose_) {
-    tracking = TrackAlongLossMotion(*frame, predicted);  // lost: `tracking` was empty
-    tracked = tracking.pose.success && tracking.weighted_inliers >= 2.0 * options_.min_inliers;
+    bool confirmed = false;
+    tracking = TrackAlongLossMotion(*frame, predicted, &confirmed);  // lost: it was empty
+    tracked = tracking.pose.success &&
+              (tracking.weighted_inliers >= 2.0 * options_.min_inliers ||
+               (confirmed && tracking.weighted_inliers >= options_.min_inliers));
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
   result.matched_lines = static_cast<int>(tracking.line_ids.size());

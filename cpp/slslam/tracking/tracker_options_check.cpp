@@ -84,6 +84,7 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.lost_velocity_decay", lost_velocity_decay, 0.0, 1.0);
   CheckInRange("tracking.lost_search_scale", lost_search_scale, 1.0f, 1000.0f);
   CheckInRange("tracking.lost_reentry_min_point_ratio", lost_reentry_min_point_ratio, 0.0, 1.0);
+  CheckInRange("tracking.lost_reentry_confirm_m", lost_reentry_confirm_m, 0.0, 100.0);
   CheckInRange("tracking.new_map_after_lost_frames", new_map_after_lost_frames, 0, kMaxCount);
   CheckInRange("tracking.weak_keyframe_inliers", weak_keyframe_inliers, 0, kMaxCount);
   CheckInRange("tracking.weak_keyframe_frames", weak_keyframe_frames, 1, kMaxCount);

@@ -3,10 +3,17 @@
 #include "slslam/tracking/tracker.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "slslam/tracking/tracker_internal.h"
 
 namespace slslam {
+
+namespace {
+// How far two frames' re-entry attempts may turn apart (after one step of the loss motion) and
+// still confirm each other; lost_reentry_confirm_m holds their distance [rad]: 5 degrees.
+constexpr double kLostReentryConfirmRad = 5.0 * M_PI / 180.0;
+}  // namespace
 
 using tracker_detail::Clock;
 using tracker_detail::Ms;
@@ -81,7 +88,9 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
 }
 
 Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
-                                                     const Rigid3d& frozen_cam_from_world) {
+                                                     const Rigid3d& frozen_cam_from_world,
+                                                     bool* confirmed) {
+  *confirmed = false;
   // The robot most likely kept moving through the dark as before the loss: the local map is
   // tried from poses along the pre-loss motion (a fraction of the frames since the last
   // estimate) and from the frozen pose, with a wide window; the best-ranked attempt (below) whose
@@ -156,8 +165,26 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // min_inliers). Looking further down for one with more weighted inliers re-entered the old map
   // in tracker_test's kidnapping (ASecondMapIsMergedIntoTheFirstWhereTheyOverlap: the robot put
   // back 4.5 m behind the frozen pose, every pose tried starting 4.5 m or more from it).
+  // Short of the caller's bar (twice min_inliers), an attempt is confirmed by the previous
+  // frame's, moved one step along the loss motion; either way it becomes the next frame's.
+  const auto confirm = [&](LocalTracking&& chosen) {
+    const Rigid3d& pose = chosen.pose.cam_from_world;
+    if (chosen.weighted_inliers >= 2.0 * options_.min_inliers) {
+      loss_candidate_.frame = -1;
+      return std::move(chosen);
+    }
+    if (options_.lost_reentry_confirm_m > 0.0 && loss_candidate_.frame == frame.index - 1) {
+      const Rigid3d moved = loss_velocity_ * loss_candidate_.cam_from_world;
+      const double angle_rad =
+          Eigen::AngleAxisd(moved.rotation * pose.rotation.transpose()).angle();
+      *confirmed = (moved.Center() - pose.Center()).norm() <= options_.lost_reentry_confirm_m &&
+                   angle_rad <= kLostReentryConfirmRad;
+    }
+    loss_candidate_ = {frame.index, pose};
+    return std::move(chosen);
+  };
   for (auto& ranked : attempts) {
-    if (points_agree(ranked.second)) return std::move(ranked.second);
+    if (points_agree(ranked.second)) return confirm(std::move(ranked.second));
   }
   if (!attempts.empty() && attempts.front().first.points > 0) {
     // None agrees, but the pose optimised from the best-ranked one may be near: its matches
@@ -169,8 +196,9 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     map.mutex().AssertHeld();  // locked by LockActiveMap
     const Rigid3d& top = attempts.front().second.pose.cam_from_world;
     LocalTracking again = TrackLocalMap(frame, map, last_keyframe_, top, 1.0f);
-    if (points_agree(again)) return again;
+    if (points_agree(again)) return confirm(std::move(again));
   }
+  loss_candidate_.frame = -1;
   return {};  // none agrees
 }
 

@@ -331,6 +331,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(lost_velocity_decay, "tracking.lost_velocity_decay", 0, 1, "[]"),
        FIELD(lost_search_scale, "tracking.lost_search_scale", 1, 1000, "[]"),
        FIELD(lost_reentry_min_point_ratio, "tracking.lost_reentry_min_point_ratio", 0, 1, "[]"),
+       FIELD(lost_reentry_confirm_m, "tracking.lost_reentry_confirm_m", 0, 100, "[]"),
        FIELD(new_map_after_lost_frames, "tracking.new_map_after_lost_frames", 0, 1e9, "[]"),
        FIELD(weak_keyframe_inliers, "tracking.weak_keyframe_inliers", 0, 1e9, "[]"),
        FIELD(weak_keyframe_frames, "tracking.weak_keyframe_frames", 1, 1e9, "[]"),
