@@ -51,6 +51,7 @@ struct LeftLines {
 // A frame whose stereo matching ran ahead of the tracker (TrackerCore.prepare), opaque to
 // Python: the frame, the images it was built from (copies) and the lines extracted beside it.
 struct PreparedFrame {
+  const void* session = nullptr;  // the TrackerSession that prepared it (and tracks it)
   cv::Mat left, right, left_used;
   std::shared_ptr<StereoFrame> frame;
   std::shared_ptr<LeftLines> left_lines;
@@ -99,6 +100,7 @@ class TrackerSession {
     const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
     const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
     auto p = std::make_shared<PreparedFrame>();
+    p->session = this;
     p->left_lines = left_lines;
     py::gil_scoped_release release;
     p->left = left.clone();
@@ -115,6 +117,8 @@ class TrackerSession {
   // Track's second part: the tracker (and local mapping) on a prepared frame, one call at a
   // time and in frame order.
   FrameOutput TrackPrepared(const PreparedFrame& p) {
+    SLSLAM_CHECK(p.session == this, "a prepared frame is tracked by the TrackerCore that "
+                 "prepared it (its rig and options)");
     FrameOutput out;
     static_cast<StereoFrontendTiming&>(out) = p.timing;
     const LineFeatures* ahead = p.left_lines ? &p.left_lines->features : nullptr;

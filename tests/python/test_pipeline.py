@@ -90,7 +90,12 @@ def test_stereo_matching_runs_ahead_of_the_core_and_a_frame_is_tracked_once(sequ
         with pytest.raises(ValueError, match="tracked once"):
             tracker._core.track_prepared(first.stereo)
         _, poses, _ = tracker.trajectory()
+        f2 = sequence[2]
+        third = tracker._prepare(2, f2.left, f2.right, f2.t_ns * 1e-9, f1.t_ns * 1e-9)
     assert np.array_equal(poses, expected)
+    with Tracker(sequence.camera, orb_lines()) as other:  # a frame is its own core's
+        with pytest.raises(ValueError, match="TrackerCore that prepared it"):
+            other._core.track_prepared(third.stereo)
 
 
 def test_overlapped_local_mapping_through_the_pipeline_is_reproducible(sequence):

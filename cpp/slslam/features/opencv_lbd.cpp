@@ -11,7 +11,9 @@
 
 #include "slslam/core/check.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// (not under a sanitizer, which does not see into the gathers: the scalar loop reads the same
+// pixels)
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(SLSLAM_SANITIZED)
 #include <immintrin.h>
 #define SLSLAM_LBD_AVX2 1
 #endif
@@ -72,7 +74,7 @@ struct Sampling {
   float dl0 = 0.0f, dl1 = 0.0f;  // direction (cos, sin)
   int length = 0;                // samples per row
   int width = 0, height = 0;     // image size [px]
-  const std::int32_t* gradients = nullptr;  // (dx, dy) int16 pairs, row-major
+  const std::int16_t* gradients = nullptr;  // (dx, dy) int16 pairs, row-major
 };
 
 // Nearest pixel, OpenCV's rounding (half away from zero) and clamp to [0, max]; the truncation
@@ -90,10 +92,11 @@ void SampleRowsScalar(const Sampling& s, int first_row, RowSums* sums) {
     float x = s.x0[h], y = s.y0[h];
     float pl = 0.0f, nl = 0.0f, po = 0.0f, no = 0.0f;
     for (int w = 0; w < s.length; ++w) {
-      const std::int32_t v =
-          s.gradients[RoundClamp(y, s.height - 1) * s.width + RoundClamp(x, s.width - 1)];
-      const float dx = static_cast<float>(static_cast<std::int16_t>(v & 0xffff));
-      const float dy = static_cast<float>(static_cast<std::int16_t>((v >> 16) & 0xffff));
+      const std::int16_t* g =
+          s.gradients +
+          2 * (RoundClamp(y, s.height - 1) * s.width + RoundClamp(x, s.width - 1));
+      const float dx = static_cast<float>(g[0]);
+      const float dy = static_cast<float>(g[1]);
       const float gl = dx * s.dl0 + dy * s.dl1;
       const float go = dx * do0 + dy * do1;
       if (gl > 0.0f) {
@@ -137,6 +140,7 @@ __attribute__((target("avx2"))) void SampleRowsAvx2(const Sampling& s, int first
   const __m256i stride = _mm256_set1_epi32(s.width);
   __m256 x = _mm256_loadu_ps(&s.x0[first_row]), y = _mm256_loadu_ps(&s.y0[first_row]);
   __m256 pl = zero, nl = zero, po = zero, no = zero;
+  // (one 32-bit lane a pixel: dx in the low half, x86 being little-endian)
   const int* base = reinterpret_cast<const int*>(s.gradients);
   for (int w = 0; w < s.length; ++w) {
     const __m256i index = _mm256_add_epi32(_mm256_mullo_epi32(RoundClampAvx2(y, max_y), stride),
@@ -268,7 +272,7 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
   Sampling s;
   s.width = image.cols;
   s.height = image.rows;
-  s.gradients = gradients.ptr<std::int32_t>();
+  s.gradients = gradients.ptr<std::int16_t>();
   RowSums rows;
   constexpr float kHalfRowsF = static_cast<float>(kHalfRows);
   for (size_t i = 0; i < segments.size(); ++i) {

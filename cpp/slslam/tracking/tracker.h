@@ -185,9 +185,10 @@ struct TrackerOptions {
   /// 0: any share above none (a pose held by lines alone is never taken)
   double lost_reentry_min_point_ratio = 0.25;
   /// Lost: the re-entry along the loss motion whose pose holds fewer than twice min_inliers is
-  /// taken when it holds min_inliers and the previous frame's (also short of the bar) lies,
-  /// moved one step along that motion, within this distance and 5 degrees of it: two frames
-  /// agreeing where one alone would not do. On the dark camera-only blackout of the simulated
+  /// taken when it holds min_inliers and the previous frame's (also short of the bar, with
+  /// min_inliers) lies, moved one step along that motion, within this distance and 5 degrees of
+  /// it: two frames agreeing where one alone would not do. Attempts started from the frozen pose
+  /// take no part (two frames of it agree by construction). On the dark camera-only blackout of the simulated
   /// junction the attempts along the motion reached the right pose (1-9 cm off) with 21-29
   /// weighted inliers, frame after frame, until the frozen pose 1 m behind got past the bar on
   /// its lines (benchmarks/README.md, 2026-11-28 d). 0: off [m]
@@ -444,9 +445,12 @@ class Tracker {
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)
   /// The previous frame's re-entry attempt along the loss motion that fell short of the bar
-  /// (TrackAlongLossMotion; frame -1: none).
+  /// (TrackAlongLossMotion): its frame, the map and correction epoch its pose is expressed in.
   struct LossCandidate {
-    int frame = -1;
+    bool valid = false;
+    int frame = 0;
+    int map = -1;
+    int epoch = -1;
     Rigid3d cam_from_world;
   } loss_candidate_;
   bool have_pose_ = false;

@@ -127,6 +127,7 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     int stereo_points = 0;
     int points = 0;
     double weighted = 0.0;
+    int hypothesis = 0;  // (not ranked) where the attempt started; 0: the frozen pose
     bool operator>(const Rank& o) const {
       if (stereo_points != o.stereo_points) return stereo_points > o.stereo_points;
       if (points != o.points) return points > o.points;
@@ -151,6 +152,7 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     }
     if (!attempt.pose.success) continue;
     Rank rank;
+    rank.hypothesis = static_cast<int>(&hypothesis - hypotheses.data());
     rank.points = attempt.pose.point_inliers;
     rank.weighted = attempt.weighted_inliers;
     for (size_t i = 0; i < attempt.point_ids.size(); ++i) {
@@ -165,26 +167,34 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // min_inliers). Looking further down for one with more weighted inliers re-entered the old map
   // in tracker_test's kidnapping (ASecondMapIsMergedIntoTheFirstWhereTheyOverlap: the robot put
   // back 4.5 m behind the frozen pose, every pose tried starting 4.5 m or more from it).
-  // Short of the caller's bar (twice min_inliers), an attempt is confirmed by the previous
-  // frame's, moved one step along the loss motion; either way it becomes the next frame's.
-  const auto confirm = [&](LocalTracking&& chosen) {
+  // Short of the caller's bar (twice min_inliers) but with min_inliers, an attempt started along
+  // the motion is confirmed by the previous frame's, moved one step along it, and becomes the
+  // next frame's candidate. One started from the frozen pose neither confirms nor is confirmed:
+  // it stays where it started, so two frames of it always agree to within one step (a robot
+  // that stopped in the dark comes back on the full bar, as before).
+  const auto confirm = [&](LocalTracking&& chosen, int hypothesis) {
     const Rigid3d& pose = chosen.pose.cam_from_world;
-    if (chosen.weighted_inliers >= 2.0 * options_.min_inliers) {
-      loss_candidate_.frame = -1;
-      return std::move(chosen);
-    }
-    if (options_.lost_reentry_confirm_m > 0.0 && loss_candidate_.frame == frame.index - 1) {
-      const Rigid3d moved = loss_velocity_ * loss_candidate_.cam_from_world;
+    const bool candidate = hypothesis != 0 &&
+                           chosen.weighted_inliers < 2.0 * options_.min_inliers &&
+                           chosen.weighted_inliers >= options_.min_inliers;
+    const LossCandidate& previous = loss_candidate_;
+    if (candidate && options_.lost_reentry_confirm_m > 0.0 && previous.valid &&
+        previous.frame == frame.index - 1 && previous.map == active_ &&
+        previous.epoch == seen_epoch_) {
+      const Rigid3d moved = loss_velocity_ * previous.cam_from_world;
       const double angle_rad =
           Eigen::AngleAxisd(moved.rotation * pose.rotation.transpose()).angle();
       *confirmed = (moved.Center() - pose.Center()).norm() <= options_.lost_reentry_confirm_m &&
                    angle_rad <= kLostReentryConfirmRad;
     }
-    loss_candidate_ = {frame.index, pose};
+    loss_candidate_ = candidate ? LossCandidate{true, frame.index, active_, seen_epoch_, pose}
+                                : LossCandidate{};
     return std::move(chosen);
   };
   for (auto& ranked : attempts) {
-    if (points_agree(ranked.second)) return confirm(std::move(ranked.second));
+    if (points_agree(ranked.second)) {
+      return confirm(std::move(ranked.second), ranked.first.hypothesis);
+    }
   }
   if (!attempts.empty() && attempts.front().first.points > 0) {
     // None agrees, but the pose optimised from the best-ranked one may be near: its matches
@@ -196,9 +206,9 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     map.mutex().AssertHeld();  // locked by LockActiveMap
     const Rigid3d& top = attempts.front().second.pose.cam_from_world;
     LocalTracking again = TrackLocalMap(frame, map, last_keyframe_, top, 1.0f);
-    if (points_agree(again)) return confirm(std::move(again));
+    if (points_agree(again)) return confirm(std::move(again), attempts.front().first.hypothesis);
   }
-  loss_candidate_.frame = -1;
+  loss_candidate_ = {};
   return {};  // none agrees
 }
 

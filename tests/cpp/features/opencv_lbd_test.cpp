@@ -51,6 +51,7 @@ Segments RandomSegments(int count, unsigned seed) {
   out.push_back({{0.0f, 0.0f}, {751.0f, 0.0f}});      // the top row
   out.push_back({{751.0f, 479.0f}, {751.0f, 0.0f}});  // the right column, upwards
   out.push_back({{10.25f, 5.5f}, {12.75f, 5.5f}});    // a short one on half pixels
+  out.push_back({{0.0f, 479.0f}, {751.0f, 0.0f}});    // the longest: the image's diagonal
   return out;
 }
 
