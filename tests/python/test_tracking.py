@@ -308,16 +308,12 @@ def test_a_blackout_is_bridged_by_the_imu_and_reported_lost_without_it(tmp_path)
     assert m["ape"]["rmse"] < 0.03
 
 
-def test_a_camera_only_blackout_does_not_come_back_on_line_inliers(tmp_path):
-    """The camera-only blackout of the test above with simulator seed 5: there the pose along the
-    motion before the loss that gathered the most weighted inliers was wrong, carried by 32 line
-    inliers and 13 of 108 point matches, and the run came back into the one map 0.49 m off (ATE)
-    with no loss reported. A re-entry now needs a quarter of its point matches as inliers
-    (tracking.lost_reentry_min_point_ratio); the right pose keeps 38-48 % on this junction."""
+def _camera_only_blackout(tmp_path, **sim) -> dict:
+    """Metrics of ORB + lines without the IMU on the 160-frame junction with a blackout."""
     data = tmp_path / "seq"
-    Simulator(
-        SimOptions(preset="junction", lidar=False, blackout=True, light=0.5, frames=160, seed=5)
-    ).write(data, progress=False)
+    Simulator(SimOptions(preset="junction", lidar=False, blackout=True, frames=160, **sim)).write(
+        data, progress=False
+    )
     base = config("orb", lines=True)
     no_imu = dataclasses.replace(
         base,
@@ -325,7 +321,16 @@ def test_a_camera_only_blackout_does_not_come_back_on_line_inliers(tmp_path):
             base.tracking, imu=dataclasses.replace(base.tracking.imu, enabled=False)
         ),
     )
-    m = run_sequence(data, tmp_path / "out", no_imu, progress=False).metrics
+    return run_sequence(data, tmp_path / "out", no_imu, progress=False).metrics
+
+
+def test_a_camera_only_blackout_does_not_come_back_on_line_inliers(tmp_path):
+    """The camera-only blackout of the test above with simulator seed 5: there the pose along the
+    motion before the loss that gathered the most weighted inliers was wrong, carried by 32 line
+    inliers and 13 of 108 point matches, and the run came back into the one map 0.49 m off (ATE)
+    with no loss reported. A re-entry now needs a quarter of its point matches as inliers
+    (tracking.lost_reentry_min_point_ratio); the right pose keeps 38-48 % on this junction."""
+    m = _camera_only_blackout(tmp_path, light=0.5, seed=5)
     assert m["lost_frames"] >= 15 and m["maps"] == 1
     assert m["ape"]["rmse"] < 0.03  # 1.6 cm measured
 
@@ -335,27 +340,8 @@ def test_a_dark_camera_only_blackout_comes_back_where_two_frames_agree(tmp_path)
     along the motion before the loss reached the truth (1-9 cm off) frame after frame with 21-29
     weighted inliers, short of the bar of 30, until the frozen pose 1 m behind passed it on 30
     line inliers: one map, ATE 0.51 m, no loss reported. Two consecutive frames whose attempts
-    agree (tracking.lost_reentry_confirm_m) now take the right pose a bar of min_inliers."""
-    data = tmp_path / "seq"
-    Simulator(
-        SimOptions(
-            preset="junction",
-            lidar=False,
-            blackout=True,
-            light=0.15,
-            dust=True,
-            frames=160,
-            seed=2,
-        )
-    ).write(data, progress=False)
-    base = config("orb", lines=True)
-    no_imu = dataclasses.replace(
-        base,
-        tracking=dataclasses.replace(
-            base.tracking, imu=dataclasses.replace(base.tracking.imu, enabled=False)
-        ),
-    )
-    m = run_sequence(data, tmp_path / "out", no_imu, progress=False).metrics
+    agree (tracking.lost_reentry_confirm_m) now take the right pose with min_inliers."""
+    m = _camera_only_blackout(tmp_path, light=0.15, dust=True, seed=2)
     assert m["lost_frames"] >= 15 and m["maps"] == 1
     assert m["ape"]["rmse"] < 0.06  # 2.6 cm measured
 
