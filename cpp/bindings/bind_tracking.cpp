@@ -56,7 +56,7 @@ struct PreparedFrame {
   std::shared_ptr<StereoFrame> frame;
   std::shared_ptr<LeftLines> left_lines;
   StereoFrontendTiming timing;
-  mutable bool used = false;  // tracked (under the session's lock): a frame is tracked once
+  bool used = false;  // tracked (under the session's lock): a frame is tracked once
 };
 
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
@@ -116,7 +116,7 @@ class TrackerSession {
 
   // Track's second part: the tracker (and local mapping) on a prepared frame, one call at a
   // time and in frame order.
-  FrameOutput TrackPrepared(const PreparedFrame& p) {
+  FrameOutput TrackPrepared(PreparedFrame& p) {
     SLSLAM_CHECK(p.session == this, "a prepared frame is tracked by the TrackerCore that "
                  "prepared it (its rig and options)");
     FrameOutput out;

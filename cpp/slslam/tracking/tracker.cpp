@@ -527,9 +527,9 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   if (!tracked && !relocalised && mode_ == Mode::kLost && have_pose_) {
     bool confirmed = false;
     tracking = TrackAlongLossMotion(*frame, predicted, &confirmed);  // lost: it was empty
+    // (a confirmed attempt holds min_inliers: TrackAlongLossMotion's candidate rule)
     tracked = tracking.pose.success &&
-              (tracking.weighted_inliers >= 2.0 * options_.min_inliers ||
-               (confirmed && tracking.weighted_inliers >= options_.min_inliers));
+              (confirmed || tracking.weighted_inliers >= 2.0 * options_.min_inliers);
   }
   result.matched_points = static_cast<int>(tracking.point_ids.size());
   result.matched_lines = static_cast<int>(tracking.line_ids.size());

@@ -188,10 +188,10 @@ struct TrackerOptions {
   /// taken when it holds min_inliers and the previous frame's (also short of the bar, with
   /// min_inliers) lies, moved one step along that motion, within this distance and 5 degrees of
   /// it: two frames agreeing where one alone would not do. Attempts started from the frozen pose
-  /// take no part (two frames of it agree by construction). On the dark camera-only blackout of the simulated
-  /// junction the attempts along the motion reached the right pose (1-9 cm off) with 21-29
-  /// weighted inliers, frame after frame, until the frozen pose 1 m behind got past the bar on
-  /// its lines (benchmarks/README.md, 2026-11-28 d). 0: off [m]
+  /// take no part (two frames of it agree by construction). On the dark camera-only blackout of
+  /// the simulated junction the attempts along the motion reached the right pose (1-9 cm off)
+  /// with 21-29 weighted inliers, frame after frame, until the frozen pose 1 m behind got past
+  /// the bar on its lines (benchmarks/README.md, 2026-11-28 d). 0: off [m]
   double lost_reentry_confirm_m = 0.15;
   /// Lost: lit frames (at least min(min_init_points, 15) stereo points, StartMap's first check;
   /// a black frame has none) that must fail relocalisation and the re-entry along the loss

@@ -171,19 +171,16 @@ class TrackResult:
 
 @dataclass
 class _Prepared:
-    """A checked frame with its keypoints, ready for the core."""
+    """A checked frame with its keypoints and stereo matching, ready for the core (the images,
+    keypoints and lines the core needs travel inside ``stereo``)."""
 
     index: int
     timestamp: float
-    left: np.ndarray
-    right: np.ndarray
+    left: np.ndarray  #: as the core saw it (the viewer's last image)
     left_keypoints: Keypoints
-    right_keypoints: Keypoints
     inference_ms: float  #: point front end, both images (wall)
-    left_lines: _core.LeftLines | None  #: extracted beside it; None: the core extracts them
-    front_ms: float  #: the whole front-end step (wall): points and lines side by side
-    #: stereo matching done (TrackerCore.prepare): what the core tracks
-    stereo: _core.PreparedFrame
+    front_ms: float  #: the whole front-end step (wall): points, lines, stereo matching
+    stereo: _core.PreparedFrame  #: TrackerCore.prepare's frame: what the core tracks
 
 
 _END = object()  # the pipeline's worker has read every frame
@@ -685,9 +682,7 @@ class Tracker:
             left_lines,
         )
         front_ms = (time.perf_counter() - start) * 1e3
-        return _Prepared(
-            index, float(timestamp), left, right, kl, kr, inference_ms, left_lines, front_ms, stereo
-        )
+        return _Prepared(index, float(timestamp), left, kl, inference_ms, front_ms, stereo)
 
     def _track_prepared(self, frame: _Prepared) -> TrackResult:
         """The core's part of one frame (GIL released inside): tracking and local mapping (and
