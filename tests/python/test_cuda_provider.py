@@ -71,3 +71,19 @@ def test_superpoint_on_cuda_matches_the_cpu():
     )
     assert cuda.providers[0] == "CUDAExecutionProvider"
     assert_same_features(cpu.detect(image), cuda.detect(image))
+
+
+@pytest.mark.skipif(HAS_CUDA, reason="CUDA starts here: the fallback cannot be seen")
+def test_cuda_asked_for_but_not_started_is_a_warning_not_a_silent_cpu_run(monkeypatch, caplog):
+    """onnxruntime-gpu lists CUDA on a machine without a GPU and quietly runs on the CPU: the
+    session is made anyway, and slslam says in the log that CUDA did not start."""
+    import slslam.features.superpoint as sp
+    from slslam.features.xfeat import SHIPPED_MODEL
+
+    monkeypatch.setattr(
+        sp, "_providers", lambda _: ["CUDAExecutionProvider", "CPUExecutionProvider"]
+    )
+    with caplog.at_level("WARNING", logger="slslam"):
+        session = sp.open_session(SHIPPED_MODEL, "auto", 1)
+    assert session.get_providers() == ["CPUExecutionProvider"]
+    assert "could not start" in caplog.text and SHIPPED_MODEL.name in caplog.text

@@ -109,16 +109,28 @@ def _providers(choice: str | tuple[str, ...]) -> list[str]:
 
 def open_session(path: Path, providers: str | tuple[str, ...], intra_op_threads: int):
     """An onnxruntime session on ``path`` (providers as in the options, 0 threads: all cores);
-    a file onnxruntime cannot load is a ModelError naming it. Shared by every network."""
+    a file onnxruntime cannot load is a ModelError naming it. Shared by every network. Where
+    CUDA was asked for and onnxruntime could not start it, a warning says so (onnxruntime then
+    runs on the CPU)."""
     import onnxruntime as ort
 
+    chosen = _providers(providers)
     session_options = ort.SessionOptions()
     if intra_op_threads:
         session_options.intra_op_num_threads = intra_op_threads
     try:
-        return ort.InferenceSession(str(path), session_options, providers=_providers(providers))
+        session = ort.InferenceSession(str(path), session_options, providers=chosen)
     except Exception as exc:  # onnxruntime raises its own types for corrupt files
         raise ModelError(path, f"onnxruntime cannot load it ({exc})") from None
+    if "CUDAExecutionProvider" in chosen and "CUDAExecutionProvider" not in session.get_providers():
+        import logging
+
+        logging.getLogger("slslam").warning(
+            "%s: onnxruntime has CUDA but could not start it (no GPU, or CUDA / cuDNN libraries "
+            "missing: pip install onnxruntime-gpu[cuda,cudnn]); running on the CPU",
+            path.name,
+        )
+    return session
 
 
 def validate_session(session, path: Path) -> None:
