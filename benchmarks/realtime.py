@@ -65,7 +65,14 @@ from slslam.sim import SimOptions, Simulator
 from slslam.tracking import Tracker
 from slslam.tracking.run import tracked_trajectory
 
-from common import RESULTS_DIR, merged, parse_overrides, with_xfeat_preset, write_results
+from common import (
+    RESULTS_DIR,
+    machine_line,
+    merged,
+    parse_overrides,
+    with_xfeat_preset,
+    write_results,
+)
 
 SHARED_SUPERPOINT = (
     Path(__file__).resolve().parents[1].parent
@@ -442,7 +449,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"same poses {r['same_poses']} [{time.perf_counter() - start:.0f} s]",
                 flush=True,
             )
-    text = table(runs) + "\n\n" + keyframe_table(runs)
+    text = machine_line() + "\n\n" + table(runs) + "\n\n" + keyframe_table(runs)
     if notes:
         text += "\n\n" + "\n".join(notes)
     print(text)
