@@ -11,9 +11,9 @@ of the float network's keypoints came back within 1 px there against 91 % on a V
 bits 90 % on both, the same outputs on either processor (benchmarks/README.md, 2026-11-28 f).
 Activation ranges come from calibration images (min / max over them): by default frames the
 simulator renders of the shaft-bottom loop at full light and at light 0.15 (seed 0), so the file
-is reproducible from slslam alone and no data set is needed. On these 2-core machines the network
-took about half the time of the float file; the tracker's accuracy was the same within the
-run-to-run spread (benchmarks/README.md). Needs only onnxruntime (its ``quantization`` package).
+is reproducible from slslam alone and no data set is needed. On 2-core machines with VNNI the
+network took about half the time of the float file, on one with AVX2 only about the same; the
+tracker's accuracy was the same within the run-to-run spread (benchmarks/README.md). Needs only onnxruntime (its ``quantization`` package).
 """
 
 from __future__ import annotations
