@@ -69,9 +69,8 @@ def machine() -> dict[str, object]:
 def machine_line() -> str:
     """One line for a results table: processor, its SIMD flags, cores."""
     m = machine()
-    return (
-        f"Machine: {m['processor']} ({', '.join(m['simd']) or 'no AVX2'}), {m['cpu_count']} cores"
-    )
+    simd = ", ".join(m["simd"]) or "none of " + " / ".join(SIMD_FLAGS)
+    return f"Machine: {m['processor']} ({simd}), {m['cpu_count']} cores"
 
 
 def write_results(name: str, results: dict, out: Path | None = None) -> Path:

@@ -13,7 +13,8 @@ Activation ranges come from calibration images (min / max over them): by default
 simulator renders of the shaft-bottom loop at full light and at light 0.15 (seed 0), so the file
 is reproducible from slslam alone and no data set is needed. On 2-core machines with VNNI the
 network took about half the time of the float file, on one with AVX2 only about the same; the
-tracker's accuracy was the same within the run-to-run spread (benchmarks/README.md). Needs only onnxruntime (its ``quantization`` package).
+tracker's accuracy was the same within the run-to-run spread (benchmarks/README.md). Needs only
+onnxruntime (its ``quantization`` package).
 """
 
 from __future__ import annotations
