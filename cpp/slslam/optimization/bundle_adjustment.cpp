@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 
 #include <Eigen/Eigenvalues>
 #include <ceres/iteration_callback.h>
 #include <ceres/loss_function.h>
+#include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 
@@ -126,6 +128,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckInRange("ba.refine_iterations", refine_iterations, 0, 10000);
   CheckAboveInRange("ba.chi2_mono", chi2_mono, 0.0, 1e6);
   CheckAboveInRange("ba.chi2_stereo", chi2_stereo, 0.0, 1e6);
+  CheckAboveInRange("ba.chi2_one_dof", chi2_one_dof, 0.0, 1e6);
   CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
   CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
   CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
@@ -194,6 +197,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     ceres::Problem solver_problem(problem_options);
     std::vector<bool> pose_used(ba.poses.size(), false);
     std::vector<bool> line_used(ba.lines.size(), false);
+    std::vector<bool> point_used(ba.points.size(), false);
     // Each line free in the directions its observations determine, held in the others.
     std::vector<LineSubspaceManifold::Basis> determined;
     if (options.line_min_information_per_rad2 > 0.0) {
@@ -203,16 +207,26 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     for (size_t i = 0; i < ba.point_observations.size(); ++i) {
       if (report.point_outlier[i]) continue;
       const BaPointObservation& o = ba.point_observations[i];
-      ceres::CostFunction* cost =
-          o.stereo
-              ? static_cast<ceres::CostFunction*>(new StereoPointCost(rig, o.observed, o.sigma_px))
-              : new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px);
-      ceres::LossFunction* loss =
-          robust
-              ? new ceres::HuberLoss(std::sqrt(o.stereo ? options.chi2_stereo : options.chi2_mono))
-              : nullptr;
-      solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
-                                      params.points[o.point].data());
+      double* pose = params.poses[o.pose].data();
+      double* point = params.points[o.point].data();
+      if (o.stereo) {
+        // Two blocks of two rows (StereoPointHalfCost), each with its own Huber loss: (u_left,
+        // v) at the monocular bound, u_right at the bound of one degree of freedom.
+        for (int half = 0; half < 2; ++half) {
+          ceres::LossFunction* loss =
+              robust ? new ceres::HuberLoss(std::sqrt(half == 0 ? options.chi2_mono
+                                                                : options.chi2_one_dof))
+                     : nullptr;
+          solver_problem.AddResidualBlock(
+              new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), loss, pose, point);
+        }
+      } else {
+        ceres::LossFunction* loss =
+            robust ? new ceres::HuberLoss(std::sqrt(options.chi2_mono)) : nullptr;
+        solver_problem.AddResidualBlock(
+            new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px), loss, pose, point);
+      }
+      point_used[o.point] = true;
       pose_used[o.pose] = true;
       ++blocks;
     }
@@ -264,6 +278,26 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     solver_options.max_num_iterations =
         robust ? options.robust_iterations : options.refine_iterations;
     solver_options.num_threads = 1;
+    // The points are eliminated, the poses and lines kept in the reduced system: with every point
+    // block two rows (above) and every pose tangent six, Ceres' Schur eliminator runs its
+    // fixed-size <2, 3, 6> kernel. (Left to itself, Ceres also eliminates the lines, whose
+    // tangent of four makes the sizes dynamic.) The ordering names every parameter block. Ceres
+    // orders a group's blocks by address: each group holds the blocks of one vector, in index
+    // order, so runs stay bit-identical (poses and lines in one group would be ordered by where
+    // the two vectors happen to lie).
+    if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
+      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+      for (size_t i = 0; i < ba.points.size(); ++i) {
+        if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
+      }
+      for (size_t i = 0; i < ba.poses.size(); ++i) {
+        if (pose_used[i]) ordering->AddElementToGroup(params.poses[i].data(), 1);
+      }
+      for (size_t i = 0; i < ba.lines.size(); ++i) {
+        if (line_used[i]) ordering->AddElementToGroup(params.lines[i].data(), 2);
+      }
+      solver_options.linear_solver_ordering = ordering;
+    }
     solver_options.logging_type = ceres::SILENT;
     StopCallback stop_callback(abort, interrupt);
     if (abort || interrupt) solver_options.callbacks.push_back(&stop_callback);

@@ -40,6 +40,26 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
   double inv_sigma_;
 };
 
+// One half of a stereo point observation: parameters pose (7), point (3); residual 2, half 0 =
+// (u_left, v), half 1 = (u_right, 0). Both halves together are StereoPointCost's rows plus a zero
+// row, the same least-squares problem; but every point block then has two rows, which lets Ceres'
+// Schur eliminator use its fixed-size <2, 3, 6> kernel (blocks of 2 and 3 rows make it fall back
+// to dynamic sizes, about twice the linear solver's time in local BA; benchmarks/README.md,
+// 2026-11-28 h). A robust loss on each half acts on that half alone.
+class StereoPointHalfCost final : public ceres::SizedCostFunction<2, kPoseSize, 3> {
+ public:
+  StereoPointHalfCost(const StereoRig& rig, const Eigen::Vector3d& observed, double sigma_px,
+                      int half);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  StereoRig rig_;
+  Eigen::Vector3d observed_;
+  double inv_sigma_;
+  int row_;  ///< the first of the half's rows of StereoPointResidual: 0 or 2
+};
+
 // Line segment: parameters pose (7), line (5); residual 3 (e1, e2, e3 of LineResidual).
 // The line parameters hold the line as seen from `anchor_world` (a world point, the origin by
 // default): the world line is that line moved by +anchor (n_world = n + anchor x v). Bundle

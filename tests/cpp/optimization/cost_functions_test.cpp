@@ -3,6 +3,7 @@
 #include "slslam/optimization/cost_functions.h"
 
 #include <array>
+#include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -83,6 +84,45 @@ TEST(CostFunctions, StereoPointCostJacobiansThroughManifold) {
   StereoPointCost cost(rig, Eigen::Vector3d(300.0, 200.0, 290.0), 1.0);
   PoseManifold pose_manifold;
   CheckCost(cost, {PoseParams(), {0.4, -0.2, 5.0}}, {&pose_manifold, nullptr});
+}
+
+// Bundle adjustment gives each stereo observation as two 2-row halves (Ceres' fixed-size Schur
+// kernel): StereoPointCost's rows plus a zero row, with the derivatives of what they return.
+TEST(CostFunctions, StereoPointHalvesAreTheStereoCostsRows) {
+  const StereoRig rig = EurocLikeRig();
+  const std::vector<double> pose = PoseParams();
+  const std::vector<double> point = {0.4, -0.2, 5.0};
+  const double* parameters[2] = {pose.data(), point.data()};
+  const Eigen::Vector3d observed(300.0, 200.0, 290.0);
+  const double sigma_px = 1.5;
+  const StereoPointCost whole(rig, observed, sigma_px);
+  Eigen::Vector3d e;
+  RowMatrix d_pose(3, kPoseSize), d_point(3, 3);
+  double* whole_jacobians[2] = {d_pose.data(), d_point.data()};
+  ASSERT_TRUE(whole.Evaluate(parameters, e.data(), whole_jacobians));
+  PoseManifold pose_manifold;
+  for (int half = 0; half < 2; ++half) {
+    const StereoPointHalfCost cost(rig, observed, sigma_px, half);
+    CheckCost(cost, {pose, point}, {&pose_manifold, nullptr});
+    Eigen::Vector2d r;
+    RowMatrix h_pose(2, kPoseSize), h_point(2, 3);
+    double* jacobians[2] = {h_pose.data(), h_point.data()};
+    ASSERT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
+    const int row = half == 0 ? 0 : 2;
+    EXPECT_EQ(r(0), e(row));
+    EXPECT_EQ(h_pose.row(0), d_pose.row(row));
+    EXPECT_EQ(h_point.row(0), d_point.row(row));
+    if (half == 0) {
+      EXPECT_EQ(r(1), e(1));
+      EXPECT_EQ(h_pose.row(1), d_pose.row(1));
+      EXPECT_EQ(h_point.row(1), d_point.row(1));
+    } else {
+      EXPECT_EQ(r(1), 0.0);
+      EXPECT_TRUE(h_pose.row(1).isZero(0.0));
+      EXPECT_TRUE(h_point.row(1).isZero(0.0));
+    }
+  }
+  EXPECT_THROW(StereoPointHalfCost(rig, observed, sigma_px, 2), std::invalid_argument);
 }
 
 TEST(CostFunctions, LineCostJacobiansThroughManifold) {
