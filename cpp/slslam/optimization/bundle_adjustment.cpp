@@ -128,7 +128,6 @@ void BundleAdjustmentOptions::Check() const {
   CheckInRange("ba.refine_iterations", refine_iterations, 0, 10000);
   CheckAboveInRange("ba.chi2_mono", chi2_mono, 0.0, 1e6);
   CheckAboveInRange("ba.chi2_stereo", chi2_stereo, 0.0, 1e6);
-  CheckAboveInRange("ba.chi2_one_dof", chi2_one_dof, 0.0, 1e6);
   CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
   CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
   CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
@@ -209,16 +208,16 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       const BaPointObservation& o = ba.point_observations[i];
       double* pose = params.poses[o.pose].data();
       double* point = params.points[o.point].data();
-      if (o.stereo) {
-        // Two blocks of two rows (StereoPointHalfCost), each with its own Huber loss: (u_left,
-        // v) at the monocular bound, u_right at the bound of one degree of freedom.
+      if (o.stereo && robust) {
+        solver_problem.AddResidualBlock(new StereoPointCost(rig, o.observed, o.sigma_px),
+                                        new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
+                                        pose, point);
+      } else if (o.stereo) {
+        // Without a loss, the same rows as two blocks of two (StereoPointHalfCost): see the
+        // ordering below.
         for (int half = 0; half < 2; ++half) {
-          ceres::LossFunction* loss =
-              robust ? new ceres::HuberLoss(std::sqrt(half == 0 ? options.chi2_mono
-                                                                : options.chi2_one_dof))
-                     : nullptr;
           solver_problem.AddResidualBlock(
-              new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), loss, pose, point);
+              new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), nullptr, pose, point);
         }
       } else {
         ceres::LossFunction* loss =
@@ -278,13 +277,15 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     solver_options.max_num_iterations =
         robust ? options.robust_iterations : options.refine_iterations;
     solver_options.num_threads = 1;
-    // The points are eliminated, the poses and lines kept in the reduced system: with every point
-    // block two rows (above) and every pose tangent six, Ceres' Schur eliminator runs its
-    // fixed-size <2, 3, 6> kernel. (Left to itself, Ceres also eliminates the lines, whose
-    // tangent of four makes the sizes dynamic.) The ordering names every parameter block. Ceres
-    // orders a group's blocks by address: each group holds the blocks of one vector, in index
-    // order, so runs stay bit-identical (poses and lines in one group would be ordered by where
-    // the two vectors happen to lie).
+    // The points are eliminated, the poses and lines kept in the reduced system. In the refine
+    // pass every point block has two rows (above) and every pose tangent six, so Ceres' Schur
+    // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
+    // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
+    // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
+    // it would be another objective. The ordering names every parameter block. Ceres orders a
+    // group's blocks by address: each group holds the blocks of one vector, in index order, so
+    // runs stay bit-identical (poses and lines in one group would be ordered by where the two
+    // vectors happen to lie).
     if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
       auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
       for (size_t i = 0; i < ba.points.size(); ++i) {

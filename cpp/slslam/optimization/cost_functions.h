@@ -45,7 +45,8 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
 // row, the same least-squares problem; but every point block then has two rows, which lets Ceres'
 // Schur eliminator use its fixed-size <2, 3, 6> kernel (blocks of 2 and 3 rows make it fall back
 // to dynamic sizes, about twice the linear solver's time in local BA; benchmarks/README.md,
-// 2026-11-28 h). A robust loss on each half acts on that half alone.
+// 2026-11-28 h). A robust loss on each half would act on that half alone: bundle adjustment uses
+// the halves without one (its refine pass).
 class StereoPointHalfCost final : public ceres::SizedCostFunction<2, kPoseSize, 3> {
  public:
   StereoPointHalfCost(const StereoRig& rig, const Eigen::Vector3d& observed, double sigma_px,
