@@ -38,21 +38,35 @@ class StopCallback : public ceres::IterationCallback {
 };
 
 struct Parameters {
-  std::vector<std::array<double, kPoseSize>> poses;
+  /// The poses' and then the lines' parameters (each line relative to its anchor) in one buffer:
+  /// both stay in the reduced system, one group of the elimination ordering, and Ceres orders a
+  /// group's blocks by address; in one buffer that order is theirs, the same in every run.
+  std::vector<double> reduced;
+  int num_poses = 0;
   std::vector<Eigen::Vector3d> points;
-  std::vector<std::array<double, kLineSize>> lines;  ///< each relative to its anchor
-  std::vector<Eigen::Vector3d> line_anchors;          ///< world points (LineCost's anchor)
+  std::vector<Eigen::Vector3d> line_anchors;  ///< world points (LineCost's anchor)
+
+  void Resize(size_t poses, size_t lines) {
+    num_poses = static_cast<int>(poses);
+    reduced.assign(kPoseSize * poses + kLineSize * lines, 0.0);
+  }
+  double* pose(int i) { return reduced.data() + kPoseSize * i; }
+  const double* pose(int i) const { return reduced.data() + kPoseSize * i; }
+  double* line(int i) { return reduced.data() + kPoseSize * num_poses + kLineSize * i; }
+  const double* line(int i) const {
+    return reduced.data() + kPoseSize * num_poses + kLineSize * i;
+  }
 };
 
 PluckerLine LineInWorld(const Parameters& p, int line) {
-  PluckerLine world = ParametersToLine(p.lines[line].data()).ToPlucker();
+  PluckerLine world = ParametersToLine(p.line(line)).ToPlucker();
   world.n += p.line_anchors[line].cross(world.v);
   return world;
 }
 
 double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObservation& o) {
   Rigid3d cam_from_world;
-  ParametersToPose(p.poses[o.pose].data(), &cam_from_world);
+  ParametersToPose(p.pose(o.pose), &cam_from_world);
   const double w = 1.0 / (o.sigma_px * o.sigma_px);
   if (o.stereo) {
     Eigen::Vector3d e;
@@ -70,7 +84,7 @@ double PointChi2(const StereoRig& rig, const Parameters& p, const BaPointObserva
 
 double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservation& o) {
   Rigid3d cam_from_world;
-  ParametersToPose(p.poses[o.pose].data(), &cam_from_world);
+  ParametersToPose(p.pose(o.pose), &cam_from_world);
   const PluckerLine line = LineInWorld(p, o.line);
   Eigen::Vector3d e;
   if (!LineResidual(rig.camera, cam_from_world, line, o.start_px, o.end_px, 0.0, &e)) {
@@ -100,7 +114,7 @@ std::vector<LineSubspaceManifold::Basis> DeterminedLineDirections(
     const BaLineObservation& o = ba.line_observations[i];
     const LineCost cost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px,
                         p.line_anchors[o.line]);
-    const double* parameters[2] = {p.poses[o.pose].data(), p.lines[o.line].data()};
+    const double* parameters[2] = {p.pose(o.pose), p.line(o.line)};
     if (!cost.Evaluate(parameters, residual, jacobians)) continue;
     // (the tangent Jacobian sits in the first four of the five ambient columns)
     const Eigen::Matrix<double, 3, kLineTangentSize> j =
@@ -155,15 +169,14 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   }
 
   Parameters params;
-  params.poses.resize(ba.poses.size());
+  params.Resize(ba.poses.size(), ba.lines.size());
   for (size_t i = 0; i < ba.poses.size(); ++i) {
-    PoseToParameters(ba.poses[i].cam_from_world, params.poses[i].data());
+    PoseToParameters(ba.poses[i].cam_from_world, params.pose(i));
   }
   params.points = ba.points;
   // With the pull (line_prior_weight), each line anchored at the camera centre of its first
   // observation: the line as that camera's centre sees it, a few metres away, not as the world's
   // origin does, possibly far behind, so the pull's tangent means about the same everywhere.
-  params.lines.resize(ba.lines.size());
   params.line_anchors.assign(ba.lines.size(), Eigen::Vector3d::Zero());
   if (options.line_prior_weight > 0.0) {
     std::vector<bool> anchored(ba.lines.size(), false);
@@ -176,7 +189,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   for (size_t i = 0; i < ba.lines.size(); ++i) {
     PluckerLine local = ba.lines[i];
     local.n -= params.line_anchors[i].cross(local.v);
-    LineToParameters(OrthonormalLine::FromPlucker(local), params.lines[i].data());
+    LineToParameters(OrthonormalLine::FromPlucker(local), params.line(i));
   }
 
   BundleAdjustmentReport report;
@@ -206,7 +219,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     for (size_t i = 0; i < ba.point_observations.size(); ++i) {
       if (report.point_outlier[i]) continue;
       const BaPointObservation& o = ba.point_observations[i];
-      double* pose = params.poses[o.pose].data();
+      double* pose = params.pose(o.pose);
       double* point = params.points[o.point].data();
       if (o.stereo && robust) {
         solver_problem.AddResidualBlock(new StereoPointCost(rig, o.observed, o.sigma_px),
@@ -240,10 +253,10 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       if (options.line_weight != 1.0) {
         loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
       }
-      solver_problem.AddResidualBlock(cost, loss, params.poses[o.pose].data(),
-                                      params.lines[o.line].data());
+      solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose),
+                                      params.line(o.line));
       if (!line_used[o.line]) {
-        double* line = params.lines[o.line].data();
+        double* line = params.line(o.line);
         const int free = determined.empty() ? kLineTangentSize
                                             : static_cast<int>(determined[o.line].cols());
         if (free > 0 && free < kLineTangentSize) {
@@ -264,8 +277,8 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     if (blocks == 0) return report;
     for (size_t i = 0; i < ba.poses.size(); ++i) {
       if (!pose_used[i]) continue;
-      solver_problem.SetManifold(params.poses[i].data(), new PoseManifold);
-      if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.poses[i].data());
+      solver_problem.SetManifold(params.pose(i), new PoseManifold);
+      if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.pose(i));
     }
 
     ceres::Solver::Options solver_options;
@@ -282,20 +295,19 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
     // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
     // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
-    // it would be another objective. The ordering names every parameter block. Ceres orders a
-    // group's blocks by address: each group holds the blocks of one vector, in index order, so
-    // runs stay bit-identical (poses and lines in one group would be ordered by where the two
-    // vectors happen to lie).
+    // it would be another objective. The ordering names every parameter block, in two groups (a
+    // third group for the lines made SuiteSparse's ordering of the reduced system slow: local BA
+    // took longer than before; Parameters keeps the second group's order fixed).
     if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
       auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
       for (size_t i = 0; i < ba.points.size(); ++i) {
         if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
       }
       for (size_t i = 0; i < ba.poses.size(); ++i) {
-        if (pose_used[i]) ordering->AddElementToGroup(params.poses[i].data(), 1);
+        if (pose_used[i]) ordering->AddElementToGroup(params.pose(i), 1);
       }
       for (size_t i = 0; i < ba.lines.size(); ++i) {
-        if (line_used[i]) ordering->AddElementToGroup(params.lines[i].data(), 2);
+        if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
       }
       solver_options.linear_solver_ordering = ordering;
     }
@@ -345,7 +357,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   }
 
   for (size_t i = 0; i < ba.poses.size(); ++i) {
-    ParametersToPose(params.poses[i].data(), &ba.poses[i].cam_from_world);
+    ParametersToPose(params.pose(i), &ba.poses[i].cam_from_world);
   }
   ba.points = params.points;
   for (size_t i = 0; i < ba.lines.size(); ++i) {
