@@ -253,8 +253,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
       if (options.line_weight != 1.0) {
         loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
       }
-      solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose),
-                                      params.line(o.line));
+      solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose), params.line(o.line));
       if (!line_used[o.line]) {
         double* line = params.line(o.line);
         const int free = determined.empty() ? kLineTangentSize
@@ -295,9 +294,9 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
     // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
     // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
-    // it would be another objective. The ordering names every parameter block, in two groups (a
-    // third group for the lines made SuiteSparse's ordering of the reduced system slow: local BA
-    // took longer than before; Parameters keeps the second group's order fixed).
+    // it would be another objective. The ordering names every parameter block, in two groups
+    // (with a third for the lines, local BA took longer than before this ordering; measured in
+    // benchmarks/README.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
     if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
       auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
       for (size_t i = 0; i < ba.points.size(); ++i) {

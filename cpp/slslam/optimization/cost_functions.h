@@ -44,7 +44,7 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
 // (u_left, v), half 1 = (u_right, 0). Both halves together are StereoPointCost's rows plus a zero
 // row, the same least-squares problem; but every point block then has two rows, which lets Ceres'
 // Schur eliminator use its fixed-size <2, 3, 6> kernel (blocks of 2 and 3 rows make it fall back
-// to dynamic sizes, about twice the linear solver's time in local BA; benchmarks/README.md,
+// to dynamic sizes: 1.6-2.4 times the linear solver's time in local BA; benchmarks/README.md,
 // 2026-11-28 h). A robust loss on each half would act on that half alone: bundle adjustment uses
 // the halves without one (its refine pass).
 class StereoPointHalfCost final : public ceres::SizedCostFunction<2, kPoseSize, 3> {
