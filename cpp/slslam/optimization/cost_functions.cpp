@@ -86,39 +86,39 @@ bool StereoPointCost::Evaluate(double const* const* parameters, double* residual
 
 StereoPointHalfCost::StereoPointHalfCost(const StereoRig& rig, const Eigen::Vector3d& observed,
                                          double sigma_px, int half)
-    : rig_(rig), observed_(observed), inv_sigma_(InverseSigma(sigma_px)), row_(2 * half) {
+    : whole_(rig, observed, sigma_px), row_(2 * half) {
   SLSLAM_CHECK(half == 0 || half == 1, "a stereo observation has halves 0 and 1, got ", half);
 }
 
 bool StereoPointHalfCost::Evaluate(double const* const* parameters, double* residuals,
                                    double** jacobians) const {
-  Rigid3d cam_from_world;
-  ParametersToPose(parameters[0], &cam_from_world);
-  const Eigen::Map<const Eigen::Vector3d> point(parameters[1]);
+  // The whole observation's rows, then this half's: rows 0 and 1, or row 2 and a zero row.
   Eigen::Vector3d e;
-  Eigen::Matrix<double, 3, 6> d_pose;
-  Eigen::Matrix<double, 3, 3> d_point;
-  const bool want = jacobians != nullptr;
-  if (!StereoPointResidual(rig_, cam_from_world, point, observed_, &e, want ? &d_pose : nullptr,
-                           want ? &d_point : nullptr)) {
-    return false;
-  }
-  // Half 0: rows 0 and 1; half 1: row 2 and a zero row.
+  Eigen::Matrix<double, 3, kPoseSize, kRowMajor> d_pose;
+  Eigen::Matrix<double, 3, 3, kRowMajor> d_point;
+  double* whole_jacobians[2] = {jacobians && jacobians[0] ? d_pose.data() : nullptr,
+                                jacobians && jacobians[1] ? d_point.data() : nullptr};
+  if (!whole_.Evaluate(parameters, e.data(), jacobians ? whole_jacobians : nullptr)) return false;
   const bool two = row_ == 0;
-  residuals[0] = inv_sigma_ * e(row_);
-  residuals[1] = two ? inv_sigma_ * e(1) : 0.0;
-  if (!want) return true;
-  if (jacobians[0]) {
-    Eigen::Matrix<double, 2, 6> j = Eigen::Matrix<double, 2, 6>::Zero();
+  residuals[0] = e(row_);
+  residuals[1] = two ? e(1) : 0.0;
+  if (jacobians && jacobians[0]) {
+    Eigen::Map<Eigen::Matrix<double, 2, kPoseSize, kRowMajor>> j(jacobians[0]);
     j.row(0) = d_pose.row(row_);
-    if (two) j.row(1) = d_pose.row(1);
-    WriteLifted<2, 6, kPoseSize>(j, inv_sigma_, jacobians[0]);
+    if (two) {
+      j.row(1) = d_pose.row(1);
+    } else {
+      j.row(1).setZero();
+    }
   }
-  if (jacobians[1]) {
+  if (jacobians && jacobians[1]) {
     Eigen::Map<Eigen::Matrix<double, 2, 3, kRowMajor>> j(jacobians[1]);
-    j.setZero();
-    j.row(0) = inv_sigma_ * d_point.row(row_);
-    if (two) j.row(1) = inv_sigma_ * d_point.row(1);
+    j.row(0) = d_point.row(row_);
+    if (two) {
+      j.row(1) = d_point.row(1);
+    } else {
+      j.row(1).setZero();
+    }
   }
   return true;
 }

@@ -55,10 +55,8 @@ class StereoPointHalfCost final : public ceres::SizedCostFunction<2, kPoseSize, 
                 double** jacobians) const override;
 
  private:
-  StereoRig rig_;
-  Eigen::Vector3d observed_;
-  double inv_sigma_;
-  int row_;  ///< the first of the half's rows of StereoPointResidual: 0 or 2
+  StereoPointCost whole_;
+  int row_;  ///< the first of the half's rows of StereoPointCost: 0 or 2
 };
 
 // Line segment: parameters pose (7), line (5); residual 3 (e1, e2, e3 of LineResidual).
