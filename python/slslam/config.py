@@ -421,8 +421,8 @@ class TrackingConfig:
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
     # motion-only BA by slslam's own 6-parameter Levenberg-Marquardt instead of a Ceres problem
     # per outlier round (the same costs and trust-region rules; about 3x faster, 2.28 -> 0.72 ms on
-    # 400 stereo points). Off: on the hard junction it lost seed 6 in the dark low-texture stretch
-    # where Ceres tracks through (benchmarks/README.md, 2026-11-27 i and 2026-11-28)
+    # 400 stereo points); false: a Ceres problem per round, the default until 2026-11-28 i
+    # (benchmarks/README.md)
     own_pose_solver: bool = _tracking("own_pose_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]

@@ -163,9 +163,10 @@ TEST(PoseOptimizer, Deterministic) {
 TEST(PoseOptimizer, OwnSolverAgreesWithCeres) {
   const Scene s = MakeScene(150, 30, 0.2, 9);
   const Rigid3d start = PerturbedStartPose(s);
-  PoseOptimizerOptions own;
+  PoseOptimizerOptions ceres, own;
+  ceres.own_solver = false;
   own.own_solver = true;
-  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), start, s.points, s.lines);
+  const PoseOptimizerResult a = OptimizePose(EurocLikeRig(), start, s.points, s.lines, ceres);
   const PoseOptimizerResult b = OptimizePose(EurocLikeRig(), start, s.points, s.lines, own);
   ASSERT_TRUE(a.success && b.success);
   EXPECT_EQ(a.point_inlier, b.point_inlier);
