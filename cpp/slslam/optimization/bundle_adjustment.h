@@ -47,7 +47,9 @@ struct BundleAdjustmentOptions {
   int robust_iterations = 5;        ///< iterations of the robust pass [-]
   int refine_iterations = 10;       ///< iterations after outlier removal [-]
   double chi2_mono = 5.991;         ///< [-]
-  double chi2_stereo = 7.815;       ///< [-]
+  /// outliers after each pass, and the robust pass's Huber bound, of a stereo observation (3
+  /// degrees of freedom) [-]
+  double chi2_stereo = 7.815;
   double chi2_line = 5.991;         ///< on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< [px]
   double line_weight = 1.0;         ///< [-]

@@ -125,11 +125,10 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
 // went to building the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3
 // against 0.7 ms here, on every frame's tracking; on the long dark sequences its accuracy is
 // within the spread of simulator seeds of Ceres' (benchmarks/README.md, 2026-11-27 i and
-// 2026-11-28 i). Ceres solves by QR of the
-// Jacobian, this by the normal equations, so steps differ in the last digits (pose_optimizer_test
-// compares steps with Huber losses and with scaled lines, and the whole outlier rounds, with
-// Ceres). When the starting pose cannot be evaluated the pose stays as given, as Ceres' failed
-// solve leaves it.
+// 2026-11-28 i). Ceres solves by QR of the Jacobian, this by the normal equations, so steps differ
+// in the last digits (pose_optimizer_test compares steps with Huber losses and with scaled lines,
+// and the whole outlier rounds, with Ceres). When the starting pose cannot be evaluated the pose
+// stays as given, as Ceres' failed solve leaves it.
 void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool robust,
                                  int max_iterations, double* pose) {
   PoseNormalEquations current;
@@ -182,7 +181,8 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
 }
 
 // The same problem solved by Ceres (DENSE_QR), as every release before 2026-11-28 i did
-// (PoseOptimizerOptions::own_solver false). The terms' costs stay theirs; the problem owns the losses.
+// (PoseOptimizerOptions::own_solver false). The terms' costs stay theirs; the problem owns the
+// losses.
 void SolvePoseCeres(const std::vector<const PoseTerm*>& terms, bool robust, int max_iterations,
                     double* pose) {
   ceres::Problem::Options problem_options;
