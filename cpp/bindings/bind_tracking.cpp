@@ -334,6 +334,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("dogleg_with_lines", &BundleAdjustmentOptions::dogleg_with_lines)
       .def_readwrite("line_min_information_per_rad2",
                      &BundleAdjustmentOptions::line_min_information_per_rad2)
+      .def_readwrite("own_solver", &BundleAdjustmentOptions::own_solver)
       .def("check", &BundleAdjustmentOptions::Check);
   py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
       .def(py::init<>())

@@ -828,6 +828,7 @@ class BundleAdjustmentOptions:
     Local bundle adjustment.
     """
     dogleg_with_lines: bool
+    own_solver: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:

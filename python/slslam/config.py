@@ -164,6 +164,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "local_ba_line_prior_weight": ("mapping.ba.line_prior_weight",),
     "local_ba_dogleg": ("mapping.ba.dogleg_with_lines",),
     "own_pose_solver": ("pose.own_solver",),
+    "own_local_ba_solver": ("mapping.ba.own_solver",),
     "local_ba_line_min_information_per_rad2": ("mapping.ba.line_min_information_per_rad2",),
 }
 LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
@@ -424,6 +425,12 @@ class TrackingConfig:
     # 400 stereo points); false: a Ceres problem per round, the default until 2026-11-28 i
     # (benchmarks/README.md)
     own_pose_solver: bool = _tracking("own_pose_solver")
+    # local BA by slslam's own Levenberg-Marquardt with the points and lines eliminated (the same
+    # costs, trust-region rules and steps, a dense reduced system over the window's free
+    # keyframes; about 5x faster) instead of Ceres' sparse Schur solver; off until the
+    # camera-only blackout re-entry is robust to the runs' last digits (benchmarks/README.md,
+    # 2026-11-29)
+    own_local_ba_solver: bool = _tracking("own_local_ba_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
     # (0: free in all four; 1: less drift in the dark with the IMU over five simulator seeds,

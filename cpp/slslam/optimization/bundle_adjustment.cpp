@@ -15,6 +15,7 @@
 #include "slslam/core/check.h"
 #include "slslam/optimization/cost_functions.h"
 #include "slslam/optimization/manifolds.h"
+#include "slslam/optimization/schur_levenberg_marquardt.h"
 
 namespace slslam {
 
@@ -135,6 +136,87 @@ std::vector<LineSubspaceManifold::Basis> DeterminedLineDirections(
   return determined;
 }
 
+// Every observation an outlier or not by its chi-square at the current estimate.
+void ClassifyOutliers(const StereoRig& rig, const Parameters& params, const BaProblem& ba,
+                      const BundleAdjustmentOptions& options, BundleAdjustmentReport* report) {
+  for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+    const BaPointObservation& o = ba.point_observations[i];
+    const double bound = o.stereo ? options.chi2_stereo : options.chi2_mono;
+    report->point_outlier[i] = !(PointChi2(rig, params, o) <= bound);
+  }
+  for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+    report->line_outlier[i] =
+        !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
+  }
+}
+
+// The most free poses the own solver takes: its reduced system is dense (6 per free pose).
+constexpr int kOwnSolverMaxFreePoses = 64;
+
+struct OwnPassSummary : SchurSolveSummary {
+  bool ran = false;  ///< the pass had a residual to minimise
+};
+
+// One pass by the own solver (BundleAdjustmentOptions::own_solver): the same residuals and losses
+// as the Ceres pass below, a stereo observation as one block of three rows in both passes.
+OwnPassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
+                            const BundleAdjustmentOptions& options, bool robust,
+                            const std::atomic<bool>* interrupt, const std::atomic<bool>* abort,
+                            Parameters* params, const BundleAdjustmentReport* report) {
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  std::vector<SchurTerm> terms;
+  costs.reserve(ba.point_observations.size() + ba.line_observations.size());
+  terms.reserve(costs.capacity());
+  for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+    if (report->point_outlier[i]) continue;
+    const BaPointObservation& o = ba.point_observations[i];
+    SchurTerm term;
+    if (o.stereo) {
+      costs.push_back(std::make_unique<StereoPointCost>(rig, o.observed, o.sigma_px));
+      term.huber = robust ? std::sqrt(options.chi2_stereo) : 0.0;
+    } else {
+      costs.push_back(
+          std::make_unique<PointCost>(rig.camera, o.observed.head<2>(), o.sigma_px));
+      term.huber = robust ? std::sqrt(options.chi2_mono) : 0.0;
+    }
+    term.cost = costs.back().get();
+    term.pose = o.pose;
+    term.landmark = o.point;
+    terms.push_back(term);
+  }
+  for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+    if (report->line_outlier[i] || options.line_weight <= 0.0) continue;
+    const BaLineObservation& o = ba.line_observations[i];
+    costs.push_back(std::make_unique<LineCost>(rig.camera, o.start_px, o.end_px,
+                                               options.line_angle_weight, o.sigma_px,
+                                               params->line_anchors[o.line]));
+    SchurTerm term;
+    term.cost = costs.back().get();
+    term.pose = o.pose;
+    term.landmark = o.line;
+    term.line = true;
+    term.huber = robust ? std::sqrt(options.chi2_line) : 0.0;
+    term.weight = options.line_weight;
+    terms.push_back(term);
+  }
+  OwnPassSummary summary;
+  if (terms.empty()) return summary;
+  SchurBlocks blocks;
+  for (size_t i = 0; i < ba.poses.size(); ++i) {
+    blocks.poses.push_back(params->pose(static_cast<int>(i)));
+    blocks.pose_fixed.push_back(ba.poses[i].fixed);
+  }
+  for (Eigen::Vector3d& point : params->points) blocks.points.push_back(point.data());
+  for (size_t i = 0; i < ba.lines.size(); ++i) {
+    blocks.lines.push_back(params->line(static_cast<int>(i)));
+  }
+  const int iterations = robust ? options.robust_iterations : options.refine_iterations;
+  static_cast<SchurSolveSummary&>(summary) =
+      SolveSchurLevenbergMarquardt(terms, blocks, iterations, abort, interrupt);
+  summary.ran = true;
+  return summary;
+}
+
 }  // namespace
 
 void BundleAdjustmentOptions::Check() const {
@@ -202,8 +284,40 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     report.line_outlier[i] = !std::isfinite(LineChi2(rig, params, ba.line_observations[i]));
   }
 
+  // The own solver takes the default problem (no pull, no dogleg, every line direction free)
+  // with a reduced system small enough to be dense: a local BA window.
+  const bool own = options.own_solver && options.line_prior_weight == 0.0 &&
+                   !options.dogleg_with_lines && options.line_min_information_per_rad2 == 0.0 &&
+                   std::count_if(ba.poses.begin(), ba.poses.end(), [](const BaPose& pose) {
+                     return !pose.fixed;
+                   }) <= kOwnSolverMaxFreePoses;
   for (int pass = 0; pass < 2; ++pass) {
     const bool robust = pass == 0;
+    if (own) {
+      const OwnPassSummary summary =
+          SolvePassOwn(rig, ba, options, robust, interrupt, abort, &params, &report);
+      if (!summary.ran) return report;
+      if (summary.aborted) {
+        report.solved = false;
+        return report;
+      }
+      if (pass == 0 && summary.interrupted && !summary.moved) {
+        report.solved = false;
+        report.interrupted = true;
+        return report;
+      }
+      report.iterations += summary.steps;
+      report.rejected_steps += summary.rejected_steps;
+      if (pass == 0) report.initial_cost = summary.initial_cost;
+      report.final_cost = summary.final_cost;
+      report.solved = summary.usable;
+      ClassifyOutliers(rig, params, ba, options, &report);
+      if (interrupt && interrupt->load()) {
+        report.interrupted = true;
+        break;
+      }
+      continue;
+    }
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
     ceres::Problem solver_problem(problem_options);
@@ -338,15 +452,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     report.final_cost = summary.final_cost;
     report.solved = summary.IsSolutionUsable();
 
-    for (size_t i = 0; i < ba.point_observations.size(); ++i) {
-      const BaPointObservation& o = ba.point_observations[i];
-      const double bound = o.stereo ? options.chi2_stereo : options.chi2_mono;
-      report.point_outlier[i] = !(PointChi2(rig, params, o) <= bound);
-    }
-    for (size_t i = 0; i < ba.line_observations.size(); ++i) {
-      report.line_outlier[i] =
-          !(LineChi2(rig, params, ba.line_observations[i]) <= options.chi2_line);
-    }
+    ClassifyOutliers(rig, params, ba, options, &report);
     // Interrupted (a callback ended it, the parameters hold the last accepted iterate): no
     // further pass.
     if (interrupt && interrupt->load()) {

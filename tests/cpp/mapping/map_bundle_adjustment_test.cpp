@@ -1,6 +1,7 @@
 #include "slslam/mapping/map_bundle_adjustment.h"
 
 #include <atomic>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
@@ -112,7 +113,17 @@ BaProblem TwoViewProblem(const StereoRig& rig, std::vector<Eigen::Vector3d>* tru
   return problem;
 }
 
-TEST(MapBundleAdjustment, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
+// Both solvers of local BA: Ceres and the own one (BundleAdjustmentOptions::own_solver).
+class MapBundleAdjustmentSolver : public ::testing::TestWithParam<bool> {
+ protected:
+  BundleAdjustmentOptions Options() const {
+    BundleAdjustmentOptions options;
+    options.own_solver = GetParam();
+    return options;
+  }
+};
+
+TEST_P(MapBundleAdjustmentSolver, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
   const StereoRig rig = TestRig();
   std::vector<Eigen::Vector3d> truth;
   BaProblem problem = TwoViewProblem(rig, &truth);
@@ -121,7 +132,7 @@ TEST(MapBundleAdjustment, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
   // Not interrupted: solved, the outlier found and only it.
   const std::atomic<bool> no{false};
   BaProblem full = problem;
-  const BundleAdjustmentReport done = SolveBundleAdjustment(rig, &full, {}, nullptr, &no);
+  const BundleAdjustmentReport done = SolveBundleAdjustment(rig, &full, Options(), nullptr, &no);
   EXPECT_TRUE(done.solved);
   EXPECT_FALSE(done.interrupted);
   for (size_t i = 0; i < done.point_outlier.size(); ++i) {
@@ -134,24 +145,29 @@ TEST(MapBundleAdjustment, AnInterruptBeforeAnyStepLeavesTheProblemAsItWas) {
   // starting estimate (whose residuals exceed the bounds almost everywhere).
   const std::atomic<bool> yes{true};
   BaProblem cut = problem;
-  const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &cut, {}, nullptr, &yes);
+  const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &cut, Options(), nullptr, &yes);
   EXPECT_TRUE(report.interrupted);
   EXPECT_FALSE(report.solved);
   for (size_t i = 0; i < truth.size(); ++i) EXPECT_EQ(cut.points[i], problem.points[i]);
 }
 
-TEST(MapBundleAdjustment, ASolveAskedToAbortReportsUnsolved) {
+TEST_P(MapBundleAdjustmentSolver, ASolveAskedToAbortReportsUnsolved) {
   const StereoRig rig = TestRig();
   const BaProblem problem = TwoViewProblem(rig);
   BaProblem copy = problem;
-  EXPECT_TRUE(SolveBundleAdjustment(rig, &copy).solved);
+  EXPECT_TRUE(SolveBundleAdjustment(rig, &copy, Options()).solved);
   const std::atomic<bool> abort{true};
   copy = problem;
-  EXPECT_FALSE(SolveBundleAdjustment(rig, &copy, {}, &abort).solved);
+  EXPECT_FALSE(SolveBundleAdjustment(rig, &copy, Options(), &abort).solved);
   const std::atomic<bool> go_on{false};
   copy = problem;
-  EXPECT_TRUE(SolveBundleAdjustment(rig, &copy, {}, &go_on).solved);
+  EXPECT_TRUE(SolveBundleAdjustment(rig, &copy, Options(), &go_on).solved);
 }
+
+INSTANTIATE_TEST_SUITE_P(CeresAndOwn, MapBundleAdjustmentSolver, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? std::string("Own") : std::string("Ceres");
+                         });
 
 }  // namespace
 }  // namespace slslam

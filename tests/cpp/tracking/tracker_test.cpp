@@ -745,12 +745,14 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
   }
 }
 
-TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
-  const Scene scene;
-  const StereoRig rig = Rig();
+// Four stereo keyframes (the first fixed, the others perturbed) of the scene's first 400 points
+// and 30 lines (those seen at least twice), the points and lines perturbed.
+BaProblem PerturbedWindow(const Scene& scene, const StereoRig& rig,
+                          std::vector<Eigen::Matrix3d>* true_R_out,
+                          std::vector<Eigen::Vector3d>* true_t_out) {
   BaProblem problem;
-  std::vector<Eigen::Matrix3d> true_R;
-  std::vector<Eigen::Vector3d> true_t;
+  std::vector<Eigen::Matrix3d>& true_R = *true_R_out;
+  std::vector<Eigen::Vector3d>& true_t = *true_t_out;
   const int frames[] = {0, 8, 16, 24};
   for (int k : frames) {
     Eigen::Matrix3d R;
@@ -810,6 +812,15 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
       }
     }
   }
+  return problem;
+}
+
+TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
+  const Scene scene;
+  const StereoRig rig = Rig();
+  std::vector<Eigen::Matrix3d> true_R;
+  std::vector<Eigen::Vector3d> true_t;
+  const BaProblem problem = PerturbedWindow(scene, rig, &true_R, &true_t);
   ASSERT_GT(problem.lines.size(), 5u);
   // The defaults, and the lines' pull with the dogleg (the pull's bias towards the start of each
   // pass is too small here to keep the noise-free scene from being recovered).
@@ -820,10 +831,15 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
   // each, every direction is determined above the bound: the same recovery).
   BundleAdjustmentOptions held;
   held.line_min_information_per_rad2 = 1.0;
-  for (const BundleAdjustmentOptions& options : {BundleAdjustmentOptions{}, pulled, held}) {
+  // The own solver (landmarks eliminated, dense reduced system) and Ceres.
+  BundleAdjustmentOptions own, ceres;
+  own.own_solver = true;
+  ceres.own_solver = false;
+  for (const BundleAdjustmentOptions& options : {own, ceres, pulled, held}) {
     SCOPED_TRACE(options.dogleg_with_lines                       ? "dogleg, pulled lines"
                  : options.line_min_information_per_rad2 > 0.0 ? "weak directions held"
-                                                                 : "defaults");
+                 : options.own_solver                          ? "own solver"
+                                                               : "Ceres");
     BaProblem solved = problem;
     const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &solved, options);
     ASSERT_TRUE(report.solved);
@@ -840,6 +856,59 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
     }
     for (bool outlier : report.point_outlier) EXPECT_FALSE(outlier);
     for (bool outlier : report.line_outlier) EXPECT_FALSE(outlier);
+  }
+}
+
+// The own solver follows Ceres' Levenberg-Marquardt on the same problem: with pixel noise, mono
+// observations and gross outliers, both passes take the same steps (accepted and rejected) to
+// the same estimate, and classify the same observations as outliers.
+TEST(BundleAdjustmentTest, OwnSolverFollowsCeresStepForStep) {
+  const Scene scene;
+  const StereoRig rig = Rig();
+  std::vector<Eigen::Matrix3d> true_R;
+  std::vector<Eigen::Vector3d> true_t;
+  BaProblem problem = PerturbedWindow(scene, rig, &true_R, &true_t);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.7);
+  for (size_t i = 0; i < problem.point_observations.size(); ++i) {
+    BaPointObservation& o = problem.point_observations[i];
+    for (int k = 0; k < 3; ++k) o.observed(k) += noise(rng);
+    if (i % 5 == 0) o.stereo = false;
+    if (i % 23 == 0) o.observed.x() += 25.0;  // gross outliers
+  }
+  for (BaLineObservation& o : problem.line_observations) {
+    o.start_px += Eigen::Vector2d(noise(rng), noise(rng));
+    o.end_px += Eigen::Vector2d(noise(rng), noise(rng));
+  }
+  BundleAdjustmentOptions own, ceres;
+  own.own_solver = true;
+  ceres.own_solver = false;
+  BaProblem by_own = problem, by_ceres = problem;
+  const BundleAdjustmentReport a = SolveBundleAdjustment(rig, &by_own, own);
+  const BundleAdjustmentReport b = SolveBundleAdjustment(rig, &by_ceres, ceres);
+  ASSERT_TRUE(a.solved);
+  ASSERT_TRUE(b.solved);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.rejected_steps, b.rejected_steps);
+  EXPECT_NEAR(a.initial_cost, b.initial_cost, 1e-9 * b.initial_cost);
+  EXPECT_NEAR(a.final_cost, b.final_cost, 1e-6 * b.final_cost);
+  EXPECT_EQ(a.point_outlier, b.point_outlier);
+  EXPECT_EQ(a.line_outlier, b.line_outlier);
+  int outliers = 0;
+  for (bool outlier : a.point_outlier) outliers += outlier;
+  EXPECT_GT(outliers, 0);  // the gross ones were found
+  for (size_t f = 0; f < problem.poses.size(); ++f) {
+    EXPECT_LT((by_own.poses[f].cam_from_world.Center() -
+               by_ceres.poses[f].cam_from_world.Center()).norm(),
+              1e-7)
+        << "pose " << f;
+  }
+  for (size_t i = 0; i < problem.points.size(); ++i) {
+    EXPECT_LT((by_own.points[i] - by_ceres.points[i]).norm(), 1e-6) << "point " << i;
+  }
+  for (size_t i = 0; i < problem.lines.size(); ++i) {
+    EXPECT_LT((by_own.lines[i].v.normalized() - by_ceres.lines[i].v.normalized()).norm(), 1e-6)
+        << "line " << i;
   }
 }
 
