@@ -467,6 +467,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("lost_reentry_confirm_m", &TrackerOptions::lost_reentry_confirm_m)
       .def_readwrite("new_map_after_lost_frames", &TrackerOptions::new_map_after_lost_frames)
       .def_readwrite("lost_velocity_decay", &TrackerOptions::lost_velocity_decay)
+      .def_readwrite("lost_motion_frames", &TrackerOptions::lost_motion_frames)
       .def_readwrite("lost_search_scale", &TrackerOptions::lost_search_scale)
       .def_readwrite("weak_keyframe_inliers", &TrackerOptions::weak_keyframe_inliers)
       .def_readwrite("weak_keyframe_frames", &TrackerOptions::weak_keyframe_frames)

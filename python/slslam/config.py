@@ -143,6 +143,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "recently_lost_frames",
         "lost_velocity_decay",
         "lost_search_scale",
+        "lost_motion_frames",
         "lost_reentry_min_point_ratio",
         "lost_reentry_confirm_m",
         "new_map_after_lost_frames",
@@ -427,9 +428,8 @@ class TrackingConfig:
     own_pose_solver: bool = _tracking("own_pose_solver")
     # local BA by slslam's own Levenberg-Marquardt with the points and lines eliminated (the same
     # costs, trust-region rules and steps, a dense reduced system over the window's free
-    # keyframes; about 5x faster) instead of Ceres' sparse Schur solver; off until the
-    # camera-only blackout re-entry is robust to the runs' last digits (benchmarks/README.md,
-    # 2026-11-29)
+    # keyframes; about 5x faster) instead of Ceres' sparse Schur solver; false: Ceres, the
+    # default until 2026-11-29 (benchmarks/README.md)
     own_local_ba_solver: bool = _tracking("own_local_ba_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
@@ -499,6 +499,11 @@ class TrackingConfig:
     lost_velocity_decay: float = _tracking("lost_velocity_decay", "[0, 1]")
     # guided-matching window factor while recently lost
     lost_search_scale: float = _tracking("lost_search_scale", "[1, 100]")
+    # lost: the motion before the loss, along which the local map is tried, is the mean per-frame
+    # motion over this many frames (1: the last frame's; one frame's jitter extrapolated over a
+    # blackout of 20 frames re-entered a repeated roadway 0.9 m off; benchmarks/README.md,
+    # 2026-11-29)
+    lost_motion_frames: int = _tracking("lost_motion_frames", "[1, 1000]")
     # lost: a re-entry along the motion before the loss needs this share of its point matches
     # as inliers (lines do not count: a wrong pose gathers line inliers along the lines)
     lost_reentry_min_point_ratio: float = _tracking("lost_reentry_min_point_ratio", "[0, 1]")

@@ -82,14 +82,12 @@ struct BundleAdjustmentOptions {
   double line_min_information_per_rad2 = 0.0;
   /// true: each pass solved by this library's own Levenberg-Marquardt with the landmarks
   /// eliminated (schur_levenberg_marquardt.h: Ceres' trust-region rules on the same costs, no
-  /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR).
-  /// On 187 local BAs of the dark dusty loop both took the same steps to the same cost (9
-  /// digits) in 5.8x less time; but the runs' last digits differ, and the camera-only blackout
-  /// of test_tracking.py then re-entered its map 0.9 m off (the roadway's arches repeat), so it
-  /// stays off until that re-entry is made robust (benchmarks/README.md, 2026-11-29). The own
-  /// solver takes only problems of at most 64 free poses without the pull, the dogleg or held
-  /// line directions above; Ceres solves the others (a large map's global BA) [-]
-  bool own_solver = false;
+  /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR),
+  /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took the same
+  /// steps to the same cost (9 digits) in 5.8x less time (benchmarks/README.md, 2026-11-29).
+  /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg or
+  /// held line directions above; Ceres solves the others (a large map's global BA) [-]
+  bool own_solver = true;
 
   void Check() const;
 };

@@ -182,6 +182,11 @@ void Tracker::Predict(Rigid3d* pred_cam_from_world) const {
 }
 
 void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
+  if (!(update_velocity && have_pose_)) recent_poses_.clear();
+  recent_poses_.push_back(cam_from_world);
+  while (static_cast<int>(recent_poses_.size()) > options_.lost_motion_frames + 1) {
+    recent_poses_.pop_front();
+  }
   if (update_velocity && have_pose_) {
     // R_v = R_cw R_last^T, t_v = t_cw - R_v t_last (as written, not T_cw * T_last^-1).
     velocity_.rotation = cam_from_world.rotation * last_cam_from_world_.rotation.transpose();
@@ -673,6 +678,19 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   if (mode_ == Mode::kTracking) {  // the last estimate and the motion before the loss
     loss_cam_from_world_ = last_cam_from_world_;
     loss_velocity_ = velocity_;
+    if (recent_poses_.size() >= 3) {
+      // The mean per-frame motion over the recent frames: T_newest T_oldest^-1 taken to the
+      // 1/n (the rotation's angle divided, the translation too: exact for a constant rotation).
+      const Rigid3d& oldest = recent_poses_.front();
+      const Rigid3d& newest = recent_poses_.back();
+      const double n = static_cast<double>(recent_poses_.size() - 1);
+      const Eigen::Matrix3d R = newest.rotation * oldest.rotation.transpose();
+      const Eigen::AngleAxisd per_frame(R);
+      loss_velocity_.rotation =
+          Eigen::AngleAxisd(per_frame.angle() / n, per_frame.axis()).toRotationMatrix();
+      loss_velocity_.translation = (newest.translation - R * oldest.translation) / n;
+    }
+    recent_poses_.clear();
   }
   ++lost_count_;
   // A short outage with the IMU: the bridged pose is an estimate, and the frame is recorded.

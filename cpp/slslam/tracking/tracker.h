@@ -12,6 +12,7 @@
 // make a keyframe and to start a map, so lines carry the low-texture stretches.
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <initializer_list>
 #include <memory>
@@ -177,6 +178,13 @@ struct TrackerOptions {
   double lost_velocity_decay = 0.6;     ///< per-frame factor on the predicted motion while
                                         ///< recently lost (rotation angle and translation) [-]
   float lost_search_scale = 2.0f;       ///< guided-matching window factor while recently lost [-]
+  /// Lost: the motion before the loss, along which the local map is tried (TrackAlongLossMotion),
+  /// is the mean per-frame motion over this many frames before it, not the last frame's alone:
+  /// twenty black frames extrapolate one frame's jitter twentyfold. On the camera-only blackouts
+  /// of the simulated junction (light 0.5 seeds 0-8, light 0.15 with dust seeds 0-15) 5 brought
+  /// all 25 back right with either local BA solver, where with 1 the bright seed 0 re-entered
+  /// 0.9 m off with the own one (benchmarks/README.md, 2026-11-29). 1: the last frame's [frames]
+  int lost_motion_frames = 5;
   /// Lost, the local map tracked from a pose along the motion before the loss is taken only where
   /// at least this share of its point matches are inliers [-]. Lines do not count here: a line
   /// constrains a pose little along itself, and on the camera-only blackout of the simulated
@@ -444,6 +452,9 @@ class Tracker {
   bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)
+  /// the poses of the last consecutive frames set with a known motion (newest last), at most
+  /// lost_motion_frames + 1: the mean motion before a loss
+  std::deque<Rigid3d> recent_poses_;
   /// The previous frame's re-entry attempt along the loss motion that fell short of the bar
   /// (TrackAlongLossMotion): its frame, the map and correction epoch its pose is expressed in.
   struct LossCandidate {

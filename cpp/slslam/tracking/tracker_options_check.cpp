@@ -82,6 +82,7 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.line_inlier_weight", line_inlier_weight, 0.0, 1e6);
   CheckInRange("tracking.recently_lost_frames", recently_lost_frames, 0, kMaxCount);
   CheckInRange("tracking.lost_velocity_decay", lost_velocity_decay, 0.0, 1.0);
+  CheckInRange("tracking.lost_motion_frames", lost_motion_frames, 1, 1000);
   CheckInRange("tracking.lost_search_scale", lost_search_scale, 1.0f, 1000.0f);
   CheckInRange("tracking.lost_reentry_min_point_ratio", lost_reentry_min_point_ratio, 0.0, 1.0);
   CheckInRange("tracking.lost_reentry_confirm_m", lost_reentry_confirm_m, 0.0, 100.0);

@@ -330,6 +330,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(recently_lost_frames, "tracking.recently_lost_frames", 0, 1e9, "[]"),
        FIELD(lost_velocity_decay, "tracking.lost_velocity_decay", 0, 1, "[]"),
        FIELD(lost_search_scale, "tracking.lost_search_scale", 1, 1000, "[]"),
+       FIELD(lost_motion_frames, "tracking.lost_motion_frames", 1, 1000, "[]"),
        FIELD(lost_reentry_min_point_ratio, "tracking.lost_reentry_min_point_ratio", 0, 1, "[]"),
        FIELD(lost_reentry_confirm_m, "tracking.lost_reentry_confirm_m", 0, 100, "[]"),
        FIELD(new_map_after_lost_frames, "tracking.new_map_after_lost_frames", 0, 1e9, "[]"),
