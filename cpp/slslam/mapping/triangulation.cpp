@@ -169,7 +169,6 @@ int TriangulateLines(Map* map, const View& a, const View& b, const StereoRig& ri
                      const TriangulationOptions& options) SLSLAM_REQUIRES(map->mutex()) {
   const PinholeCamera& camera = rig.camera;
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
-  const double bound = options.chi2 * options.sigma_px * options.sigma_px;
   const double cos_max = std::cos(options.min_plane_angle_deg * kDegToRad);
   const double line_bound = options.chi2 * options.line_sigma_px * options.line_sigma_px;
   int made = 0;
