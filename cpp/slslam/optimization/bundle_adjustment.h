@@ -83,8 +83,9 @@ struct BundleAdjustmentOptions {
   /// true: each pass solved by this library's own Levenberg-Marquardt with the landmarks
   /// eliminated (schur_levenberg_marquardt.h: Ceres' trust-region rules on the same costs, no
   /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR),
-  /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took the same
-  /// steps to the same cost (9 digits) in 5.8x less time (benchmarks/README.md, 2026-11-29).
+  /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took as many
+  /// steps in each, to the same cost within 1e-6 in 169 (1e-9 in 121, 0.15-0.7 % apart in 5),
+  /// in 5.8x less time (benchmarks/README.md, 2026-11-29).
   /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg or
   /// held line directions above; Ceres solves the others (a large map's global BA) [-]
   bool own_solver = true;
