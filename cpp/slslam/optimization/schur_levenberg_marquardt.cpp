@@ -314,6 +314,36 @@ void Solver::WriteBack() const {
   }
 }
 
+// The largest absolute gradient entry of the used landmarks of one kind, or `at_least`.
+template <int D>
+double LargestGradient(const LandmarkEquations<D>& eq, const std::vector<bool>& used,
+                       double at_least) {
+  for (size_t l = 0; l < used.size(); ++l) {
+    if (used[l]) at_least = std::max(at_least, eq.gradient[l].cwiseAbs().maxCoeff());
+  }
+  return at_least;
+}
+
+// One kind of landmark's part of a step (tangent size D, ambient size A, moved by `plus`): adds
+// to the step's and the state's squared sizes and to the model's g^T d and d^T H d (the
+// landmarks' own blocks; the cross terms come later), and writes the candidate's landmarks.
+template <int D, size_t A, typename Plus>
+void StepLandmarks(const LandmarkEquations<D>& eq, const std::vector<bool>& used,
+                   const std::vector<Eigen::Matrix<double, D, 1>>& step,
+                   const std::vector<std::array<double, A>>& state, const Plus& plus,
+                   std::vector<std::array<double, A>>* candidate, double* step_squared,
+                   double* state_squared, double* gd, double* dhd) {
+  for (size_t l = 0; l < step.size(); ++l) {
+    if (!used[l]) continue;
+    const Eigen::Matrix<double, D, 1>& d = step[l];
+    *step_squared += d.squaredNorm();
+    *gd += eq.gradient[l].dot(d);
+    *dhd += d.dot(eq.information[l] * d);
+    for (double v : state[l]) *state_squared += v * v;
+    plus(state[l].data(), d.data(), (*candidate)[l].data());
+  }
+}
+
 SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort,
                               const std::atomic<bool>* interrupt) {
   SchurSolveSummary summary;
@@ -358,16 +388,8 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     for (const Vector6d& g : current.pose_gradient) {
       gradient_max = std::max(gradient_max, g.cwiseAbs().maxCoeff());
     }
-    for (size_t l = 0; l < point_scale.size(); ++l) {
-      if (point_used_[l]) {
-        gradient_max = std::max(gradient_max, current.points.gradient[l].cwiseAbs().maxCoeff());
-      }
-    }
-    for (size_t l = 0; l < line_scale.size(); ++l) {
-      if (line_used_[l]) {
-        gradient_max = std::max(gradient_max, current.lines.gradient[l].cwiseAbs().maxCoeff());
-      }
-    }
+    gradient_max = LargestGradient(current.points, point_used_, gradient_max);
+    gradient_max = LargestGradient(current.lines, line_used_, gradient_max);
     if (gradient_max <= 1e-10) break;
     // The damped system, the landmarks eliminated.
     reduced.setZero();
@@ -402,26 +424,16 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
       for (double v : state_.poses[i]) state_squared += v * v;
       pose_manifold.Plus(state_.poses[i].data(), d.data(), candidate.poses[i].data());
     }
-    for (size_t l = 0; l < point_step.size(); ++l) {
-      if (!point_used_[l]) continue;
-      const Eigen::Vector3d& d = point_step[l];
-      step_squared += d.squaredNorm();
-      gd += current.points.gradient[l].dot(d);
-      dhd += d.dot(current.points.information[l] * d);
-      for (int k = 0; k < kPointSize; ++k) {
-        state_squared += state_.points[l][k] * state_.points[l][k];
-        candidate.points[l][k] = state_.points[l][k] + d(k);
-      }
-    }
-    for (size_t l = 0; l < line_step.size(); ++l) {
-      if (!line_used_[l]) continue;
-      const Eigen::Vector4d& d = line_step[l];
-      step_squared += d.squaredNorm();
-      gd += current.lines.gradient[l].dot(d);
-      dhd += d.dot(current.lines.information[l] * d);
-      for (double v : state_.lines[l]) state_squared += v * v;
-      line_manifold.Plus(state_.lines[l].data(), d.data(), candidate.lines[l].data());
-    }
+    const auto point_plus = [](const double* x, const double* d, double* out) {
+      for (int k = 0; k < kPointSize; ++k) out[k] = x[k] + d[k];
+    };
+    const auto line_plus = [&](const double* x, const double* d, double* out) {
+      line_manifold.Plus(x, d, out);
+    };
+    StepLandmarks(current.points, point_used_, point_step, state_.points, point_plus,
+                  &candidate.points, &step_squared, &state_squared, &gd, &dhd);
+    StepLandmarks(current.lines, line_used_, line_step, state_.lines, line_plus,
+                  &candidate.lines, &step_squared, &state_squared, &gd, &dhd);
     for (size_t i = 0; i < terms_.size(); ++i) {  // the couplings' cross terms, twice
       const SchurTerm& t = terms_[i];
       const int f = free_index_[t.pose];
