@@ -153,16 +153,22 @@ void ClassifyOutliers(const StereoRig& rig, const Parameters& params, const BaPr
 // The most free poses the own solver takes: its reduced system is dense (6 per free pose).
 constexpr int kOwnSolverMaxFreePoses = 64;
 
-struct OwnPassSummary : SchurSolveSummary {
-  bool ran = false;  ///< the pass had a residual to minimise
+// What one pass of either solver did, as SolveBundleAdjustment needs it.
+struct PassSummary {
+  bool ran = false;                  ///< the pass had a residual to minimise
+  bool aborted = false;              ///< the abort flag ended it: its result is not to be used
+  bool interrupted_unmoved = false;  ///< the interrupt ended it before any step was taken
+  bool usable = false;               ///< the solver's result is usable
+  int steps = 0, rejected_steps = 0;
+  double initial_cost = 0.0, final_cost = 0.0;
 };
 
 // One pass by the own solver (BundleAdjustmentOptions::own_solver): the same residuals and losses
 // as the Ceres pass below, a stereo observation as one block of three rows in both passes.
-OwnPassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
-                            const BundleAdjustmentOptions& options, bool robust,
-                            const std::atomic<bool>* interrupt, const std::atomic<bool>* abort,
-                            Parameters* params, const BundleAdjustmentReport* report) {
+PassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
+                         const BundleAdjustmentOptions& options, bool robust,
+                         const std::atomic<bool>* interrupt, const std::atomic<bool>* abort,
+                         Parameters* params, const BundleAdjustmentReport* report) {
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   std::vector<SchurTerm> terms;
   costs.reserve(ba.point_observations.size() + ba.line_observations.size());
@@ -199,7 +205,7 @@ OwnPassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
     term.weight = options.line_weight;
     terms.push_back(term);
   }
-  OwnPassSummary summary;
+  PassSummary summary;
   if (terms.empty()) return summary;
   SchurBlocks blocks;
   for (size_t i = 0; i < ba.poses.size(); ++i) {
@@ -211,9 +217,155 @@ OwnPassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
     blocks.lines.push_back(params->line(static_cast<int>(i)));
   }
   const int iterations = robust ? options.robust_iterations : options.refine_iterations;
-  static_cast<SchurSolveSummary&>(summary) =
+  const SchurSolveSummary solved =
       SolveSchurLevenbergMarquardt(terms, blocks, iterations, abort, interrupt);
   summary.ran = true;
+  summary.aborted = solved.aborted;
+  summary.interrupted_unmoved = solved.interrupted && !solved.moved;
+  summary.usable = solved.usable;
+  summary.steps = solved.steps;
+  summary.rejected_steps = solved.rejected_steps;
+  summary.initial_cost = solved.initial_cost;
+  summary.final_cost = solved.final_cost;
+  return summary;
+}
+
+// One pass by Ceres (SPARSE_SCHUR; the pull, the dogleg, held line directions, large problems).
+PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
+                           const BundleAdjustmentOptions& options, bool robust,
+                           const std::atomic<bool>* interrupt, const std::atomic<bool>* abort,
+                           Parameters* parameters, const BundleAdjustmentReport* outliers) {
+  Parameters& params = *parameters;
+  const BundleAdjustmentReport& report = *outliers;
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem solver_problem(problem_options);
+  std::vector<bool> pose_used(ba.poses.size(), false);
+  std::vector<bool> line_used(ba.lines.size(), false);
+  std::vector<bool> point_used(ba.points.size(), false);
+  // Each line free in the directions its observations determine, held in the others.
+  std::vector<LineSubspaceManifold::Basis> determined;
+  if (options.line_min_information_per_rad2 > 0.0) {
+    determined = DeterminedLineDirections(rig, params, ba, report.line_outlier, options);
+  }
+  int blocks = 0;
+  for (size_t i = 0; i < ba.point_observations.size(); ++i) {
+    if (report.point_outlier[i]) continue;
+    const BaPointObservation& o = ba.point_observations[i];
+    double* pose = params.pose(o.pose);
+    double* point = params.points[o.point].data();
+    if (o.stereo && robust) {
+      solver_problem.AddResidualBlock(new StereoPointCost(rig, o.observed, o.sigma_px),
+                                      new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
+                                      pose, point);
+    } else if (o.stereo) {
+      // Without a loss, the same rows as two blocks of two (StereoPointHalfCost): see the
+      // ordering below.
+      for (int half = 0; half < 2; ++half) {
+        solver_problem.AddResidualBlock(
+            new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), nullptr, pose, point);
+      }
+    } else {
+      ceres::LossFunction* loss =
+          robust ? new ceres::HuberLoss(std::sqrt(options.chi2_mono)) : nullptr;
+      solver_problem.AddResidualBlock(
+          new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px), loss, pose, point);
+    }
+    point_used[o.point] = true;
+    pose_used[o.pose] = true;
+    ++blocks;
+  }
+  for (size_t i = 0; i < ba.line_observations.size(); ++i) {
+    if (report.line_outlier[i] || options.line_weight <= 0.0) continue;
+    const BaLineObservation& o = ba.line_observations[i];
+    ceres::CostFunction* cost =
+        new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px,
+                     params.line_anchors[o.line]);
+    ceres::LossFunction* loss =
+        robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
+    if (options.line_weight != 1.0) {
+      loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
+    }
+    solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose), params.line(o.line));
+    if (!line_used[o.line]) {
+      double* line = params.line(o.line);
+      const int free = determined.empty() ? kLineTangentSize
+                                          : static_cast<int>(determined[o.line].cols());
+      if (free > 0 && free < kLineTangentSize) {
+        solver_problem.SetManifold(line, new LineSubspaceManifold(determined[o.line]));
+      } else {
+        solver_problem.SetManifold(line, new LineManifold);
+      }
+      if (free == 0) solver_problem.SetParameterBlockConstant(line);
+      if (options.line_prior_weight > 0.0) {
+        solver_problem.AddResidualBlock(new LinePriorCost(line, options.line_prior_weight),
+                                        nullptr, line);
+      }
+    }
+    line_used[o.line] = true;
+    pose_used[o.pose] = true;
+    ++blocks;
+  }
+  if (blocks == 0) return {};
+  for (size_t i = 0; i < ba.poses.size(); ++i) {
+    if (!pose_used[i]) continue;
+    solver_problem.SetManifold(params.pose(i), new PoseManifold);
+    if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.pose(i));
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  if (options.dogleg_with_lines && std::any_of(line_used.begin(), line_used.end(),
+                                               [](bool used) { return used; })) {
+    solver_options.trust_region_strategy_type = ceres::DOGLEG;
+  }
+  solver_options.max_num_iterations =
+      robust ? options.robust_iterations : options.refine_iterations;
+  solver_options.num_threads = 1;
+  // The points are eliminated, the poses and lines kept in the reduced system. In the refine
+  // pass every point block has two rows (above) and every pose tangent six, so Ceres' Schur
+  // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
+  // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
+  // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
+  // it would be another objective. The ordering names every parameter block, in two groups
+  // (with a third for the lines, local BA took longer than before this ordering; measured in
+  // benchmarks/README.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
+  if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (size_t i = 0; i < ba.points.size(); ++i) {
+      if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
+    }
+    for (size_t i = 0; i < ba.poses.size(); ++i) {
+      if (pose_used[i]) ordering->AddElementToGroup(params.pose(i), 1);
+    }
+    for (size_t i = 0; i < ba.lines.size(); ++i) {
+      if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
+    }
+    solver_options.linear_solver_ordering = ordering;
+  }
+  solver_options.logging_type = ceres::SILENT;
+  StopCallback stop_callback(abort, interrupt);
+  if (abort || interrupt) solver_options.callbacks.push_back(&stop_callback);
+  ceres::Solver::Summary solved;
+  ceres::Solve(solver_options, &solver_problem, &solved);
+  PassSummary summary;
+  summary.ran = true;
+  if (abort && abort->load()) {
+    summary.aborted = true;
+    return summary;
+  }
+  // (iterations[0] is the start itself; Ceres counts it among the successful steps)
+  const bool moved =
+      solved.iterations.size() > 1 &&
+      std::any_of(solved.iterations.begin() + 1, solved.iterations.end(),
+                  [](const ceres::IterationSummary& it) { return it.step_is_successful; });
+  summary.interrupted_unmoved = interrupt && interrupt->load() && !moved;
+  // (iterations[0] is the start, not a step)
+  summary.steps = std::max(static_cast<int>(solved.iterations.size()) - 1, 0);
+  summary.rejected_steps = solved.num_unsuccessful_steps;
+  summary.initial_cost = solved.initial_cost;
+  summary.final_cost = solved.final_cost;
+  summary.usable = solved.IsSolutionUsable();
   return summary;
 }
 
@@ -293,164 +445,26 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
                    }) <= kOwnSolverMaxFreePoses;
   for (int pass = 0; pass < 2; ++pass) {
     const bool robust = pass == 0;
-    if (own) {
-      const OwnPassSummary summary =
-          SolvePassOwn(rig, ba, options, robust, interrupt, abort, &params, &report);
-      if (!summary.ran) return report;
-      if (summary.aborted) {
-        report.solved = false;
-        return report;
-      }
-      if (pass == 0 && summary.interrupted && !summary.moved) {
-        report.solved = false;
-        report.interrupted = true;
-        return report;
-      }
-      report.iterations += summary.steps;
-      report.rejected_steps += summary.rejected_steps;
-      if (pass == 0) report.initial_cost = summary.initial_cost;
-      report.final_cost = summary.final_cost;
-      report.solved = summary.usable;
-      ClassifyOutliers(rig, params, ba, options, &report);
-      if (interrupt && interrupt->load()) {
-        report.interrupted = true;
-        break;
-      }
-      continue;
-    }
-    ceres::Problem::Options problem_options;
-    problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
-    ceres::Problem solver_problem(problem_options);
-    std::vector<bool> pose_used(ba.poses.size(), false);
-    std::vector<bool> line_used(ba.lines.size(), false);
-    std::vector<bool> point_used(ba.points.size(), false);
-    // Each line free in the directions its observations determine, held in the others.
-    std::vector<LineSubspaceManifold::Basis> determined;
-    if (options.line_min_information_per_rad2 > 0.0) {
-      determined = DeterminedLineDirections(rig, params, ba, report.line_outlier, options);
-    }
-    int blocks = 0;
-    for (size_t i = 0; i < ba.point_observations.size(); ++i) {
-      if (report.point_outlier[i]) continue;
-      const BaPointObservation& o = ba.point_observations[i];
-      double* pose = params.pose(o.pose);
-      double* point = params.points[o.point].data();
-      if (o.stereo && robust) {
-        solver_problem.AddResidualBlock(new StereoPointCost(rig, o.observed, o.sigma_px),
-                                        new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
-                                        pose, point);
-      } else if (o.stereo) {
-        // Without a loss, the same rows as two blocks of two (StereoPointHalfCost): see the
-        // ordering below.
-        for (int half = 0; half < 2; ++half) {
-          solver_problem.AddResidualBlock(
-              new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), nullptr, pose, point);
-        }
-      } else {
-        ceres::LossFunction* loss =
-            robust ? new ceres::HuberLoss(std::sqrt(options.chi2_mono)) : nullptr;
-        solver_problem.AddResidualBlock(
-            new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px), loss, pose, point);
-      }
-      point_used[o.point] = true;
-      pose_used[o.pose] = true;
-      ++blocks;
-    }
-    for (size_t i = 0; i < ba.line_observations.size(); ++i) {
-      if (report.line_outlier[i] || options.line_weight <= 0.0) continue;
-      const BaLineObservation& o = ba.line_observations[i];
-      ceres::CostFunction* cost =
-          new LineCost(rig.camera, o.start_px, o.end_px, options.line_angle_weight, o.sigma_px,
-                       params.line_anchors[o.line]);
-      ceres::LossFunction* loss =
-          robust ? new ceres::HuberLoss(std::sqrt(options.chi2_line)) : nullptr;
-      if (options.line_weight != 1.0) {
-        loss = new ceres::ScaledLoss(loss, options.line_weight, ceres::TAKE_OWNERSHIP);
-      }
-      solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose), params.line(o.line));
-      if (!line_used[o.line]) {
-        double* line = params.line(o.line);
-        const int free = determined.empty() ? kLineTangentSize
-                                            : static_cast<int>(determined[o.line].cols());
-        if (free > 0 && free < kLineTangentSize) {
-          solver_problem.SetManifold(line, new LineSubspaceManifold(determined[o.line]));
-        } else {
-          solver_problem.SetManifold(line, new LineManifold);
-        }
-        if (free == 0) solver_problem.SetParameterBlockConstant(line);
-        if (options.line_prior_weight > 0.0) {
-          solver_problem.AddResidualBlock(new LinePriorCost(line, options.line_prior_weight),
-                                          nullptr, line);
-        }
-      }
-      line_used[o.line] = true;
-      pose_used[o.pose] = true;
-      ++blocks;
-    }
-    if (blocks == 0) return report;
-    for (size_t i = 0; i < ba.poses.size(); ++i) {
-      if (!pose_used[i]) continue;
-      solver_problem.SetManifold(params.pose(i), new PoseManifold);
-      if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.pose(i));
-    }
-
-    ceres::Solver::Options solver_options;
-    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-    if (options.dogleg_with_lines && std::any_of(line_used.begin(), line_used.end(),
-                                                 [](bool used) { return used; })) {
-      solver_options.trust_region_strategy_type = ceres::DOGLEG;
-    }
-    solver_options.max_num_iterations =
-        robust ? options.robust_iterations : options.refine_iterations;
-    solver_options.num_threads = 1;
-    // The points are eliminated, the poses and lines kept in the reduced system. In the refine
-    // pass every point block has two rows (above) and every pose tangent six, so Ceres' Schur
-    // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
-    // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
-    // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
-    // it would be another objective. The ordering names every parameter block, in two groups
-    // (with a third for the lines, local BA took longer than before this ordering; measured in
-    // benchmarks/README.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
-    if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
-      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-      for (size_t i = 0; i < ba.points.size(); ++i) {
-        if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
-      }
-      for (size_t i = 0; i < ba.poses.size(); ++i) {
-        if (pose_used[i]) ordering->AddElementToGroup(params.pose(i), 1);
-      }
-      for (size_t i = 0; i < ba.lines.size(); ++i) {
-        if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
-      }
-      solver_options.linear_solver_ordering = ordering;
-    }
-    solver_options.logging_type = ceres::SILENT;
-    StopCallback stop_callback(abort, interrupt);
-    if (abort || interrupt) solver_options.callbacks.push_back(&stop_callback);
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver_options, &solver_problem, &summary);
-    if (abort && abort->load()) {
+    const PassSummary summary =
+        own ? SolvePassOwn(rig, ba, options, robust, interrupt, abort, &params, &report)
+            : SolvePassCeres(rig, ba, options, robust, interrupt, abort, &params, &report);
+    if (!summary.ran) return report;
+    if (summary.aborted) {
       report.solved = false;
       return report;
     }
     // Interrupted before the first pass took a step: the estimate is the start, whose outliers
     // say nothing yet (ORB-SLAM's local BA returns untouched when its stop flag is already set).
-    // (summary.iterations[0] is the start itself; Ceres counts it among the successful steps)
-    const bool moved =
-        summary.iterations.size() > 1 &&
-        std::any_of(summary.iterations.begin() + 1, summary.iterations.end(),
-                    [](const ceres::IterationSummary& it) { return it.step_is_successful; });
-    if (pass == 0 && interrupt && interrupt->load() && !moved) {
+    if (pass == 0 && summary.interrupted_unmoved) {
       report.solved = false;
       report.interrupted = true;
       return report;
     }
-    // (iterations[0] is the start, not a step)
-    report.iterations += std::max(static_cast<int>(summary.iterations.size()) - 1, 0);
-    report.rejected_steps += summary.num_unsuccessful_steps;
+    report.iterations += summary.steps;
+    report.rejected_steps += summary.rejected_steps;
     if (pass == 0) report.initial_cost = summary.initial_cost;
     report.final_cost = summary.final_cost;
-    report.solved = summary.IsSolutionUsable();
+    report.solved = summary.usable;
 
     ClassifyOutliers(rig, params, ba, options, &report);
     // Interrupted (a callback ended it, the parameters hold the last accepted iterate): no
