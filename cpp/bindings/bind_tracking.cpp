@@ -2,8 +2,6 @@
 // images and the point features (SuperPoint runs in Python through onnxruntime, ORB in C++);
 // line extraction, stereo matching, tracking and mapping run here with the GIL released.
 #include <chrono>
-#include <functional>
-#include <future>
 #include <memory>
 #include <mutex>
 
@@ -130,29 +128,16 @@ class TrackerSession {
       std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
       SLSLAM_CHECK(!p.used, "a prepared frame is tracked once");
       p.used = true;
-      // (right_lines_on_keyframes: the right image's lines when the tracker needs them; their
-      // segments on a thread of their own from the moment it decides on a keyframe, beside its
-      // work until it matches them. The future's destructor waits for that thread, also when
-      // Track throws.)
-      std::future<LineFeatures> right_lines;
-      const std::function<void()> prefetch = [&] {
-        if (right_lines.valid()) return;
-        right_lines = std::async(std::launch::async,
-                                 [&] { return frontend_.ExtractRightLines(p.right); });
-      };
+      // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
-        if (right_lines.valid()) {
-          frontend_.CompleteStereoLines(right_lines.get(), f);
-        } else {
-          frontend_.CompleteStereoLines(p.right, f);
-        }
+        frontend_.CompleteStereoLines(p.right, f);
       };
       // (lines_on_demand: the left image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete_left = [&](StereoFrame* f) {
         frontend_.CompleteLeftLines(p.left, f, ahead);
       };
       static_cast<TrackResult&>(out) = tracker_.Track(p.frame, complete, p.left_used,
-                                                      complete_left, prefetch);
+                                                      complete_left);
       out.lines = out.frame_lines;
       if (!ahead) out.line_extraction_ms += out.left_lines_ms;
     }

@@ -99,22 +99,12 @@ void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
 void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const {
   Require(frame != nullptr, "CompleteStereoLines needs a frame");
   if (!frame->stereo_lines_pending) return;
-  CompleteStereoLines(ExtractRightLines(right), frame);
-}
-
-LineFeatures StereoFrontend::ExtractRightLines(const cv::Mat& right) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(right.cols == cam.width && right.rows == cam.height, "right image is ", right.cols,
                "x", right.rows, ", calibration says ", cam.width, "x", cam.height);
   const cv::Mat smoothed = SmoothIfNoisy(right, options_.denoise_above_noise);  // as in Build
-  return ExtractLines(smoothed, options_.lines);
-}
-
-void StereoFrontend::CompleteStereoLines(const LineFeatures& right_lines,
-                                         StereoFrame* frame) const {
-  Require(frame != nullptr, "CompleteStereoLines needs a frame");
-  if (!frame->stereo_lines_pending) return;
-  MatchStereoLinesInto(right_lines, options_.rig, options_.stereo, frame);
+  MatchStereoLinesInto(ExtractLines(smoothed, options_.lines), options_.rig, options_.stereo,
+                       frame);
   frame->stereo_lines_pending = false;
 }
 

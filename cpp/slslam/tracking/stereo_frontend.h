@@ -71,11 +71,6 @@ class StereoFrontend {
   // The stereo lines of a frame Build left pending: the right image's segments, matched and
   // triangulated (for Tracker::Track's completer). Does nothing when none are pending.
   void CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const;
-  // The same in two steps: the right image's segments (smoothed when noisy, as in Build; no
-  // frame needed, so a caller may run it on another thread beside the tracker's work, see
-  // Tracker::Track's prefetch), then their matching and triangulation. Thread-safe (const).
-  LineFeatures ExtractRightLines(const cv::Mat& right) const;
-  void CompleteStereoLines(const LineFeatures& right_lines, StereoFrame* frame) const;
 
   // The left lines of a frame Build left pending (left_lines_on_demand), for Tracker::Track's
   // completer: `extracted` when given (ExtractLeftLines of this image, run ahead on another

@@ -397,8 +397,7 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
                            const StereoLineCompleter& complete_stereo_lines,
                            const cv::Mat& left_image,
-                           const StereoLineCompleter& complete_left_lines,
-                           const std::function<void()>& prefetch_stereo_lines) {
+                           const StereoLineCompleter& complete_left_lines) {
   Require(frame != nullptr, "Track needs a frame");
   // The completers and the image are valid for this call only.
   struct CallScope {
@@ -406,13 +405,11 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
     ~CallScope() {
       tracker.complete_stereo_lines_ = nullptr;
       tracker.complete_left_lines_ = nullptr;
-      tracker.prefetch_stereo_lines_ = nullptr;
       tracker.current_left_ = nullptr;
     }
   } scope{*this};
   complete_stereo_lines_ = &complete_stereo_lines;
   complete_left_lines_ = &complete_left_lines;
-  prefetch_stereo_lines_ = &prefetch_stereo_lines;
   current_left_ = &left_image;
   TrackResult result = TrackFrame(frame);
   // (the frame as it ended up: its left lines completed on demand or not)
@@ -567,12 +564,6 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
         velocity_known = velocity_known && move_last;
       }
       make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
-    }
-    if (make_keyframe && !options_.localise_only && options_.use_lines &&
-        frame->stereo_lines_pending && prefetch_stereo_lines_ && *prefetch_stereo_lines_) {
-      // The right image's segments may start now, beside the work below (WithStereoLines takes
-      // them).
-      (*prefetch_stereo_lines_)();
     }
     if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
       // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map

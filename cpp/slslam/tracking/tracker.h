@@ -285,17 +285,10 @@ class Tracker {
   // the call only.
   // `complete_left_lines` fills in the left image's lines of a frame built without them
   // (StereoFrame::left_lines_pending, lines_on_demand), on a copy, when the frame needs them.
-  // `prefetch_stereo_lines` is called once the frame is to become a keyframe and before its
-  // remaining work there (its left lines when on demand, tracking them, refining its keypoints),
-  // when its stereo lines are pending: a caller may start extracting the right image's segments
-  // on another thread there, for `complete_stereo_lines` to take (the same lines, sooner when a
-  // core is free). Whatever it starts must be finished by `complete_stereo_lines`' return or
-  // joined by the caller after Track (Track may end without calling it, e.g. by an exception).
   TrackResult Track(std::shared_ptr<const StereoFrame> frame,
                     const StereoLineCompleter& complete_stereo_lines = {},
                     const cv::Mat& left_image = cv::Mat(),
-                    const StereoLineCompleter& complete_left_lines = {},
-                    const std::function<void()>& prefetch_stereo_lines = {});
+                    const StereoLineCompleter& complete_left_lines = {});
   // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
   // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
   // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
@@ -348,8 +341,7 @@ class Tracker {
   bool CouldStartMap(const StereoFrame& frame) const;
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
   // was given a completer.
-  std::shared_ptr<const StereoFrame> WithStereoLines(
-      std::shared_ptr<const StereoFrame> frame) const;
+  std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
   // The frame with its left lines: itself, or a completed copy when they are pending
   // (lines_on_demand) and Track was given a completer. Adds the time taken to `*ms`.
   std::shared_ptr<const StereoFrame> WithLeftLines(std::shared_ptr<const StereoFrame> frame,
@@ -519,7 +511,6 @@ class Tracker {
   /// the completer given to the Track call in progress (null outside Track, or none given)
   const StereoLineCompleter* complete_stereo_lines_ = nullptr;
   const StereoLineCompleter* complete_left_lines_ = nullptr;  ///< during Track only
-  const std::function<void()>* prefetch_stereo_lines_ = nullptr;  ///< during Track only
   /// point inliers of the last tracked frame (lines_on_demand); 0 after a loss
   int last_point_inliers_ = 0;
 };
