@@ -66,6 +66,18 @@ def machine() -> dict[str, object]:
     }
 
 
+def speed_reference_ms(image: np.ndarray, repeats: int = 30) -> float:
+    """Median time [ms] of OpenCV's ORB (the core's ``extract_orb`` with adaptive detection off)
+    on ``image`` (8-bit gray): one fixed piece of work, to put runs of different machines side
+    by side (the sessions' machines differ by about 2x)."""
+    from slslam import _core  # (imported here: the helpers above need no build)
+
+    options = _core.OrbOptions()
+    options.adaptive = False
+    image = np.ascontiguousarray(image)
+    return time_calls(lambda: _core.extract_orb(image, options), repeats)["median_ms"]
+
+
 def machine_line() -> str:
     """One line for a results table: processor, its SIMD flags, cores."""
     m = machine()

@@ -39,7 +39,10 @@ simulator's ground truth, the tracked ratio and the keyframes. Learned configura
 compared with SuperPoint + lines at the same light level when that ran (ATE ratio).
 
 The machine is shared: the 1-minute load average (os.getloadavg) is recorded before and after
-every pass; read speeds as ratios between configurations of one run.
+every pass; read speeds as ratios between configurations of one run. Machines differ too (the
+sessions' by about 2x): a speed reference, OpenCV's ORB on the first left image of the first
+light's loop (common.speed_reference_ms; the simulator makes the same image everywhere), is timed
+before and after the runs, to put runs of different machines side by side.
 
 SuperPoint runs when its weights are found ($SLSLAM_SUPERPOINT_MODEL or
 ../shared/models/superpoint_v1/superpoint_v1.onnx next to the repository), and is skipped with a
@@ -70,6 +73,7 @@ from common import (
     machine_line,
     merged,
     parse_overrides,
+    speed_reference_ms,
     with_xfeat_preset,
     write_results,
 )
@@ -421,6 +425,10 @@ def main(argv: list[str] | None = None) -> int:
                 f"{CONFIGS[name][0]} skipped: no weights ({ENV_MODEL} or {SHARED_SUPERPOINT})"
             )
             print(notes[-1])
+    # (the first left image of the first light's loop: the simulator makes the same bytes on
+    # every machine)
+    reference_image = EurocSequence(simulate(lights[0], args.frames, args.data_dir))[0].left
+    reference_ms = {"before": speed_reference_ms(reference_image)}
     runs = []
     for light in lights:
         data = simulate(light, args.frames, args.data_dir)
@@ -449,7 +457,16 @@ def main(argv: list[str] | None = None) -> int:
                 f"same poses {r['same_poses']} [{time.perf_counter() - start:.0f} s]",
                 flush=True,
             )
-    text = machine_line() + "\n\n" + table(runs) + "\n\n" + keyframe_table(runs)
+    reference_ms["after"] = speed_reference_ms(reference_image)
+    text = (
+        machine_line()
+        + "\n\nSpeed reference (OpenCV's ORB on the first left image, median of 30 calls): "
+        + f"{reference_ms['before']:.2f} ms before the runs, {reference_ms['after']:.2f} ms after"
+        + "\n\n"
+        + table(runs)
+        + "\n\n"
+        + keyframe_table(runs)
+    )
     if notes:
         text += "\n\n" + "\n".join(notes)
     print(text)
@@ -464,6 +481,7 @@ def main(argv: list[str] | None = None) -> int:
             "mapping_thread": args.mapping_thread,
             "live": args.live,
             "cpu_count": os.cpu_count(),
+            "speed_reference_ms": reference_ms,
             "runs": runs,
             "notes": notes,
         },
