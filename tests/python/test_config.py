@@ -15,6 +15,7 @@ from slslam.config import (
 )
 from slslam.features.orb import Orb
 from slslam.features.superpoint import ENV_MODEL, SuperPoint
+from slslam.features.xfeat import XFeatOptions
 
 DEFAULT_YAML = Path(__file__).resolve().parents[2] / "configs" / "default.yaml"
 
@@ -136,7 +137,8 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
     assert config.features.point_frontend == "xfeat"
     assert config.features.dynamic_cells.sigma_median_ratio == 2.0
     assert config.features.xfeat.precision == "int8"
-    assert config.features.xfeat.intra_op_threads == 1
+    assert config.features.xfeat.intra_op_threads == 2
+    assert not config.features.xfeat.intra_op_spinning and XFeatOptions().intra_op_spinning
     assert _core.DynamicCellOptions().sigma_median_ratio == 0.0  # the paper's fixed width
     camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
     assert _core_options(camera, config).dynamic.sigma_median_ratio == 2.0

@@ -97,6 +97,22 @@ def test_any_size_is_padded_and_keypoints_stay_inside(xfeat):
     assert len(XFeat(XFeatOptions(max_keypoints=7)).detect(image)) == 7
 
 
+def test_threads_that_sleep_give_the_same_keypoints(xfeat):
+    """intra_op_spinning False (configs/xfeat.yaml) reaches onnxruntime's session, and the
+    network's outputs do not change with it or with the thread count."""
+    spin_key = "session.intra_op.allow_spinning"
+    sleeping = XFeat(XFeatOptions(intra_op_threads=2, intra_op_spinning=False))
+    assert sleeping.session.get_session_options().get_session_config_entry(spin_key) == "0"
+    with pytest.raises(RuntimeError):  # the default: onnxruntime's own (spinning)
+        xfeat.session.get_session_options().get_session_config_entry(spin_key)
+    rng = np.random.default_rng(5)
+    image = (rng.random((240, 320)) * 255).astype(np.uint8)
+    a, b = xfeat.detect(image), sleeping.detect(image)
+    assert len(a) > 50
+    np.testing.assert_allclose(b.uv, a.uv, atol=1e-4)
+    np.testing.assert_allclose(b.descriptors, a.descriptors, atol=1e-4)
+
+
 def _numpy_local_maxima(heat, threshold, radius, border):
     """The definition, in numpy (the front end's first implementation)."""
     v, u = np.nonzero(heat > threshold)

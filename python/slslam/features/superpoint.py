@@ -107,17 +107,23 @@ def _providers(choice: str | tuple[str, ...]) -> list[str]:
     return wanted
 
 
-def open_session(path: Path, providers: str | tuple[str, ...], intra_op_threads: int):
+def open_session(
+    path: Path, providers: str | tuple[str, ...], intra_op_threads: int, spinning: bool = True
+):
     """An onnxruntime session on ``path`` (providers as in the options, 0 threads: all cores);
     a file onnxruntime cannot load is a ModelError naming it. Shared by every network. Where
     CUDA was asked for and onnxruntime could not start it, a warning says so (onnxruntime then
-    runs on the CPU)."""
+    runs on the CPU). ``spinning`` False: the session's worker threads sleep between tasks
+    instead of spinning (onnxruntime's ``session.intra_op.allow_spinning``), which leaves the
+    cores to the tracker's other threads."""
     import onnxruntime as ort
 
     chosen = _providers(providers)
     session_options = ort.SessionOptions()
     if intra_op_threads:
         session_options.intra_op_num_threads = intra_op_threads
+    if not spinning:
+        session_options.add_session_config_entry("session.intra_op.allow_spinning", "0")
     try:
         session = ort.InferenceSession(str(path), session_options, providers=chosen)
     except Exception as exc:  # onnxruntime raises its own types for corrupt files

@@ -87,6 +87,9 @@ class XFeatOptions:
     max_keypoints: int | None = 4096  # keep the strongest N (None: all)
     providers: str | tuple[str, ...] = "auto"  # onnxruntime providers; auto: CUDA if present
     intra_op_threads: int = 0  # onnxruntime threads (0: its default, all cores)
+    # onnxruntime's worker threads spin while waiting for work (its default); False: they sleep,
+    # and leave the cores to the tracker's other threads
+    intra_op_spinning: bool = True
     # keypoints to subpixel positions: a Gaussian (parabola through the log heatmap) fitted to
     # the maximum and its two neighbours along each axis (the reference keeps whole pixels)
     subpixel: bool = False
@@ -242,7 +245,9 @@ class XFeat:
         options.check()
         self.options = options
         self.model_path = resolve_model_path(options.model_path, options.precision)
-        self.session = open_session(self.model_path, options.providers, options.intra_op_threads)
+        self.session = open_session(
+            self.model_path, options.providers, options.intra_op_threads, options.intra_op_spinning
+        )
         validate_session(self.session, self.model_path)
         self.providers = self.session.get_providers()
 
