@@ -1,5 +1,6 @@
 #include "slslam/mapping/triangulation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -11,6 +12,43 @@
 #include "slslam/features/descriptor_matcher.h"
 
 namespace slslam {
+
+namespace triangulation_detail {
+
+EpipolarCandidates::EpipolarCandidates(
+    const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv,
+    const std::vector<int>& ids) {
+  // (a keypoint at a non-finite position is never a candidate: no line passes near it)
+  ids_.reserve(ids.size());
+  for (int id : ids) {
+    if (std::isfinite(uv(id, 0)) && std::isfinite(uv(id, 1))) ids_.push_back(id);
+  }
+  u_.resize(ids_.size());
+  v_.resize(ids_.size());
+  distance_.resize(ids_.size());
+  for (size_t k = 0; k < ids_.size(); ++k) {
+    u_[k] = uv(ids_[k], 0);
+    v_[k] = uv(ids_[k], 1);
+  }
+}
+
+void EpipolarCandidates::Collect(const Eigen::Vector3d& unit_line, double band_px,
+                                 std::vector<int>* out) {
+  out->clear();
+  const double nx = unit_line.x(), ny = unit_line.y(), c = unit_line.z();
+  const size_t n = ids_.size();
+  const double* u = u_.data();
+  const double* v = v_.data();
+  double* distance = distance_.data();
+  // Two passes: the distances in a loop without branches (the compiler vectorises it), then the
+  // few within the band.
+  for (size_t k = 0; k < n; ++k) distance[k] = std::abs(nx * u[k] + ny * v[k] + c);
+  for (size_t k = 0; k < n; ++k) {
+    if (distance[k] <= band_px) out->push_back(ids_[k]);
+  }
+}
+
+}  // namespace triangulation_detail
 
 namespace {
 
@@ -55,9 +93,15 @@ std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const Vi
   for (int j = 0; j < kb.size(); ++j) {
     if (b.keyframe->point_ids[j] < 0) free_b.push_back(j);
   }
+  if (free_b.empty()) return {};
   const bool binary = ka.descriptors.type() == CV_8U;
   const float max_distance = binary ? options.max_distance_binary : options.max_distance_float;
   const Eigen::Matrix3d F = Fundamental21(camera, a.cam_from_world, b.cam_from_world);
+  // The band narrows the candidates; the exact test below decides, over the candidates in
+  // ascending order as the exhaustive scan did, so the matches are the same. The half pixel
+  // beyond the bound covers rounding between the two tests.
+  triangulation_detail::EpipolarCandidates band(kb.uv, free_b);
+  std::vector<int> candidates;
   OneToOne one_to_one(kb.size());
   std::vector<int> match(ka.size(), -1);
   for (int i = 0; i < ka.size(); ++i) {
@@ -65,8 +109,9 @@ std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const Vi
     const Eigen::Vector3d line = F * Eigen::Vector3d(ka.uv(i, 0), ka.uv(i, 1), 1.0);
     const double norm = std::hypot(line.x(), line.y());
     if (norm < 1e-12) continue;
+    band.Collect(line / norm, options.epipolar_px + 0.5, &candidates);
     BestTwo best;
-    for (int j : free_b) {
+    for (int j : candidates) {
       const double distance =
           std::abs(line.x() * kb.uv(j, 0) + line.y() * kb.uv(j, 1) + line.z()) / norm;
       if (distance > options.epipolar_px) continue;

@@ -15,6 +15,8 @@
 // front of both cameras and its projection is within the chi-square bound of both observations.
 #pragma once
 
+#include <vector>
+
 #include "slslam/core/rigid3.h"
 #include "slslam/geometry/reprojection.h"
 #include "slslam/map/map.h"
@@ -50,6 +52,31 @@ struct TriangulationStats {
 bool TriangulatePoint(const Rigid3d& cam1_from_world, const Eigen::Vector3d& x1,
                       const Rigid3d& cam2_from_world, const Eigen::Vector3d& x2,
                       Eigen::Vector3d* p_w);
+
+namespace triangulation_detail {
+
+// The free keypoints of one keyframe near an epipolar line of another, as a prefilter: the
+// exhaustive scan's exact test (a division per pair, in a loop with a branch) was about 85 % of
+// triangulation's time; the distances to the unit line come from one branch-free pass over the
+// positions held side by side, and only the keypoints within the band go on to the exact test.
+class EpipolarCandidates {
+ public:
+  // `ids`: the keypoints to consider (indices into `uv`), ascending.
+  EpipolarCandidates(const Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>& uv,
+                     const std::vector<int>& ids);
+
+  // Replaces *out by the ids whose keypoint lies within `band_px` of the line
+  // unit_line.x() u + unit_line.y() v + unit_line.z() = 0 ((x, y) of unit length), in ascending
+  // order (the order of `ids`).
+  void Collect(const Eigen::Vector3d& unit_line, double band_px, std::vector<int>* out);
+
+ private:
+  std::vector<int> ids_;                 ///< the ids at finite positions
+  std::vector<double> u_, v_;            ///< their positions [px]
+  std::vector<double> distance_;         ///< scratch: distances to the current line [px]
+};
+
+}  // namespace triangulation_detail
 
 // Pairs keyframe `keyframe_id` with its best covisible keyframes and adds the new landmarks to
 // the map. The caller holds map.mutex().
