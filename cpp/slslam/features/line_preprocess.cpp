@@ -62,24 +62,31 @@ Segments PreprocessLines(const Segments& segments, int width, int height,
   std::stable_sort(sorted.begin(), sorted.end(), [](const LineSegment& a, const LineSegment& b) {
     return a.Length() > b.Length();
   });
+  // Each candidate's angle and angle gate once, not once per pair (an arctangent, a square root and
+  // an exponential in the inner loop were most of this function's time); the source's angle once
+  // and again after each merge. The same values as computed per pair, so the same segments.
+  std::vector<float> angle(sorted.size()), angle_bound(sorted.size());
+  for (size_t j = 0; j < sorted.size(); ++j) {
+    angle[j] = sorted[j].Angle();
+    angle_bound[j] = AngleGateFactor(sorted[j].Length(), length_threshold) * options.theta_min_rad;
+  }
   std::vector<bool> removed(sorted.size(), false);
   Segments out;
   for (size_t i = 0; i < sorted.size(); ++i) {
     if (removed[i]) continue;
     LineSegment source = sorted[i];
+    float source_angle = angle[i];
     for (size_t j = i + 1; j < sorted.size(); ++j) {
       if (removed[j]) continue;
       const LineSegment& candidate = sorted[j];
-      const float gate = AngleGateFactor(candidate.Length(), length_threshold);
-      if (AngleDifference(source.Angle(), candidate.Angle()) >= gate * options.theta_min_rad) {
-        continue;
-      }
+      if (AngleDifference(source_angle, angle[j]) >= angle_bound[j]) continue;
       if (GapAlong(source, candidate) > options.max_gap_px) continue;
       const float D =
           0.25f * (candidate.DistanceToLine(source.start) + candidate.DistanceToLine(source.end) +
                    source.DistanceToLine(candidate.start) + source.DistanceToLine(candidate.end));
       if (D < options.xi_d_px) {
         source = Merge(source, candidate);
+        source_angle = source.Angle();
         removed[j] = true;
       } else if (D < 3.0f * options.xi_d_px) {
         removed[j] = true;  // redundant near-duplicate

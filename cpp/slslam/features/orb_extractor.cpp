@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/core/cpu_dispatch.h"
 
 namespace slslam {
 
@@ -177,14 +178,16 @@ void OrbOptions::Check() const {
   CheckFinite("orb.denoise_above_noise", denoise_above_noise);
 }
 
-double EstimateNoiseSigma(const cv::Mat& image) {
+SLSLAM_AVX2_CLONES double EstimateNoiseSigma(const cv::Mat& image) {
   Require(!image.empty() && image.type() == CV_8UC1, "noise estimation needs an 8-bit gray image");
   if (image.rows < 3 || image.cols < 3) return 0.0;
   // The mask [1 -2 1]^T [1 -2 1] applied as two passes of second differences in integers: the row
   // pass per pixel (|.| <= 510 fits 16 bits), then the column pass over three rows of it, summed
   // as |.| (the same integer as cv::filter2D with the 3 x 3 mask and an L1 norm, which this
   // replaced: one pass over the frame instead of a filtered copy and a second pass, 0.34 -> 0.10 ms
-  // a 752 x 480 image; it runs on every image).
+  // a 752 x 480 image; it runs several times on every image: the tracker's smoothing, ORB, the
+  // stereo front end, the lines). Compiled for AVX2 too (core/cpu_dispatch.h), the column pass in
+  // 16-bit lanes: 2.3 -> 0.7 million instructions an image (callgrind).
   const int width = image.cols - 2;
   std::vector<int16_t> rows_buffer(3 * static_cast<size_t>(width));
   const auto second_difference = [&](int y, int16_t* out) {
@@ -201,13 +204,13 @@ double EstimateNoiseSigma(const cv::Mat& image) {
   int64_t sum_abs = 0;
   for (int y = 1; y + 1 < image.rows; ++y) {
     second_difference(y + 1, below);
-    // 32-bit sums (vectorised) over chunks of 65,536 columns: |value| <= 2040 cannot overflow.
+    // |value| <= 2040 fits 16 bits; 32-bit sums over chunks of 65,536 columns cannot overflow.
     for (int x0 = 0; x0 < width; x0 += 65536) {
       const int x1 = std::min(width, x0 + 65536);
       int32_t chunk_sum = 0;
       for (int x = x0; x < x1; ++x) {
-        const int32_t value = above[x] - 2 * middle[x] + below[x];
-        chunk_sum += value < 0 ? -value : value;
+        const int16_t value = static_cast<int16_t>(above[x] - 2 * middle[x] + below[x]);
+        chunk_sum += static_cast<uint16_t>(value < 0 ? -value : value);
       }
       sum_abs += chunk_sum;
     }
@@ -218,8 +221,10 @@ double EstimateNoiseSigma(const cv::Mat& image) {
   return std::sqrt(CV_PI / 2.0) * static_cast<double>(sum_abs) / (6.0 * inner);
 }
 
-std::vector<float> IntensityCentroidAngles(const cv::Mat& image,
-                                           const std::vector<cv::Point2f>& points, int radius_px) {
+// Compiled for AVX2 too (core/cpu_dispatch.h): 6.0 -> 4.9 million instructions for an image's 1,000
+// keypoints (callgrind), the same angles.
+SLSLAM_AVX2_CLONES std::vector<float> IntensityCentroidAngles(
+    const cv::Mat& image, const std::vector<cv::Point2f>& points, int radius_px) {
   Require(!image.empty() && image.type() == CV_8UC1, "angles need an 8-bit gray image");
   Require(radius_px >= 1 && radius_px <= 1000, "angle radius must be in [1, 1000] px");
   // The reflected copy only when a disc reaches past the edge (the extractor's keypoints never
@@ -293,10 +298,16 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
   const std::vector<int> budget = LevelBudgets(options);
   // Detection image: smoothed when the frame is noisy (dark, high gain).
   const cv::Mat detect_image = SmoothIfNoisy(image, options.denoise_above_noise);
+  // The descriptors' image: the detection image, or the image as given (describe_smoothed false
+  // on a frame that was smoothed), with a pyramid of its own.
+  const cv::Mat& describe_image = options.describe_smoothed ? detect_image : image;
+  const bool own_describe_pyramid = describe_image.data != detect_image.data;
   // FAST needs 3 px around a corner; the descriptor patch is handled by OpenCV's padded levels.
   const int border = std::max(options.edge_threshold, 3);
+  const cv::Ptr<cv::ORB> orb = MakeOrb(options);
   std::vector<cv::KeyPoint> all;
-  cv::Mat level = detect_image;
+  std::vector<cv::Mat> level_descriptors;
+  cv::Mat level = detect_image, describe_level = describe_image;
   double scale = 1.0;  // level-0 pixels per level pixel
   for (int l = 0; l < options.num_levels; ++l) {
     if (l > 0) {
@@ -304,30 +315,47 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
       const cv::Size size(static_cast<int>(std::lround(image.cols / scale)),
                           static_cast<int>(std::lround(image.rows / scale)));
       if (size.width <= 2 * border || size.height <= 2 * border) break;
+      level = cv::Mat();  // (a buffer of its own: the previous level may be describe_level)
       cv::resize(detect_image, level, size, 0, 0, cv::INTER_LINEAR);
+      if (own_describe_pyramid) {
+        describe_level = cv::Mat();
+        cv::resize(describe_image, describe_level, size, 0, 0, cv::INTER_LINEAR);
+      } else {
+        describe_level = level;
+      }
     }
     std::vector<cv::KeyPoint> found = DetectLevel(level, border, budget[l], options);
+    if (found.empty()) continue;
     std::vector<cv::Point2f> at(found.size());
     for (size_t i = 0; i < found.size(); ++i) at[i] = found[i].pt;
     const std::vector<float> angles = IntensityCentroidAngles(level, at, kHalfPatch);
     for (size_t i = 0; i < found.size(); ++i) {
-      cv::KeyPoint kp = found[i];
+      found[i].octave = 0;
+      found[i].size = static_cast<float>(kPatchSize);
+      found[i].angle = angles[i];
+    }
+    // Rotated BRIEF on this level's own image, each level a call of its own: OpenCV's ORB given
+    // the full image would build its own pyramid of it again (about a sixth of the extractor's
+    // instructions). A keypoint of octave 0 on a level image is described as OpenCV describes
+    // one of that octave on a pyramid whose level is this image (padded by reflection and
+    // blurred the same way); OpenCV resizes level by level from the previous one, this pyramid
+    // resizes each level from the full image, the one FAST saw. OpenCV may drop keypoints too
+    // close to the border, so the returned list is used.
+    cv::Mat descriptors;
+    orb->detectAndCompute(describe_level, cv::noArray(), found, descriptors,
+                          /*useProvidedKeypoints=*/true);
+    if (found.empty()) continue;
+    for (cv::KeyPoint& kp : found) {
       kp.pt.x = static_cast<float>(kp.pt.x * scale);
       kp.pt.y = static_cast<float>(kp.pt.y * scale);
       kp.octave = l;
       kp.size = static_cast<float>(kPatchSize * scale);
-      kp.angle = angles[i];
       all.push_back(kp);
     }
+    level_descriptors.push_back(descriptors);
   }
   cv::Mat descriptors;
-  if (!all.empty()) {
-    // With provided keypoints OpenCV keeps their angle and octave and only computes descriptors
-    // (it may drop keypoints too close to the border, so the returned list is used).
-    const cv::Mat& describe = options.describe_smoothed ? detect_image : image;
-    MakeOrb(options)->detectAndCompute(describe, cv::noArray(), all, descriptors,
-                                       /*useProvidedKeypoints=*/true);
-  }
+  if (!level_descriptors.empty()) cv::vconcat(level_descriptors, descriptors);
   return ToKeypoints(all, descriptors);
 }
 

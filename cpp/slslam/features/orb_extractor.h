@@ -5,7 +5,8 @@
 // threshold, or, when it has none, its weaker ones. The level's budget is then spread over the
 // cells round-robin (each cell's best first), so a dark or smooth stretch still yields keypoints
 // everywhere a corner exists instead of a few hundred in the one bright patch. Orientation is the
-// intensity centroid; descriptors are OpenCV's rotated BRIEF (cv::ORB::compute) on our keypoints.
+// intensity centroid; descriptors are OpenCV's rotated BRIEF (cv::ORB::compute) on our keypoints,
+// level by level on the pyramid detection used.
 #pragma once
 
 #include <vector>
