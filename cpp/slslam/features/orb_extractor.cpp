@@ -315,7 +315,7 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
       const cv::Size size(static_cast<int>(std::lround(image.cols / scale)),
                           static_cast<int>(std::lround(image.rows / scale)));
       if (size.width <= 2 * border || size.height <= 2 * border) break;
-      level = cv::Mat();  // (a buffer of its own: the previous level may be describe_level)
+      level = cv::Mat();  // (a new buffer: level may still share the full image's)
       cv::resize(detect_image, level, size, 0, 0, cv::INTER_LINEAR);
       if (own_describe_pyramid) {
         describe_level = cv::Mat();

@@ -1,6 +1,5 @@
 #include "slslam/mapping/triangulation.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>

@@ -57,7 +57,7 @@ TEST(EpipolarCandidates, HoldEveryKeypointInTheBandInAscendingOrder) {
               << "keypoint " << id << " missing for angle " << a << ", band " << band;
         }
         for (int id : candidates) {
-          ASSERT_TRUE(std::binary_search(ids.begin(), ids.end(), id)) << "not a bucketed id";
+          ASSERT_TRUE(std::binary_search(ids.begin(), ids.end(), id)) << "not one of the given ids";
         }
         collected += candidates.size();
         total += ids.size();
