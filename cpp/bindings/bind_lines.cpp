@@ -9,6 +9,7 @@
 #include "bindings/image_conversion.h"
 #include "slslam/features/line_extractor.h"
 #include "slslam/features/line_matcher.h"
+#include "slslam/features/lsd.h"
 #include "slslam/features/point_line_association.h"
 
 namespace py = pybind11;
@@ -92,7 +93,7 @@ void BindLines(py::module_& m) {
           [](LineExtractorOptions& o, const std::string& name) {
             o.detector = ParseLineDetector(name);
           },
-          "lsd or fld")
+          "lsd (ours), lsd_opencv (OpenCV's) or fld")
       .def_property(
           "descriptor",
           [](const LineExtractorOptions& o) { return LineDescriptorName(o.descriptor); },
@@ -103,6 +104,24 @@ void BindLines(py::module_& m) {
       .def_readwrite("lbd", &LineExtractorOptions::lbd)
       .def("check", &LineExtractorOptions::Check);
 
+  m.def(
+      "detect_lsd_segments",
+      [](const py::array& image) {
+        const cv::Mat img = WrapGray(image, "image");
+        std::vector<cv::Vec4f> raw;
+        {
+          py::gil_scoped_release release;
+          raw = DetectLsdSegments(img);
+        }
+        SegmentArray out(static_cast<Eigen::Index>(raw.size()), 4);
+        for (std::size_t i = 0; i < raw.size(); ++i) {
+          out.row(i) << raw[i][0], raw[i][1], raw[i][2], raw[i][3];
+        }
+        return out;
+      },
+      py::arg("image"),
+      "LSD's raw segments (x1, y1, x2, y2) of an 8-bit gray image, with LSD's default settings "
+      "(features/lsd.h): before preprocessing, at the image's resolution.");
   m.def(
       "extract_lines",
       [](const py::array& image, const LineExtractorOptions& options) {

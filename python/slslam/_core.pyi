@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'detect_lsd_segments', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -760,7 +760,7 @@ class LineExtractorOptions:
     @property
     def detector(self) -> str:
         """
-        lsd or fld
+        lsd (ours), lsd_opencv (OpenCV's) or fld
         """
     @detector.setter
     def detector(self, arg1: str) -> None:
@@ -2404,6 +2404,10 @@ class RegistrationResult:
 def associate_points_to_lines(keypoints: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], segments: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 4]"], width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, options: AssociationOptions = ..., valid_cells: collections.abc.Sequence[bool] = []) -> list[list[int]]:
     """
     For every segment, the indices of its associated keypoints.
+    """
+def detect_lsd_segments(image: numpy.ndarray) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"]:
+    """
+    LSD's raw segments (x1, y1, x2, y2) of an 8-bit gray image, with LSD's default settings (features/lsd.h): before preprocessing, at the image's resolution.
     """
 def extract_lines(image: numpy.ndarray, options: LineExtractorOptions = ...) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, 4]"], numpy.ndarray, int]:
     """

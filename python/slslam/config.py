@@ -480,8 +480,9 @@ class TrackingConfig:
     # LSD runs on the image scaled by this (segments mapped back; OpenCV's LBD at full
     # resolution, ours on the scaled image)
     line_detection_scale: float = _lines("line_detection_scale", "[0.1, 1]")
-    # segment detector: lsd (the paper's) or fld (OpenCV's FastLineDetector, faster)
-    line_detector: Literal["lsd", "fld"] = _lines("line_detector")
+    # segment detector: lsd (the paper's, ours), lsd_opencv (OpenCV's LSD) or fld (OpenCV's
+    # FastLineDetector)
+    line_detector: Literal["lsd", "lsd_opencv", "fld"] = _lines("line_detector")
     # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor's bytes, computed here at about
     # 20 us a segment with AVX2) or lbd (ours, from the LBD paper, about 10 us a segment on the
     # half-size image; less accurate tracking so far, see benchmarks/README.md); a saved map

@@ -73,3 +73,40 @@ def test_bad_line_inputs_raise_clear_errors():
         )
     with pytest.raises(ValueError, match="2-D"):
         _core.extract_lines(np.zeros((4, 4, 3), np.uint8))
+    with pytest.raises(ValueError, match="image"):
+        _core.detect_lsd_segments(np.zeros((4, 4), np.float32))
+
+
+def _covered_fraction(a: np.ndarray, b: np.ndarray, tol_px: float = 1.0) -> float:
+    """Share of the length of a's segments within tol_px of a segment of b at a similar angle."""
+    total = covered = 0.0
+    db = b[:, 2:] - b[:, :2]
+    lb = np.linalg.norm(db, axis=1)
+    ub = db / np.maximum(lb, 1e-9)[:, None]
+    for s in a:
+        d = s[2:] - s[:2]
+        length = float(np.linalg.norm(d))
+        u = d / length
+        near_angle = np.abs(ub @ np.array([-u[1], u[0]])) < np.sin(np.deg2rad(5.0))
+        t = np.linspace(0.0, 1.0, max(2, int(length)))
+        pts = s[:2] + t[:, None] * d
+        rel = pts[:, None, :] - b[None, near_angle, :2]
+        along = np.clip((rel * ub[None, near_angle]).sum(-1), 0.0, lb[None, near_angle])
+        off = rel - along[..., None] * ub[None, near_angle]
+        dist = np.linalg.norm(off, axis=-1).min(axis=1) if near_angle.any() else np.inf
+        covered += length * float(np.mean(dist <= tol_px))
+        total += length
+    return covered / max(total, 1e-9)
+
+
+def test_our_lsd_keeps_the_lines_of_opencvs_lsd_on_a_rendered_frame(stereo_frame):
+    """The tracker's lines (LSD at half size, preprocessing, LBD) with our LSD and OpenCV's."""
+    _, left, _, _ = stereo_frame
+    ours, theirs = _core.LineExtractorOptions(), _core.LineExtractorOptions()
+    theirs.detector = "lsd_opencv"
+    assert ours.detector == "lsd"
+    a, _, raw_a = _core.extract_lines(left, ours)
+    b, _, raw_b = _core.extract_lines(left, theirs)
+    assert len(a) > 40 and abs(len(a) - len(b)) <= 0.15 * len(b)
+    assert abs(raw_a - raw_b) <= 0.15 * raw_b
+    assert _covered_fraction(b, a) > 0.85 and _covered_fraction(a, b) > 0.85

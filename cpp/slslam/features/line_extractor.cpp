@@ -6,6 +6,7 @@
 #include <opencv2/ximgproc/fast_line_detector.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/features/lsd.h"
 #include "slslam/features/opencv_lbd.h"
 
 namespace slslam {
@@ -26,8 +27,10 @@ void DetectSegments(const cv::Mat& image, LineDetector detector, std::vector<cv:
     cv::ximgproc::createFastLineDetector(kFldMinLengthPx, kFldMaxDistancePx, kFldCannyLow,
                                          kFldCannyHigh, kFldCannyAperture, false)
         ->detect(image, *raw);
-  } else {
+  } else if (detector == LineDetector::kOpenCvLsd) {
     cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(image, *raw);
+  } else {
+    *raw = DetectLsdSegments(image);
   }
 }
 
@@ -43,12 +46,14 @@ cv::Mat ComputeLineDescriptors(const cv::Mat& image, const Segments& segments,
 LineDetector ParseLineDetector(const std::string& name) {
   if (name == "lsd") return LineDetector::kLsd;
   if (name == "fld") return LineDetector::kFld;
-  SLSLAM_CHECK(false, "line detector must be lsd or fld, got '", name, "'");
+  if (name == "lsd_opencv") return LineDetector::kOpenCvLsd;
+  SLSLAM_CHECK(false, "line detector must be lsd, lsd_opencv or fld, got '", name, "'");
   return LineDetector::kLsd;
 }
 
 std::string LineDetectorName(LineDetector detector) {
-  return detector == LineDetector::kFld ? "fld" : "lsd";
+  if (detector == LineDetector::kFld) return "fld";
+  return detector == LineDetector::kOpenCvLsd ? "lsd_opencv" : "lsd";
 }
 
 void LineExtractorOptions::Check() const {

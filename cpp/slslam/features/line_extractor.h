@@ -18,12 +18,13 @@ struct LineFeatures {
   int raw_count = 0;    ///< LSD segments before preprocessing
 };
 
-/// The segment detector. LSD (OpenCV's LineSegmentDetector, LSD_REFINE_STD) is the paper's; FLD
-/// (OpenCV contrib ximgproc's FastLineDetector: Canny edges fitted by lines, no merging) took
-/// about half LSD's time on simulated mine frames (benchmarks/README.md).
-enum class LineDetector { kLsd, kFld };
+/// The segment detector. LSD is the paper's: ours (features/lsd.h) or OpenCV's
+/// LineSegmentDetector (LSD_REFINE_STD), the same algorithm; FLD (OpenCV contrib ximgproc's
+/// FastLineDetector: Canny edges fitted by lines, no merging) took about half OpenCV's LSD's time
+/// on simulated mine frames (benchmarks/README.md).
+enum class LineDetector { kLsd, kOpenCvLsd, kFld };
 
-/// "lsd" or "fld"; anything else throws std::invalid_argument naming the choices.
+/// "lsd", "lsd_opencv" or "fld"; anything else throws std::invalid_argument naming the choices.
 LineDetector ParseLineDetector(const std::string& name);
 /// The name ParseLineDetector reads.
 std::string LineDetectorName(LineDetector detector);
