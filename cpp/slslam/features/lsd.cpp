@@ -78,8 +78,9 @@ void ComputeGradient(const cv::Mat& image, double threshold, int n_bins, Gradien
                                               static_cast<float>(threshold), &grid->norm[i],
                                               &grid->ux[i], &grid->uy[i], &grid->state[i]));
   }
-  // LSD's pseudo-ordering: seeds by bins of the norm, the highest bin first (a counting sort;
-  // within a bin, row by row).
+  // LSD's pseudo-ordering as the paper's reference code (lsd.c) does it: seeds by 1024 bins of
+  // norm * n_bins / max (clamped), the highest bin first, row by row within a bin (a counting
+  // sort; OpenCV sorts by norm * (n_bins - 1) / max).
   grid->seeds.clear();
   if (max_norm <= 0.0f) return;
   const double bin_per_norm = static_cast<double>(n_bins) / max_norm;
@@ -109,7 +110,8 @@ Pixel PixelAt(const GradientGrid& grid, int index) {
 void GrowRegion(GradientGrid* grid, int seed, double cos_tolerance, std::vector<Pixel>* region,
                 double* sum_x, double* sum_y) {
   const int s = grid->stride;
-  // LSD's neighbour order: column by column, top to bottom.
+  // The neighbour order of the paper's reference code (lsd.c): column by column, top to bottom
+  // (OpenCV's goes row by row; the order decides which pixel a growing region meets first).
   struct Step {
     int dx, dy, offset;
   };
@@ -255,16 +257,22 @@ void LsdOptions::Check() const {
 std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& options) {
   options.Check();
   Require(!gray.empty() && gray.type() == CV_8UC1, "LSD needs a non-empty 8-bit gray image");
+  std::vector<cv::Vec4f> segments;
   cv::Mat image = gray;
   if (options.scale != 1.0) {
-    // LSD's Gaussian sub-sampling: a kernel of 3 sigma at a precision of 10^-3, as OpenCV's.
+    // cv::resize's size for a scale factor; an image that would shrink below 2 x 2 has no
+    // gradient (and cv::resize refuses a size of 0).
+    if (cvRound(gray.cols * options.scale) < 2 || cvRound(gray.rows * options.scale) < 2) {
+      return segments;
+    }
+    // LSD's Gaussian sub-sampling, as OpenCV's: the kernel's half-width where the Gaussian falls
+    // to 10^-3 of its peak (about 3.7 sigma).
     const double sigma = options.sigma_scale / options.scale;
     const int half = static_cast<int>(std::ceil(sigma * std::sqrt(2.0 * 3.0 * std::log(10.0))));
     cv::Mat blurred;
     cv::GaussianBlur(gray, blurred, cv::Size(2 * half + 1, 2 * half + 1), sigma);
     cv::resize(blurred, image, cv::Size(), options.scale, options.scale, cv::INTER_LINEAR_EXACT);
   }
-  std::vector<cv::Vec4f> segments;
   if (image.cols < 2 || image.rows < 2) return segments;
   const double tolerance = options.angle_tolerance_deg * kPiD / 180.0;
   const double cos_tolerance = std::cos(tolerance);

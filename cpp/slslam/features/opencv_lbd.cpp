@@ -10,6 +10,7 @@
 #include <opencv2/line_descriptor.hpp>
 
 #include "slslam/core/check.h"
+#include "slslam/core/cpu_dispatch.h"
 
 // (not under a sanitizer, which does not see into the gathers: the scalar loop reads the same
 // pixels)
@@ -261,12 +262,9 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
   if (segments.empty()) return;
   // The gradients OpenCV's compute takes: 5 x 5 Gaussian (sigma 1), 3 x 3 Sobel, int16; here
   // interleaved so that one 32-bit load gives a pixel's (dx, dy).
-  cv::Mat smooth, dx, dy;
+  cv::Mat smooth, gradients;
   cv::GaussianBlur(image, smooth, cv::Size(5, 5), 1);
-  cv::Sobel(smooth, dx, CV_16S, 1, 0, 3);
-  cv::Sobel(smooth, dy, CV_16S, 0, 1, 3);
-  cv::Mat gradients;
-  cv::merge(std::vector<cv::Mat>{dx, dy}, gradients);
+  opencv_lbd_detail::InterleavedSobel(smooth, &gradients);
   Require(gradients.isContinuous(), "LBD gradients must be one block");
 
   Sampling s;
@@ -319,6 +317,61 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
 }
 
 }  // namespace
+
+namespace opencv_lbd_detail {
+
+namespace {
+
+// One row of (dx, dy) for the columns [begin, end), given the rows above and below (reflected at
+// the image's edge by the caller). Each pixel's pair is written as one 32-bit word, dx in the low
+// half (x86 is little-endian: the int16 pair in memory), so that the loop vectorises.
+SLSLAM_AVX2_CLONES
+void SobelRowInterior(const std::uint8_t* above, const std::uint8_t* row,
+                      const std::uint8_t* below, int begin, int end, std::uint32_t* out) {
+  for (int x = begin; x < end; ++x) {
+    const int left = above[x - 1] + 2 * row[x - 1] + below[x - 1];
+    const int right = above[x + 1] + 2 * row[x + 1] + below[x + 1];
+    const int up = above[x - 1] + 2 * above[x] + above[x + 1];
+    const int down = below[x - 1] + 2 * below[x] + below[x + 1];
+    out[x] = static_cast<std::uint32_t>(static_cast<std::uint16_t>(right - left)) |
+             (static_cast<std::uint32_t>(static_cast<std::uint16_t>(down - up)) << 16);
+  }
+}
+
+// OpenCV's BORDER_REFLECT_101 index (-1 -> 1, n -> n - 2; 0 for a single pixel).
+int Reflect101(int i, int n) {
+  if (n == 1) return 0;
+  return i < 0 ? -i : (i >= n ? 2 * n - 2 - i : i);
+}
+
+}  // namespace
+
+void InterleavedSobel(const cv::Mat& image, cv::Mat* gradients) {
+  Require(!image.empty() && image.type() == CV_8UC1, "Sobel needs a non-empty 8-bit gray image");
+  const int w = image.cols, h = image.rows;
+  gradients->create(h, w, CV_16SC2);
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* above = image.ptr<std::uint8_t>(Reflect101(y - 1, h));
+    const std::uint8_t* row = image.ptr<std::uint8_t>(y);
+    const std::uint8_t* below = image.ptr<std::uint8_t>(Reflect101(y + 1, h));
+    std::int16_t* out = gradients->ptr<std::int16_t>(y);
+    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the packed words need little-endian");
+    if (w >= 3) {
+      SobelRowInterior(above, row, below, 1, w - 1, reinterpret_cast<std::uint32_t*>(out));
+    }
+    for (const int x : {0, w - 1}) {  // the edge columns, reflected
+      const int l = Reflect101(x - 1, w), r = Reflect101(x + 1, w);
+      const int left = above[l] + 2 * row[l] + below[l];
+      const int right = above[r] + 2 * row[r] + below[r];
+      const int up = above[l] + 2 * above[x] + above[r];
+      const int down = below[l] + 2 * below[x] + below[r];
+      out[2 * x] = static_cast<std::int16_t>(right - left);
+      out[2 * x + 1] = static_cast<std::int16_t>(down - up);
+    }
+  }
+}
+
+}  // namespace opencv_lbd_detail
 
 cv::Mat ComputeOpenCvCompatibleLbd(const cv::Mat& image, const Segments& segments, bool simd) {
   cv::Mat bytes;

@@ -46,4 +46,13 @@ cv::Mat ComputeOpenCvCompatibleLbdFloat(const cv::Mat& image, const Segments& se
 cv::Mat ComputeOpenCvLbdReference(const cv::Mat& image, const Segments& segments,
                                   bool floats = false);
 
+namespace opencv_lbd_detail {
+
+/// The 3 x 3 Sobel derivatives (dx, dy) of an 8-bit image as CV_16SC2, the values of cv::Sobel
+/// (ksize 3, BORDER_REFLECT_101) for each, interleaved: one pass instead of two Sobel calls and a
+/// cv::merge (exposed for the test that compares them).
+void InterleavedSobel(const cv::Mat& image, cv::Mat* gradients);
+
+}  // namespace opencv_lbd_detail
+
 }  // namespace slslam

@@ -88,6 +88,10 @@ TEST(LineExtractor, FastLineDetectorFindsTheLinesLsdFinds) {
   EXPECT_TRUE(ExtractLines(cv::Mat(480, 752, CV_8U, cv::Scalar(0)), fld).segments.empty());
   EXPECT_EQ(ParseLineDetector("fld"), LineDetector::kFld);
   EXPECT_EQ(ParseLineDetector("lsd"), LineDetector::kLsd);
+  EXPECT_EQ(ParseLineDetector("lsd_opencv"), LineDetector::kOpenCvLsd);
+  for (const LineDetector d : {LineDetector::kLsd, LineDetector::kOpenCvLsd, LineDetector::kFld}) {
+    EXPECT_EQ(ParseLineDetector(LineDetectorName(d)), d);
+  }
   EXPECT_THROW(ParseLineDetector("hough"), std::invalid_argument);
 }
 

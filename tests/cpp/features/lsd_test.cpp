@@ -28,7 +28,8 @@ cv::Mat Shapes(double noise_sigma) {
   cv::circle(image, cv::Point(300, 170), 30, cv::Scalar(170), cv::FILLED, cv::LINE_AA);
   cv::GaussianBlur(image, image, cv::Size(), 0.8);
   cv::Mat noise(image.size(), CV_16S);
-  cv::randn(noise, 0, noise_sigma);
+  cv::RNG rng(42);  // its own generator: the same image whatever ran before
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
   cv::Mat out;
   cv::add(image, noise, out, cv::noArray(), CV_8U);
   return out;
@@ -113,8 +114,29 @@ TEST(Lsd, FlatOrTinyImagesGiveNoSegmentsAndBadInputThrows) {
   EXPECT_TRUE(DetectLsdSegments(cv::Mat(240, 376, CV_8U, cv::Scalar(90))).empty());
   EXPECT_TRUE(DetectLsdSegments(cv::Mat(1, 1, CV_8U, cv::Scalar(90))).empty());
   LsdOptions full;
-  full.scale = 1.0;  // no resizing: the smallest image with a gradient
+  full.scale = 1.0;  // no resizing
   EXPECT_TRUE(DetectLsdSegments(cv::Mat(2, 2, CV_8U, cv::Scalar(90)), full).empty());
+  // Tiny images with step edges (the padded grid's borders): segments, if any, inside the image.
+  for (const cv::Size size : {cv::Size(2, 2), cv::Size(3, 3), cv::Size(40, 2), cv::Size(2, 40)}) {
+    cv::Mat step(size, CV_8U, cv::Scalar(20));
+    step.colRange(size.width / 2, size.width).setTo(200);
+    step.rowRange(size.height / 2, size.height).setTo(120);
+    for (const LsdOptions& options : {full, LsdOptions()}) {
+      for (const cv::Vec4f& s : DetectLsdSegments(step, options)) {
+        for (int k = 0; k < 4; k += 2) {
+          EXPECT_TRUE(s[k] >= -0.5f && s[k] <= size.width) << size << " " << s;
+          EXPECT_TRUE(s[k + 1] >= -0.5f && s[k + 1] <= size.height) << size << " " << s;
+        }
+      }
+    }
+  }
+  cv::Mat wide_step(8, 200, CV_8U, cv::Scalar(20));  // a 200 px edge in an 8-row image
+  wide_step.rowRange(4, 8).setTo(200);
+  const std::vector<cv::Vec4f> found = DetectLsdSegments(wide_step, full);
+  ASSERT_FALSE(found.empty());
+  EXPECT_GT(Length(found.front()), 150.0);
+  EXPECT_NEAR(found.front()[1], 3.5, 0.5);  // between rows 3 and 4
+  EXPECT_TRUE(DetectLsdSegments(cv::Mat(1, 1, CV_8U, cv::Scalar(90)), LsdOptions{0.4}).empty());
   EXPECT_THROW(DetectLsdSegments(cv::Mat(), full), std::invalid_argument);
   EXPECT_THROW(DetectLsdSegments(cv::Mat(10, 10, CV_8UC3), full), std::invalid_argument);
   LsdOptions bad;

@@ -108,5 +108,24 @@ TEST(OpenCvLbd, EmptyInputAndBadInput) {
   EXPECT_THROW(ComputeOpenCvCompatibleLbd(image, outside), std::invalid_argument);
 }
 
+TEST(OpenCvLbd, InterleavedSobelGivesOpenCvsSobelAtEverySize) {
+  cv::RNG rng(7);
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 5), cv::Size(2, 2),
+                              cv::Size(3, 3), cv::Size(13, 7), cv::Size(752, 480)}) {
+    cv::Mat image(size, CV_8U);
+    rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+    cv::Mat dx, dy, expected, ours;
+    cv::Sobel(image, dx, CV_16S, 1, 0, 3);
+    cv::Sobel(image, dy, CV_16S, 0, 1, 3);
+    cv::merge(std::vector<cv::Mat>{dx, dy}, expected);
+    opencv_lbd_detail::InterleavedSobel(image, &ours);
+    ASSERT_EQ(ours.type(), CV_16SC2);
+    ASSERT_EQ(ours.size(), size);
+    EXPECT_EQ(cv::norm(ours, expected, cv::NORM_INF), 0.0) << size;
+  }
+  cv::Mat out;
+  EXPECT_THROW(opencv_lbd_detail::InterleavedSobel(cv::Mat(), &out), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace slslam
