@@ -50,7 +50,9 @@ namespace opencv_lbd_detail {
 
 /// The 3 x 3 Sobel derivatives (dx, dy) of an 8-bit image as CV_16SC2, the values of cv::Sobel
 /// (ksize 3, BORDER_REFLECT_101) for each, interleaved: one pass instead of two Sobel calls and a
-/// cv::merge (exposed for the test that compares them).
+/// cv::merge (exposed for the test that compares them). The image is reflected at its own edges,
+/// as with BORDER_ISOLATED: for a region of a larger image cv::Sobel would read the pixels around
+/// it (the LBD passes a whole image).
 void InterleavedSobel(const cv::Mat& image, cv::Mat* gradients);
 
 }  // namespace opencv_lbd_detail

@@ -110,10 +110,20 @@ TEST(OpenCvLbd, EmptyInputAndBadInput) {
 
 TEST(OpenCvLbd, InterleavedSobelGivesOpenCvsSobelAtEverySize) {
   cv::RNG rng(7);
-  for (const cv::Size size : {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 5), cv::Size(2, 2),
-                              cv::Size(3, 3), cv::Size(13, 7), cv::Size(752, 480)}) {
+  std::vector<cv::Size> sizes = {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 5),
+                                 cv::Size(2, 2), cv::Size(2, 9), cv::Size(9, 2),
+                                 cv::Size(3, 3), cv::Size(13, 7), cv::Size(7, 13),
+                                 cv::Size(752, 480)};
+  for (int w = 4; w <= 40; ++w) sizes.emplace_back(w, 3);  // the vector loop's tails
+  for (const cv::Size size : sizes) {
     cv::Mat image(size, CV_8U);
     rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+    // 0 / 255 stripes two pixels wide, across x (13 x 7) or y (7 x 13): derivatives of +-1020.
+    for (int y = 0; y < size.height && (size.width == 13 || size.height == 13); ++y) {
+      for (int x = 0; x < size.width; ++x) {
+        image.at<uchar>(y, x) = (((size.width == 13 ? x : y) / 2) % 2) ? 255 : 0;
+      }
+    }
     cv::Mat dx, dy, expected, ours;
     cv::Sobel(image, dx, CV_16S, 1, 0, 3);
     cv::Sobel(image, dy, CV_16S, 0, 1, 3);
@@ -122,6 +132,12 @@ TEST(OpenCvLbd, InterleavedSobelGivesOpenCvsSobelAtEverySize) {
     ASSERT_EQ(ours.type(), CV_16SC2);
     ASSERT_EQ(ours.size(), size);
     EXPECT_EQ(cv::norm(ours, expected, cv::NORM_INF), 0.0) << size;
+    if (size.width == 13 || size.height == 13) {
+      double lowest = 0.0, highest = 0.0;
+      cv::minMaxLoc(ours.reshape(1), &lowest, &highest);
+      EXPECT_EQ(lowest, -1020.0) << size;
+      EXPECT_EQ(highest, 1020.0) << size;
+    }
   }
   cv::Mat out;
   EXPECT_THROW(opencv_lbd_detail::InterleavedSobel(cv::Mat(), &out), std::invalid_argument);
