@@ -13,13 +13,12 @@ namespace slslam {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 constexpr std::uint8_t kNoDirection = 0, kFree = 1, kTaken = 2;
 
 // The gradient grid of the resized image, padded by one pixel of kNoDirection on every side so
 // that a region's neighbours need no bounds test. Pixel (x, y) has index (y + 1) * stride + x + 1.
 struct GradientGrid {
-  int width = 0, height = 0, stride = 0;
+  int stride = 0;
   std::vector<float> norm;        // LSD's gradient norm, sqrt((gx^2 + gy^2) / 4)
   std::vector<float> ux, uy;      // unit level-line direction, (-gy, gx) / |g|
   std::vector<std::uint8_t> state;
@@ -62,8 +61,6 @@ float GradientRow(const std::uint8_t* row, const std::uint8_t* below, int n, flo
 void ComputeGradient(const cv::Mat& image, double threshold, int n_bins, GradientGrid* grid) {
   // The last row and column have no 2 x 2 window: they stay without a direction, as in LSD.
   const int w = image.cols, h = image.rows;
-  grid->width = w;
-  grid->height = h;
   grid->stride = w + 2;
   const std::size_t size = static_cast<std::size_t>(grid->stride) * (h + 2);
   grid->norm.assign(size, 0.0f);
@@ -236,7 +233,7 @@ bool Refine(GradientGrid* grid, std::vector<Pixel>* region, double* sum_x, doubl
   }
   const double mean = sum / n;
   const double tau = 2.0 * std::sqrt(std::max(0.0, (sum_sq - 2.0 * mean * sum) / n + mean * mean));
-  GrowRegion(grid, seed.index, std::cos(std::min(tau, kPiD)), region, sum_x, sum_y);
+  GrowRegion(grid, seed.index, std::cos(std::min(tau, CV_PI)), region, sum_x, sum_y);
   if (region->size() < 2) return false;
   *rect = RegionRectangle(*grid, *region, *sum_x, *sum_y, cos_tolerance);
   return ReduceRadius(grid, region, *sum_x, *sum_y, cos_tolerance, density_threshold, rect);
@@ -274,7 +271,7 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
     cv::resize(blurred, image, cv::Size(), options.scale, options.scale, cv::INTER_LINEAR_EXACT);
   }
   if (image.cols < 2 || image.rows < 2) return segments;
-  const double tolerance = options.angle_tolerance_deg * kPiD / 180.0;
+  const double tolerance = options.angle_tolerance_deg * CV_PI / 180.0;
   const double cos_tolerance = std::cos(tolerance);
   GradientGrid grid;
   ComputeGradient(image, options.quant / std::sin(tolerance), options.n_bins, &grid);
@@ -284,6 +281,8 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
                            std::log10(11.0);
   const double p = options.angle_tolerance_deg / 180.0;
   const std::size_t min_region = static_cast<std::size_t>(-log_tests / std::log10(p));
+  // The gradient of (x, y) sits at the centre of its 2 x 2 window; back to the input's pixels.
+  const double to_input = 1.0 / options.scale;
   std::vector<Pixel> region;
   region.reserve(1024);
   for (const int seed : grid.seeds) {
@@ -296,8 +295,6 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
                 &rect)) {
       continue;
     }
-    // The gradient of (x, y) sits at the centre of its 2 x 2 window; back to the input's pixels.
-    const double to_input = 1.0 / options.scale;
     segments.emplace_back(static_cast<float>((rect.x1 + 0.5) * to_input),
                           static_cast<float>((rect.y1 + 0.5) * to_input),
                           static_cast<float>((rect.x2 + 0.5) * to_input),

@@ -337,11 +337,8 @@ void SobelRowInterior(const std::uint8_t* above, const std::uint8_t* row,
   }
 }
 
-// OpenCV's BORDER_REFLECT_101 index (-1 -> 1, n -> n - 2; 0 for a single pixel).
-int Reflect101(int i, int n) {
-  if (n == 1) return 0;
-  return i < 0 ? -i : (i >= n ? 2 * n - 2 - i : i);
-}
+// cv::Sobel's default border: -1 -> 1, n -> n - 2 (0 for a single pixel).
+int Reflect101(int i, int n) { return cv::borderInterpolate(i, n, cv::BORDER_REFLECT_101); }
 
 }  // namespace
 
