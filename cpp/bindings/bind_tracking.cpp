@@ -52,7 +52,7 @@ struct LeftLines {
 // Python: the frame, the images it was built from (copies) and the lines extracted beside it.
 struct PreparedFrame {
   const void* session = nullptr;  // the TrackerSession that prepared it (and tracks it)
-  cv::Mat left, right, left_used;
+  cv::Mat left, right, left_used, right_used;
   std::shared_ptr<StereoFrame> frame;
   std::shared_ptr<LeftLines> left_lines;
   StereoFrontendTiming timing;
@@ -82,7 +82,8 @@ class TrackerSession {
                     const py::array& right_descriptors,
                     const std::shared_ptr<LeftLines>& left_lines) {
     return TrackPrepared(*Prepare(index, timestamp, left_image, right_image, left_uv,
-                                  left_descriptors, right_uv, right_descriptors, left_lines));
+                                  left_descriptors, right_uv, right_descriptors, left_lines,
+                                  /*keypoints_pending=*/false));
   }
 
   // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
@@ -94,7 +95,8 @@ class TrackerSession {
                                          const py::array& left_descriptors,
                                          const PixelArray& right_uv,
                                          const py::array& right_descriptors,
-                                         const std::shared_ptr<LeftLines>& left_lines) const {
+                                         const std::shared_ptr<LeftLines>& left_lines,
+                                         bool keypoints_pending) const {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
@@ -110,7 +112,13 @@ class TrackerSession {
     const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
     p->frame = frontend_.Build(index, timestamp, p->left, p->right, kl, kr, &p->timing,
                                frontend_.options().left_lines_on_demand ? nullptr : ahead,
-                               &p->left_used);
+                               &p->left_used, &p->right_used);
+    if (keypoints_pending) {
+      SLSLAM_CHECK(kl.size() == 0 && kr.size() == 0,
+                   "a frame prepared with keypoints_pending has no keypoints (", kl.size(), " / ",
+                   kr.size(), " given)");
+      p->frame->keypoints_pending = true;
+    }
     return p;
   }
 
@@ -137,7 +145,7 @@ class TrackerSession {
         frontend_.CompleteLeftLines(p.left, f, ahead);
       };
       static_cast<TrackResult&>(out) = tracker_.Track(p.frame, complete, p.left_used,
-                                                      complete_left);
+                                                      complete_left, p.right_used);
       out.lines = out.frame_lines;
       if (!ahead) out.line_extraction_ms += out.left_lines_ms;
     }
@@ -459,6 +467,10 @@ void BindTracking(py::module_& m) {
       .def_readwrite("point_sigma_px", &TrackerOptions::point_sigma_px)
       .def_readwrite("track_refine_window_px", &TrackerOptions::track_refine_window_px)
       .def_readwrite("track_refine_max_px", &TrackerOptions::track_refine_max_px)
+      .def_readwrite("projected_max_frames", &TrackerOptions::projected_max_frames)
+      .def_readwrite("projection_min_inliers", &TrackerOptions::projection_min_inliers)
+      .def_readwrite("projection_search_px", &TrackerOptions::projection_search_px)
+      .def_readwrite("projection_cell_px", &TrackerOptions::projection_cell_px)
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
@@ -503,7 +515,12 @@ void BindTracking(py::module_& m) {
       .def_readonly("stereo_matching_ms", &FrameOutput::stereo_matching_ms)
       .def_readonly("matching_ms", &FrameOutput::matching_ms)
       .def_readonly("optimisation_ms", &FrameOutput::optimisation_ms)
-      .def_readonly("mapping_ms", &FrameOutput::mapping_ms);
+      .def_readonly("mapping_ms", &FrameOutput::mapping_ms)
+      .def_readonly("needs_keypoints", &FrameOutput::needs_keypoints,
+                    "the frame came without keypoints and the tracker could not place the map's "
+                    "points in it: nothing changed, prepare it again with detected keypoints")
+      .def_readonly("projected_keypoints", &FrameOutput::projected_keypoints,
+                    "tracked on this many projected keypoints (0: on detected ones)");
 
   m.def(
       "match_stereo_points",
@@ -564,10 +581,12 @@ void BindTracking(py::module_& m) {
       .def("prepare", &TrackerSession::Prepare, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           py::arg("left_lines") = nullptr,
+           py::arg("left_lines") = nullptr, py::arg("keypoints_pending") = false,
            "track's first part without the session's lock: the frame's stereo matching (and "
            "its lines unless left_lines or lines on demand), for a thread ahead of the core. "
-           "track(...) equals track_prepared(prepare(...)).")
+           "track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints "
+           "given; tracking.projected_max_frames): the tracker places the map's points in the "
+           "frame, or returns needs_keypoints.")
       .def("track_prepared", &TrackerSession::TrackPrepared, py::arg("frame"),
            "track's second part on a frame from prepare (once, in frame order): the tracker and "
            "local mapping; returns its FrameOutput.")

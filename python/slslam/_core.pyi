@@ -1398,6 +1398,30 @@ class TrackerOptions:
     def point_sigma_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def projected_max_frames(self) -> int:
+        ...
+    @projected_max_frames.setter
+    def projected_max_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def projection_cell_px(self) -> int:
+        ...
+    @projection_cell_px.setter
+    def projection_cell_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def projection_min_inliers(self) -> int:
+        ...
+    @projection_min_inliers.setter
+    def projection_min_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def projection_search_px(self) -> int:
+        ...
+    @projection_search_px.setter
+    def projection_search_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
     def recently_lost_frames(self) -> int:
         ...
     @recently_lost_frames.setter
@@ -1478,8 +1502,18 @@ class FrameOutput:
     def matching_ms(self) -> float:
         ...
     @property
+    def needs_keypoints(self) -> bool:
+        """
+        the frame came without keypoints and the tracker could not place the map's points in it: nothing changed, prepare it again with detected keypoints
+        """
+    @property
     def optimisation_ms(self) -> float:
         ...
+    @property
+    def projected_keypoints(self) -> int:
+        """
+        tracked on this many projected keypoints (0: on detected ones)
+        """
     @property
     def relocalisation_ms(self) -> float:
         ...
@@ -1533,9 +1567,9 @@ class TrackerCore:
         """
         Points and lines; settle: first waits for local mapping (and applies an overlapped local BA), else the map as it stands.
         """
-    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None) -> PreparedFrame:
+    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False) -> PreparedFrame:
         """
-        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)).
+        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints.
         """
     def save_map(self, path: str, version: str) -> None:
         """

@@ -138,6 +138,10 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "point_sigma_px",
         "track_refine_window_px",
         "track_refine_max_px",
+        "projected_max_frames",
+        "projection_min_inliers",
+        "projection_search_px",
+        "projection_cell_px",
         "line_sigma_px",
         "line_inlier_weight",
         "recently_lost_frames",
@@ -474,6 +478,20 @@ class TrackingConfig:
     track_refine_window_px: int = _tracking("track_refine_window_px", "[0, 50]")
     # an alignment that moves the keypoint further than this is not taken [px]
     track_refine_max_px: float = _tracking("track_refine_max_px", "[0.1, 10000]")
+    # frames tracked on projected keypoints, at most this many in a row: while tracking is strong
+    # the local map's points are projected with the predicted pose and aligned to their patches
+    # (semi-direct, as SVO between keyframes), and the point front end runs only on the frames
+    # the tracker hands back (keyframes, weak tracking, after this many) [frames]; 0: every
+    # frame's keypoints are detected
+    projected_max_frames: int = _tracking("projected_max_frames", "[0, 1000000]")
+    # point inliers the frame before must have held, and a projected frame must hold, else it
+    # is tracked on detected keypoints [-]
+    projection_min_inliers: int = _tracking("projection_min_inliers", "[0, 1000000]")
+    # search radius of the shift common to all projected points (the prediction's rotation
+    # error) [px]
+    projection_search_px: int = _tracking("projection_search_px", "[0, 64]")
+    # at most one projected point per square cell of this size [px]
+    projection_cell_px: int = _tracking("projection_cell_px", "[1, 1000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
     line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")

@@ -33,6 +33,10 @@ struct StereoFrame {
   /// the left image's lines are not extracted yet (TrackerOptions::lines_on_demand): `lines` is
   /// empty until the tracker asks for them (a weak frame, a keyframe, a new map, a lost tracker)
   bool left_lines_pending = false;
+  /// the keypoints are not detected (TrackerOptions::projected_max_frames): `keypoints` is
+  /// empty, and the tracker either places the local map's points in the image itself (aligned
+  /// to their patches) or asks for the frame again with detected keypoints
+  bool keypoints_pending = false;
 
   int NumKeypoints() const { return keypoints.size(); }
   int NumLines() const { return static_cast<int>(lines.size()); }

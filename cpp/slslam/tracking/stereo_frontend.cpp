@@ -38,7 +38,8 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
                                                    const Keypoints& right_keypoints,
                                                    StereoFrontendTiming* timing,
                                                    const LineFeatures* given_left_lines,
-                                                   cv::Mat* left_used) const {
+                                                   cv::Mat* left_used,
+                                                   cv::Mat* right_used) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
@@ -75,6 +76,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
     timing->stereo_matching_ms = Ms(start);
   }
   if (left_used != nullptr) *left_used = left;
+  if (right_used != nullptr) *right_used = right;
   return frame;
 }
 

@@ -53,13 +53,15 @@ class StereoFrontend {
   // `left_lines`, when given, are the left image's lines from ExtractLeftLines on this image
   // (extracted beside the point front end on another thread); else Build extracts them.
   // `left_used`, when given, receives the left image stereo matching used (smoothed when noisy;
-  // else `left` itself, sharing its pixels), for Tracker::Track's keypoint refinement.
+  // else `left` itself, sharing its pixels), for Tracker::Track's keypoint refinement;
+  // `right_used` the same for the right image (the stereo columns of projected keypoints).
   std::shared_ptr<StereoFrame> Build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
                                      StereoFrontendTiming* timing = nullptr,
                                      const LineFeatures* left_lines = nullptr,
-                                     cv::Mat* left_used = nullptr) const;
+                                     cv::Mat* left_used = nullptr,
+                                     cv::Mat* right_used = nullptr) const;
 
   // The left image's lines exactly as Build extracts them from the same image (smoothed when
   // noisy), for a caller that runs them beside the point front end (slslam.Tracker hands both

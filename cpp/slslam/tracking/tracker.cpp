@@ -323,7 +323,8 @@ void Tracker::AcceptLines(Map& map, const LocalTracking& tracking,
 }
 
 bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
-                             std::vector<int>* point_match, std::vector<int>* line_match) {
+                             std::vector<int>* point_match, std::vector<int>* line_match,
+                             bool decide_only) {
   const PoseOptimizerResult& pose = tracking.pose;
   // The map lock was released after matching: local mapping (threaded) may have culled a
   // landmark since, so each is looked up again.
@@ -331,10 +332,10 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
     if (!pose.point_inlier[i]) continue;
     auto p = map.point(tracking.point_ids[i]);
     if (!p || p->bad) continue;
-    p->found += 1;
+    if (!decide_only) p->found += 1;
     (*point_match)[tracking.keypoints[i]] = tracking.point_ids[i];
   }
-  AcceptLines(map, tracking, line_match);
+  if (!decide_only) AcceptLines(map, tracking, line_match);
   // Keyframe decision (ORB-SLAM3's NeedNewKeyFrame for stereo, as with local mapping idle: it is
   // in sequential mode, and in threaded mode the queue absorbs the keyframe, unless mapping_brake
   // holds it back, below). Reference: the reference keyframe's map points seen by at least
@@ -363,8 +364,9 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const int tracked = pose.point_inliers;
   // A young map has few points seen by three keyframes; the inliers of the first frame tracked
   // after the keyframe stand in for the reference then (how many of its points can be tracked).
-  if (first_tracked_ == 0 && frames_since >= 1) first_tracked_ = tracked;
-  reference = std::max(reference, first_tracked_);
+  const int first_tracked = first_tracked_ == 0 && frames_since >= 1 ? tracked : first_tracked_;
+  if (!decide_only) first_tracked_ = first_tracked;
+  reference = std::max(reference, first_tracked);
   // The minimum gap after the last keyframe, in frames and in time.
   const bool past_gap =
       frames_since >= options_.keyframe_min_frames &&
@@ -390,14 +392,15 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const bool due = (c1_without_gap && c2 && gap) || weak ||
                    frames_since >= options_.keyframe_max_frames;
   if (!due) return false;
-  mapper_->InterruptBA();
+  if (!decide_only) mapper_->InterruptBA();
   return mapper_->QueuedKeyFrames() < kMaxQueuedKeyFrames;
 }
 
 TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
                            const StereoLineCompleter& complete_stereo_lines,
                            const cv::Mat& left_image,
-                           const StereoLineCompleter& complete_left_lines) {
+                           const StereoLineCompleter& complete_left_lines,
+                           const cv::Mat& right_image) {
   Require(frame != nullptr, "Track needs a frame");
   // The completers and the image are valid for this call only.
   struct CallScope {
@@ -406,11 +409,13 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
       tracker.complete_stereo_lines_ = nullptr;
       tracker.complete_left_lines_ = nullptr;
       tracker.current_left_ = nullptr;
+      tracker.current_right_ = nullptr;
     }
   } scope{*this};
   complete_stereo_lines_ = &complete_stereo_lines;
   complete_left_lines_ = &complete_left_lines;
   current_left_ = &left_image;
+  current_right_ = &right_image;
   TrackResult result = TrackFrame(frame);
   // (the frame as it ended up: its left lines completed on demand or not)
   if (options_.use_lines && !frame->left_lines_pending) ++stats_.line_frames;
@@ -432,6 +437,23 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
                  d.cols, ")");
     loaded_descriptor_type_ = -1;  // checked once
   }
+  // projected_max_frames: the frame is tracked on the map's points placed in it, whether its
+  // keypoints were detected (ahead, in a pipeline) or not, so that the same frames are tracked
+  // the same way in a pipeline and one at a time. Handed back before anything changed.
+  const bool project = CanProject(*frame);
+  std::shared_ptr<const StereoFrame> detected;  // the frame with its own keypoints, if any
+  if (project && !frame->keypoints_pending) detected = frame;
+  const auto refuse_projection = [&]() {
+    refused_projection_index_ = frame->index;
+    if (detected) {  // as the frame handed back comes again
+      frame = detected;
+      return TrackFrame(frame);
+    }
+    TrackResult handed_back;
+    handed_back.needs_keypoints = true;
+    return handed_back;
+  };
+  if (frame->keypoints_pending && !project) return refuse_projection();
   // A loop correction or a merge may have moved the last pose (a merge into another map's
   // world): the prediction starts from where it is now.
   FollowCorrections();
@@ -478,6 +500,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     valid = dynamic_->KeypointMask(frame->keypoints.uv);
     result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
   }
+  bool projected = false;  // (the frame's keypoints placed: once)
   auto track_local_map = [&](float scale, bool points_visible) {
     LocalMapSnapshot local;
     for (int attempt = 0;; ++attempt) {
@@ -501,12 +524,28 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       SetAnchor(map, last_keyframe_);
       break;
     }
-    tracking = TrackSnapshot(*frame, local, predicted, scale, &valid, current_left_);
+    double projection_ms = 0.0;
+    if (project && !projected) {
+      projected = true;
+      const auto projection_start = Clock::now();
+      frame = WithProjectedKeypoints(std::move(frame), local, predicted);
+      projection_ms = Ms(projection_start);
+      valid.clear();
+      if (dynamic_ && dynamic_masks_) valid = dynamic_->KeypointMask(frame->keypoints.uv);
+      result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
+    }
+    // (projected keypoints are aligned to their patches already)
+    tracking = TrackSnapshot(*frame, local, predicted, scale, &valid,
+                             projected ? nullptr : current_left_);
+    tracking.matching_ms += projection_ms;  // (placing the points is their matching)
   };
   if (mode_ != Mode::kLost) {
     const float scale = mode_ == Mode::kRecentlyLost ? options_.lost_search_scale : 1.0f;
     track_local_map(scale, /*points_visible=*/true);
     tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
+    if (project && (!tracked || tracking.pose.point_inliers < options_.projection_min_inliers)) {
+      return refuse_projection();
+    }
     if (!tracked && frame->left_lines_pending) {
       // lines_on_demand: its points alone do not track it; again with its lines (both passes
       // timed).
@@ -547,24 +586,37 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   if (tracked || relocalised) {
     std::vector<int> point_match(frame->NumKeypoints(), -1);
     std::vector<int> line_match(frame->NumLines(), -1);
-    bool make_keyframe = false;
+    bool make_keyframe = false, want_keyframe = false;
     bool velocity_known = mode_ == Mode::kTracking;
     {
       // (the live map: merged into another meanwhile in threaded mode, see LockActiveMap)
       const std::unique_lock<Mutex> lock = LockActiveMap();
       Map& map = atlas_.map(active_);
       map.mutex().AssertHeld();  // locked by LockActiveMap
-      // The last pose moves too when it was in the world the estimate was made in; otherwise
-      // (a merge meanwhile) the motion between the two is unknown.
-      const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
-      Rigid3d* estimate = &tracking.pose.cam_from_world;
-      if (move_last ? FollowAnchor(map, {estimate, &last_cam_from_world_})
-                    : FollowAnchor(map, {estimate})) {
-        if (move_last) seen_epoch_ = map.correction_epoch();
-        velocity_known = velocity_known && move_last;
+      // A keyframe takes detected keypoints (new points for the map): a frame on projected ones
+      // that would become one is handed back (below, without the lock: TrackFrame takes it
+      // again), before anything changed.
+      want_keyframe = project && !options_.localise_only &&
+                      AcceptTracking(*frame, map, tracking, &point_match, &line_match,
+                                     /*decide_only=*/true);
+      if (!want_keyframe) {
+        // The last pose moves too when it was in the world the estimate was made in; otherwise
+        // (a merge meanwhile) the motion between the two is unknown.
+        const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
+        Rigid3d* estimate = &tracking.pose.cam_from_world;
+        if (move_last ? FollowAnchor(map, {estimate, &last_cam_from_world_})
+                      : FollowAnchor(map, {estimate})) {
+          if (move_last) seen_epoch_ = map.correction_epoch();
+          velocity_known = velocity_known && move_last;
+        }
+        point_match.assign(frame->NumKeypoints(), -1);
+        make_keyframe =
+            AcceptTracking(*frame, map, tracking, &point_match, &line_match) && !project;
       }
-      make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match);
     }
+    if (want_keyframe) return refuse_projection();
+    projected_run_ = project ? projected_run_ + 1 : 0;
+    result.projected_keypoints = project ? frame->NumKeypoints() : 0;
     if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
       // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
       // from the pose its points gave, and the pose is optimised again with them. The keyframe

@@ -169,6 +169,25 @@ struct TrackerOptions {
   /// mapping triangulates and points loaded from a map file have no patch. 0: off
   int track_refine_window_px = 5;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
+  /// Frames tracked on projected keypoints instead of detected ones, at most this many in a row
+  /// [frames]. While tracking is strong (the frame before held projection_min_inliers point
+  /// inliers), the local map's points that have a patch are projected with the predicted pose
+  /// and aligned to their patches in the image (track_refine_window_px; a global shift found on
+  /// a few of them first absorbs the prediction's rotation error), their stereo column searched
+  /// around the one their depth predicts; the frame is tracked on these, as semi-direct odometry
+  /// (SVO) does between keyframes. A frame that would become a keyframe, that tracks on fewer
+  /// than projection_min_inliers of them, or that comes after this many projected frames is
+  /// handed back for detected keypoints (TrackResult::needs_keypoints; nothing changed), so
+  /// keyframes always have detected keypoints. The point front end then runs on a fraction of
+  /// the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated loop at 40.5 /
+  /// 49.7 frames/s pipelined (light 1.0 / 0.15) and XFeat + lines at 16.3 / 14.9 (10.4 / 11.3
+  /// without), but the 600-frame bright loop drifted more (ORB + lines, 3 seeds, mean ATE 0.0133
+  /// -> 0.0178 m) while the dark loop, the hard junction and the spin did not (benchmarks/
+  /// README.md, 2026-11-29 e). 0: every frame's keypoints are detected
+  int projected_max_frames = 0;
+  int projection_min_inliers = 150;  ///< see projected_max_frames [-]
+  int projection_search_px = 8;      ///< the global shift's search radius [px]
+  int projection_cell_px = 24;  ///< at most one projected point per cell of this size [px]
   double line_sigma_px = 3.0;           ///< line endpoint distance sigma [px]: the two
                                         ///< distances of one segment share the map line's error
                                         ///< (benchmarks/README.md: 1.5 px over-weighted lines)
@@ -258,6 +277,10 @@ struct TrackResult {
   int frame_lines = 0;             ///< the frame's left-image segments (use_lines; with
                                    ///< lines_on_demand 0 unless it needed them)
   double left_lines_ms = 0.0;      ///< its left lines extracted during Track (lines_on_demand) [ms]
+  /// the frame came without keypoints (StereoFrame::keypoints_pending) and the tracker could not
+  /// place the map's points in it: nothing changed, track it again with detected keypoints
+  bool needs_keypoints = false;
+  int projected_keypoints = 0;  ///< tracked on this many projected keypoints (0: detected ones)
 };
 
 struct MapExport {
@@ -285,10 +308,13 @@ class Tracker {
   // the call only.
   // `complete_left_lines` fills in the left image's lines of a frame built without them
   // (StereoFrame::left_lines_pending, lines_on_demand), on a copy, when the frame needs them.
+  // `right_image`: the right image as stereo matching saw it, for the stereo columns of
+  // projected keypoints (projected_max_frames); empty: they are monocular.
   TrackResult Track(std::shared_ptr<const StereoFrame> frame,
                     const StereoLineCompleter& complete_stereo_lines = {},
                     const cv::Mat& left_image = cv::Mat(),
-                    const StereoLineCompleter& complete_left_lines = {});
+                    const StereoLineCompleter& complete_left_lines = {},
+                    const cv::Mat& right_image = cv::Mat());
   // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
   // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
   // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
@@ -396,10 +422,11 @@ class Tracker {
   // into this frame under the two frames' poses.
   void UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world);
   // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
-  // map.mutex().
+  // map.mutex(). `decide_only`: the decision alone, nothing marked or changed (a frame on
+  // projected keypoints asks whether it would become a keyframe).
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
-                      std::vector<int>* point_match, std::vector<int>* line_match)
-      SLSLAM_REQUIRES(map.mutex());
+                      std::vector<int>* point_match, std::vector<int>* line_match,
+                      bool decide_only = false) SLSLAM_REQUIRES(map.mutex());
   // The line part of AcceptTracking: marks the inlier lines found and fills their matches.
   void AcceptLines(Map& map, const LocalTracking& tracking, std::vector<int>* line_match)
       SLSLAM_REQUIRES(map.mutex());
@@ -443,6 +470,17 @@ class Tracker {
                                                           const LocalTracking& tracking) const;
   const cv::Mat* current_left_ = nullptr;  ///< the image handed to Track, during the call
                                            ///< (tracking's thread only)
+  const cv::Mat* current_right_ = nullptr;  ///< (as current_left_)
+  int projected_run_ = 0;  ///< frames tracked on projected keypoints since the last detected one
+  int refused_projection_index_ = -1;  ///< the frame handed back for detected keypoints
+  // Whether `frame` is tracked on projected keypoints (projected_max_frames): tracking strong,
+  // fewer than projected_max_frames in a row, and not a frame handed back already.
+  bool CanProject(const StereoFrame& frame) const;
+  // A copy of the frame whose keypoints are the snapshot's points aligned in current_left_
+  // (projected_max_frames); the snapshot's rows of the new keypoints in `rows`.
+  std::shared_ptr<const StereoFrame> WithProjectedKeypoints(
+      std::shared_ptr<const StereoFrame> frame, const LocalMapSnapshot& local,
+      const Rigid3d& pred_cam_from_world) const;
   std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
   Rigid3d previous_cam_from_world_;  ///< of previous_frame_
   int active_ = -1;  ///< index of the map being tracked in

@@ -40,6 +40,11 @@ inline Eigen::Vector3d ObservedPixel(const StereoFrame& frame, int k,
   return {refined.x(), refined.y(), u_right >= 0.0 ? u_right + (refined.x() - u) : u_right};
 }
 
+// Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
+// image pixels apart, row-major into `out`; the grid must lie inside [0, cols - 1] x
+// [0, rows - 1]. Returns the samples' sum.
+double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out);
+
 // The (2w+1) x (2w+1) float patch of an 8-bit image centred on (u, v), bilinear; empty when it
 // (with one pixel more around it) does not fit inside the image.
 cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w);
@@ -51,5 +56,13 @@ cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w);
 // patches correlate (zero-mean NCC >= min_ncc).
 bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc,
                 double* u, double* v);
+
+// The offset (even integers within +-radius_px) of (u, v) where `patch` (SamplePatch's)
+// correlates best with `image` (zero-mean NCC on every other patch pixel, the patch spanning
+// `scale` image pixels per patch pixel): (u, v) moved there, the NCC returned (-1 when no offset
+// fits the image or the patch is flat). A coarse start for AlignPatch when the prediction may be
+// further off than its reach (TrackerOptions::projected_max_frames).
+double SearchPatch(const cv::Mat& image, const cv::Mat& patch, double scale, int radius_px,
+                   double* u, double* v);
 
 }  // namespace slslam::tracker_detail

@@ -59,16 +59,23 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
-    // A descriptor of another kind (a loaded map of another front end) cannot be matched.
-    if (frame.NumKeypoints() > 0 && !SameKind(p->descriptor, frame.keypoints.descriptors)) {
+    // A descriptor of another kind (a loaded map of another front end) cannot be matched; a
+    // frame without keypoints yet (projected_max_frames) takes the first point's kind.
+    const cv::Mat& kind = frame.NumKeypoints() > 0 || points.empty()
+                              ? frame.keypoints.descriptors
+                              : points.front()->descriptor;
+    const bool checked = frame.NumKeypoints() > 0 || (frame.keypoints_pending && !points.empty());
+    if (checked && !SameKind(p->descriptor, kind)) {
       continue;
     }
     points.push_back(p);
     predicted.push_back(uv.cast<float>());
     if (points_visible) p->visible += 1;
   }
-  const cv::Mat& frame_desc = frame.keypoints.descriptors;
-  if (!points.empty() && frame.NumKeypoints() > 0) {
+  const cv::Mat& frame_desc =
+      frame.NumKeypoints() > 0 || points.empty() ? frame.keypoints.descriptors
+                                                 : points.front()->descriptor;
+  if (!points.empty() && (frame.NumKeypoints() > 0 || frame.keypoints_pending)) {
     snap.point_uv.resize(static_cast<Eigen::Index>(points.size()), 2);
     snap.point_descriptors =
         cv::Mat(static_cast<int>(points.size()), frame_desc.cols, frame_desc.type());
@@ -225,8 +232,6 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
 
 namespace tracker_detail {
 
-namespace {
-
 // Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
 // image pixels apart, row-major into `out`; the grid must lie inside [0, cols - 1] x
 // [0, rows - 1]. The column taps are computed once: they are the same on every row. Returns the
@@ -261,8 +266,6 @@ double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale,
   }
   return sum;
 }
-
-}  // namespace
 
 cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w) {
   if (image.empty() || image.type() != CV_8UC1 || u - w - 1 < 0.0 || v - w - 1 < 0.0 ||

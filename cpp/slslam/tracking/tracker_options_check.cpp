@@ -64,6 +64,13 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.track_refine_window_px", track_refine_window_px, 0, 50);
   CheckAboveInRange("tracking.track_refine_max_px", track_refine_max_px, 0.0f,
                     limits::kMaxImageDistancePx);
+  CheckInRange("tracking.projected_max_frames", projected_max_frames, 0, kMaxCount);
+  CheckInRange("tracking.projection_min_inliers", projection_min_inliers, 0, kMaxCount);
+  CheckInRange("tracking.projection_search_px", projection_search_px, 0, 64);
+  CheckInRange("tracking.projection_cell_px", projection_cell_px, 1, 1000);
+  Require(projected_max_frames == 0 || track_refine_window_px >= 2,
+          "tracking.projected_max_frames needs tracking.track_refine_window_px >= 2 (the patches "
+          "it aligns)");
   CheckAboveInRange("tracking.max_distance_binary", max_distance_binary, 0.0f, 256.0f);
   CheckAboveInRange("tracking.max_distance_float", max_distance_float, 0.0f,
                     limits::kMaxDescriptorDistance);

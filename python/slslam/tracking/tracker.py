@@ -31,7 +31,7 @@ import threading
 import time
 import warnings
 from collections.abc import Iterable, Iterator
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -135,6 +135,9 @@ class FrameCounts(_FieldsAsMapping):
     map: int = -1  #: index of the atlas map the pose belongs to (-1: none)
     weighted_inliers: float = 0.0  #: point inliers + line weight x line inliers
     masked_keypoints: int = 0  #: keypoints in cells the dynamic-cell filter masked
+    #: 1 when tracked on keypoints projected from the map (tracking.projected_max_frames): the
+    #: point front end did not run on it, ``keypoints`` counts the projected ones; else 0
+    projected: int = 0
 
 
 @dataclass
@@ -181,6 +184,9 @@ class _Prepared:
     inference_ms: float  #: point front end, both images (wall)
     front_ms: float  #: the whole front-end step (wall): points, lines, stereo matching
     stereo: _core.PreparedFrame  #: TrackerCore.prepare's frame: what the core tracks
+    raw_left: np.ndarray  #: the checked gray images as given (to detect keypoints on later)
+    raw_right: np.ndarray
+    lines: Future | None  #: the left image's lines extracted beside it (reused when redone)
 
 
 _END = object()  # the pipeline's worker has read every frame
@@ -409,6 +415,10 @@ class Tracker:
             raise InputError("--localise-only", "localisation-only mode needs a map (--load-map)")
         options.localise_only = localise_only
         self._core = _core.TrackerCore(options, _line_options(self.config))
+        # tracking.projected_max_frames: frames go to the core without keypoints when it will
+        # likely place the map's points itself (_detect_ahead); the descriptor kind of the empty
+        # set is the front end's own, found on the first detection.
+        self._no_keypoints: Keypoints | None = None
         if load_map is not None:
             path = Path(load_map).expanduser()
             if not path.is_file():
@@ -642,23 +652,45 @@ class Tracker:
             raise InputError(
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
+        return self._prepare_checked(
+            index, float(timestamp), left, right, detect=self._detect_ahead(), lines=None
+        )
+
+    def _prepare_checked(
+        self,
+        index: int,
+        timestamp: float,
+        left: np.ndarray,
+        right: np.ndarray,
+        detect: bool,
+        lines: Future | None,
+    ) -> _Prepared:
+        """_prepare's work on checked gray images: the point front end (unless ``detect`` is
+        False: ``tracking.projected_max_frames``, the core then places the map's points in the
+        frame or hands it back), the left image's lines (``lines``: extracted already) and the
+        stereo matching."""
+        where = f"frame {index}"
         start = time.perf_counter()
+        raw_left_in, raw_right = left, right
         # The right image and the left image's lines on helper threads meanwhile (LSD, ORB,
         # onnxruntime and the smoothing release the GIL). The left image is smoothed first, once,
         # for its lines, its detection and the core.
         row_search = self.config.tracking.stereo_row_search
         # (row search: left only, the core searches each keypoint's patch along its right row)
         right_side = self._right_side.submit(
-            self._smooth if row_search else self._smooth_and_detect, right
+            self._smooth if row_search or not detect else self._smooth_and_detect, right
         )
         raw_left, left = left, self._smooth(left)
-        lines = (
-            self._lines_side.submit(self._core.extract_left_lines, left)
-            if self._lines_side is not None and self._lines_ahead()
-            else None
-        )
-        kl = self._detect_either(raw_left, left)
-        if row_search:
+        if lines is None and self._lines_side is not None and self._lines_ahead():
+            lines = self._lines_side.submit(self._core.extract_left_lines, left)
+        if detect:
+            kl = self._detect_either(raw_left, left)
+            if self._no_keypoints is None:
+                self._no_keypoints = kl.select(np.zeros(0, dtype=np.int64))
+        else:
+            assert self._no_keypoints is not None  # (_detect_ahead: only after a detection)
+            kl = self._no_keypoints
+        if row_search or not detect:
             right = right_side.result()
             kr = kl.select(np.zeros(0, dtype=np.int64))
         else:
@@ -680,19 +712,47 @@ class Tracker:
             np.ascontiguousarray(kr.uv, dtype=np.float32).reshape(-1, 2),
             np.ascontiguousarray(kr.descriptors),
             left_lines,
+            keypoints_pending=not detect,
         )
         front_ms = (time.perf_counter() - start) * 1e3
-        return _Prepared(index, float(timestamp), left, kl, inference_ms, front_ms, stereo)
+        return _Prepared(
+            index,
+            float(timestamp),
+            left,
+            kl,
+            inference_ms,
+            front_ms,
+            stereo,
+            raw_left_in,
+            raw_right,
+            lines,
+        )
 
     def _track_prepared(self, frame: _Prepared) -> TrackResult:
         """The core's part of one frame (GIL released inside): tracking and local mapping (and
         the left image's lines when no lines thread extracted them)."""
         index, where = frame.index, f"frame {frame.index}"
+        self._feed_imu(frame.timestamp)
+        start = time.perf_counter()
+        front_ms = frame.front_ms
+        out = self._core.track_prepared(frame.stereo)
+        if out.needs_keypoints:
+            # tracking.projected_max_frames: the core could not place the map's points in this
+            # frame (or it would become a keyframe): again, with its keypoints detected
+            # (nothing changed in the core meanwhile).
+            redo_start = time.perf_counter()
+            frame = self._prepare_checked(
+                frame.index,
+                frame.timestamp,
+                frame.raw_left,
+                frame.raw_right,
+                detect=True,
+                lines=frame.lines,
+            )
+            out = self._core.track_prepared(frame.stereo)
+            front_ms += (time.perf_counter() - redo_start) * 1e3 - frame.front_ms  # (counted once)
         kl = frame.left_keypoints
         timestamp, inference_ms = frame.timestamp, frame.inference_ms
-        self._feed_imu(timestamp)
-        start = time.perf_counter()
-        out = self._core.track_prepared(frame.stereo)
         T_world_cam = np.linalg.inv(out.cam_from_world)
         if not np.all(np.isfinite(T_world_cam)):  # never hand out a NaN pose
             raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
@@ -705,10 +765,10 @@ class Tracker:
             mapping=out.mapping_ms,
             relocalisation=out.relocalisation_ms,
             # The frame's own work: front end plus core (in the pipeline the two overlap others).
-            total=frame.front_ms + (time.perf_counter() - start) * 1e3,
+            total=front_ms + (time.perf_counter() - start) * 1e3,
         )
         counts = FrameCounts(
-            keypoints=len(kl),
+            keypoints=out.projected_keypoints or len(kl),
             lines=out.lines,
             matched_points=out.matched_points,
             inlier_points=out.inlier_points,
@@ -718,11 +778,37 @@ class Tracker:
             map=out.map_index,
             weighted_inliers=round(float(out.weighted_inliers), 3),
             masked_keypoints=out.masked_keypoints,
+            projected=int(out.projected_keypoints > 0),
         )
         result = TrackResult(index, timestamp, out.state, T_world_cam, timings, counts)
         self.last_image, self.last_keypoints_uv = frame.left, kl.uv
         self._results.append(result)
         return result
+
+    def _detect_ahead(self) -> bool:
+        """Whether the point front end runs on a frame ahead of the core: always, unless
+        ``tracking.projected_max_frames``; then when the core will likely hand the frame back
+        (the newest result known here was not tracked or held fewer point inliers than
+        ``projection_min_inliers``, or the frames projected in a row reached the limit). The
+        guess decides time only: the core tracks a frame on projected keypoints by its own rule
+        whether they were detected or not, and hands back one it cannot (detected then)."""
+        tracking = self.config.tracking
+        if tracking.projected_max_frames <= 0 or self._no_keypoints is None:
+            return True
+        results = self._results
+        last = results[-1] if results else None
+        if (
+            last is None
+            or last.state != "OK"
+            or last.counts.inlier_points < tracking.projection_min_inliers
+        ):
+            return True
+        run = 0
+        for result in reversed(results[-tracking.projected_max_frames :]):
+            if not result.counts.projected:
+                break
+            run += 1
+        return run >= tracking.projected_max_frames
 
     def _lines_ahead(self) -> bool:
         """Whether the left image's lines are extracted beside the point front end: always,

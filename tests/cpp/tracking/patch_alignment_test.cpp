@@ -1,5 +1,8 @@
 // The tracker's keypoint refinement: a map point's patch aligned to a later image (shifted,
-// scaled, brighter), and refused on flat images and on a patch of something else.
+// scaled, brighter), and refused on flat images and on a patch of something else; the coarse
+// search that starts projected points (TrackerOptions::projected_max_frames).
+#include <cmath>
+
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
@@ -63,6 +66,34 @@ TEST(PatchAlignment, RefusesFlatImagesAndOtherPatches) {
   EXPECT_FALSE(AlignPatch(image, other, 1.0, 0.8, &u, &v));
   // Near the border there is no patch to take.
   EXPECT_TRUE(SamplePatch(image, 3.0, 100.0, 5).empty());
+}
+
+TEST(PatchSearch, FindsAShiftBeyondTheAlignmentsReachThenAlignsIt) {
+  // A projected point predicted 7 px right and 5 px up of where the image shows it (a rotation
+  // the motion model missed): the coarse search lands within reach, the alignment finishes.
+  const cv::Mat image = Texture(5);
+  const cv::Mat patch = SamplePatch(image, 120.4, 100.6, 5);
+  double u = 127.4, v = 95.6;
+  const double ncc = tracker_detail::SearchPatch(image, patch, 1.0, 8, &u, &v);
+  EXPECT_GT(ncc, 0.7);
+  EXPECT_LE(std::abs(u - 120.4), 1.5);
+  EXPECT_LE(std::abs(v - 100.6), 1.5);
+  ASSERT_TRUE(AlignPatch(image, patch, 1.0, 0.8, &u, &v));
+  EXPECT_NEAR(u, 120.4, 0.05);
+  EXPECT_NEAR(v, 100.6, 0.05);
+}
+
+TEST(PatchSearch, SaysWhenNothingFits) {
+  const cv::Mat image = Texture(6);
+  const cv::Mat patch = SamplePatch(image, 100.0, 100.0, 5);
+  // The search window lies outside the image: nothing is tried, (u, v) stays.
+  double u = 2.0, v = 2.0;
+  EXPECT_EQ(tracker_detail::SearchPatch(image, patch, 1.0, 0, &u, &v), -1.0);
+  EXPECT_EQ(u, 2.0);
+  // A flat patch has no correlation to offer.
+  const cv::Mat flat = SamplePatch(cv::Mat(200, 240, CV_8U, cv::Scalar(90)), 100.0, 100.0, 5);
+  u = v = 100.0;
+  EXPECT_EQ(tracker_detail::SearchPatch(image, flat, 1.0, 4, &u, &v), -1.0);
 }
 
 }  // namespace
