@@ -324,7 +324,7 @@ void Tracker::AcceptLines(Map& map, const LocalTracking& tracking,
 
 bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
                              std::vector<int>* point_match, std::vector<int>* line_match,
-                             bool decide_only) {
+                             bool decide_only, bool projected) {
   const PoseOptimizerResult& pose = tracking.pose;
   // The map lock was released after matching: local mapping (threaded) may have culled a
   // landmark since, so each is looked up again.
@@ -364,8 +364,9 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   const int tracked = pose.point_inliers;
   // A young map has few points seen by three keyframes; the inliers of the first frame tracked
   // after the keyframe stand in for the reference then (how many of its points can be tracked).
+  // Detected frames only: projected ones keep one point per cell.
   const int first_tracked = first_tracked_ == 0 && frames_since >= 1 ? tracked : first_tracked_;
-  if (!decide_only) first_tracked_ = first_tracked;
+  if (!decide_only && !projected) first_tracked_ = first_tracked;
   reference = std::max(reference, first_tracked);
   // The minimum gap after the last keyframe, in frames and in time.
   const bool past_gap =
@@ -598,7 +599,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       // again), before anything changed.
       want_keyframe = project && !options_.localise_only &&
                       AcceptTracking(*frame, map, tracking, &point_match, &line_match,
-                                     /*decide_only=*/true);
+                                     /*decide_only=*/true, /*projected=*/true);
       if (!want_keyframe) {
         // The last pose moves too when it was in the world the estimate was made in; otherwise
         // (a merge meanwhile) the motion between the two is unknown.
@@ -610,8 +611,9 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
           velocity_known = velocity_known && move_last;
         }
         point_match.assign(frame->NumKeypoints(), -1);
-        make_keyframe =
-            AcceptTracking(*frame, map, tracking, &point_match, &line_match) && !project;
+        make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match,
+                                       /*decide_only=*/false, project) &&
+                        !project;
       }
     }
     if (want_keyframe) return refuse_projection();

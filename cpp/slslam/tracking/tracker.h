@@ -423,10 +423,12 @@ class Tracker {
   void UpdateDynamicCells(const StereoFrame& frame, const Rigid3d& cam_from_world);
   // Marks inliers found, fills the per-feature matches and decides on a keyframe. Caller holds
   // map.mutex(). `decide_only`: the decision alone, nothing marked or changed (a frame on
-  // projected keypoints asks whether it would become a keyframe).
+  // projected keypoints asks whether it would become a keyframe). `projected`: the frame's
+  // keypoints are projected ones (projected_max_frames).
   bool AcceptTracking(const StereoFrame& frame, Map& map, const LocalTracking& tracking,
                       std::vector<int>* point_match, std::vector<int>* line_match,
-                      bool decide_only = false) SLSLAM_REQUIRES(map.mutex());
+                      bool decide_only = false, bool projected = false)
+      SLSLAM_REQUIRES(map.mutex());
   // The line part of AcceptTracking: marks the inlier lines found and fills their matches.
   void AcceptLines(Map& map, const LocalTracking& tracking, std::vector<int>* line_match)
       SLSLAM_REQUIRES(map.mutex());

@@ -653,7 +653,7 @@ class Tracker:
                 where, f"timestamp {timestamp} does not increase (previous {previous})"
             )
         return self._prepare_checked(
-            index, float(timestamp), left, right, detect=self._detect_ahead(), lines=None
+            index, float(timestamp), left, right, detect=self._detect_ahead(index), lines=None
         )
 
     def _prepare_checked(
@@ -785,17 +785,19 @@ class Tracker:
         self._results.append(result)
         return result
 
-    def _detect_ahead(self) -> bool:
-        """Whether the point front end runs on a frame ahead of the core: always, unless
-        ``tracking.projected_max_frames``; then when the core will likely hand the frame back
-        (the newest result known here was not tracked or held fewer point inliers than
-        ``projection_min_inliers``, or the frames projected in a row reached the limit). The
-        guess decides time only: the core tracks a frame on projected keypoints by its own rule
-        whether they were detected or not, and hands back one it cannot (detected then)."""
+    def _detect_ahead(self, index: int) -> bool:
+        """Whether the point front end runs on frame ``index`` ahead of the core: always, unless
+        ``tracking.projected_max_frames``; then when the core will likely hand the frame back:
+        the newest result known here was not tracked or held fewer point inliers than
+        ``projection_min_inliers``, the frames since the last detected one reach the limit, or a
+        keyframe is due (as many frames since the last keyframe as the median of the last gaps
+        between keyframes). The guess decides time only: the core tracks a frame on projected
+        keypoints by its own rule whether they were detected or not, and hands back one it
+        cannot (detected then, on the core's thread: the cost of a wrong guess)."""
         tracking = self.config.tracking
         if tracking.projected_max_frames <= 0 or self._no_keypoints is None:
             return True
-        results = self._results
+        results = self._results[-64:]  # (a copy: the core's thread appends meanwhile)
         last = results[-1] if results else None
         if (
             last is None
@@ -803,12 +805,14 @@ class Tracker:
             or last.counts.inlier_points < tracking.projection_min_inliers
         ):
             return True
-        run = 0
-        for result in reversed(results[-tracking.projected_max_frames :]):
-            if not result.counts.projected:
-                break
-            run += 1
-        return run >= tracking.projected_max_frames
+        detected = [r.index for r in results if not r.counts.projected]
+        if not detected or index - detected[-1] > tracking.projected_max_frames:
+            return True
+        keyframes = [r.index for r in results if r.counts.keyframe]
+        if len(keyframes) < 2:
+            return False
+        gaps = np.diff(keyframes[-6:])
+        return index - keyframes[-1] >= max(1, int(np.median(gaps)))
 
     def _lines_ahead(self) -> bool:
         """Whether the left image's lines are extracted beside the point front end: always,
