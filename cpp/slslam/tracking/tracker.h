@@ -179,11 +179,13 @@ struct TrackerOptions {
   /// than projection_min_inliers of them, or that comes after this many projected frames is
   /// handed back for detected keypoints (TrackResult::needs_keypoints; nothing changed), so
   /// keyframes always have detected keypoints. The point front end then runs on a fraction of
-  /// the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated loop at 40.5 /
-  /// 49.7 frames/s pipelined (light 1.0 / 0.15) and XFeat + lines at 16.3 / 14.9 (10.4 / 11.3
+  /// the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated loop at 43.8 /
+  /// 48.6 frames/s pipelined (light 1.0 / 0.15) and XFeat + lines at 16.2 / 16.1 (10.4 / 11.3
   /// without), but the 600-frame bright loop drifted more (ORB + lines, 3 seeds, mean ATE 0.0133
-  /// -> 0.0178 m) while the dark loop, the hard junction and the spin did not (benchmarks/
-  /// README.md, 2026-11-29 e). 0: every frame's keypoints are detected
+  /// -> 0.0153 m: its keyframes, one every 2.3 frames, mostly for new close points, wait for a
+  /// detected frame) while the dark loop, the hard junction and the spin did not; with 1 the
+  /// ATEs held but nothing was saved (benchmarks/README.md, 2026-11-29 e). 0: every frame's
+  /// keypoints are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
