@@ -822,7 +822,10 @@ def test_projected_keypoints_track_between_detections_the_same_way_in_a_pipeline
     with Tracker(sequence.camera, projected) as tracker:
         results = [tracker.track(*f) for f in frames]
         poses = tracker.trajectory()[1]
+        line_frames = tracker.map().stats.line_frames
     assert all(r.tracked for r in results)
+    # frames handed back for detection are counted once, when they come again
+    assert line_frames == sum(r.counts.lines > 0 for r in results)
     flags = [r.counts.projected for r in results]
     assert sum(flags) > 0.3 * len(frames), flags
     assert "1111" not in "".join(map(str, flags))  # at most 3 in a row

@@ -418,6 +418,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
   current_left_ = &left_image;
   current_right_ = &right_image;
   TrackResult result = TrackFrame(frame);
+  if (result.needs_keypoints) return result;  // (handed back: it comes again, counted then)
   // (the frame as it ended up: its left lines completed on demand or not)
   if (options_.use_lines && !frame->left_lines_pending) ++stats_.line_frames;
   result.frame_lines = frame->NumLines();
