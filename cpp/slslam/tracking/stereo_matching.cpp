@@ -291,6 +291,13 @@ void SearchAndRefineStereoPoints(const cv::Mat& left, const cv::Mat& right, cons
   RefineStereoSubpixel(left, right, rig, options, frame);
 }
 
+bool SubpixelWindowFits(const cv::Mat& left, const cv::Mat& right,
+                        const StereoMatchOptions& options, int ul, int v, int ur) {
+  const int w = options.subpixel_window, L = options.subpixel_search;
+  return v - w >= 0 && v + w < left.rows && ul - w >= 0 && ul + w < left.cols &&
+         ur - L - w >= 0 && ur + L + w < right.cols;
+}
+
 void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                           const StereoMatchOptions& options, StereoFrame* frame) {
   Require(frame != nullptr, "subpixel refinement needs a frame");
@@ -312,8 +319,7 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
     const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
     const int v = static_cast<int>(std::lround(frame->keypoints.uv(i, 1)));
     const int ur0 = static_cast<int>(std::lround(frame->u_right[i]));
-    if (v - w < 0 || v + w >= left.rows || ul - w < 0 || ul + w >= left.cols || ur0 - L - w < 0 ||
-        ur0 + L + w >= right.cols) {
+    if (!SubpixelWindowFits(left, right, options, ul, v, ur0)) {
       continue;  // too close to the border to refine: keep the descriptor match
     }
     // The left patch's mean from an integer sum, as RightStrip's.

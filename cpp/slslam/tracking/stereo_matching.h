@@ -94,4 +94,10 @@ void SearchAndRefineStereoPoints(const cv::Mat& left, const cv::Mat& right, cons
 void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                           const StereoMatchOptions& options, StereoFrame* frame);
 
+// Whether RefineStereoSubpixel can refine a match at left column `ul`, row `v` and right column
+// `ur` (integers): its patch and search fit inside both images. Elsewhere it keeps the column
+// it was given.
+bool SubpixelWindowFits(const cv::Mat& left, const cv::Mat& right,
+                        const StereoMatchOptions& options, int ul, int v, int ur);
+
 }  // namespace slslam

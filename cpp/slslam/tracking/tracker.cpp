@@ -502,7 +502,6 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     valid = dynamic_->KeypointMask(frame->keypoints.uv);
     result.masked_keypoints = static_cast<int>(std::count(valid.begin(), valid.end(), false));
   }
-  bool projected = false;  // (the frame's keypoints placed: once)
   auto track_local_map = [&](float scale, bool points_visible) {
     LocalMapSnapshot local;
     for (int attempt = 0;; ++attempt) {
@@ -526,9 +525,9 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       SetAnchor(map, last_keyframe_);
       break;
     }
+    // (project: called once, the frame is handed back before a second pass)
     double projection_ms = 0.0;
-    if (project && !projected) {
-      projected = true;
+    if (project) {
       const auto projection_start = Clock::now();
       frame = WithProjectedKeypoints(std::move(frame), local, predicted);
       projection_ms = Ms(projection_start);
@@ -538,7 +537,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     }
     // (projected keypoints are aligned to their patches already)
     tracking = TrackSnapshot(*frame, local, predicted, scale, &valid,
-                             projected ? nullptr : current_left_);
+                             project ? nullptr : current_left_);
     tracking.matching_ms += projection_ms;  // (placing the points is their matching)
   };
   if (mode_ != Mode::kLost) {

@@ -481,7 +481,8 @@ class Tracker {
   // fewer than projected_max_frames in a row, and not a frame handed back already.
   bool CanProject(const StereoFrame& frame) const;
   // A copy of the frame whose keypoints are the snapshot's points aligned in current_left_
-  // (projected_max_frames); the snapshot's rows of the new keypoints in `rows`.
+  // (projected_max_frames), with the snapshot's descriptors and stereo columns searched in
+  // current_right_.
   std::shared_ptr<const StereoFrame> WithProjectedKeypoints(
       std::shared_ptr<const StereoFrame> frame, const LocalMapSnapshot& local,
       const Rigid3d& pred_cam_from_world) const;

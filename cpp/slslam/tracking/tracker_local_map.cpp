@@ -52,6 +52,8 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
   // Points in front of the predicted camera and inside the image.
   std::vector<std::shared_ptr<MapPoint>> points;
   std::vector<Eigen::Vector2f> predicted;
+  // The descriptors' kind: the frame's (none for a frame without keypoints)
+  const cv::Mat* kind = frame.NumKeypoints() > 0 ? &frame.keypoints.descriptors : nullptr;
   for (int pid : point_ids) {
     auto p = map.point(pid);
     if (!p || p->bad) continue;
@@ -59,23 +61,16 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     if (x_c.z() <= 0.05) continue;
     const Eigen::Vector2d uv = camera.Project(x_c);
     if (!InImage(camera, uv)) continue;
-    // A descriptor of another kind (a loaded map of another front end) cannot be matched; a
-    // frame without keypoints yet (projected_max_frames) takes the first point's kind.
-    const cv::Mat& kind = frame.NumKeypoints() > 0 || points.empty()
-                              ? frame.keypoints.descriptors
-                              : points.front()->descriptor;
-    const bool checked = frame.NumKeypoints() > 0 || (frame.keypoints_pending && !points.empty());
-    if (checked && !SameKind(p->descriptor, kind)) {
-      continue;
-    }
+    // A descriptor of another kind (a loaded map of another front end) cannot be matched.
+    if (kind != nullptr && !SameKind(p->descriptor, *kind)) continue;
+    // (a frame without keypoints yet, projected_max_frames, takes the first point's kind)
+    if (kind == nullptr && frame.keypoints_pending) kind = &p->descriptor;
     points.push_back(p);
     predicted.push_back(uv.cast<float>());
     if (points_visible) p->visible += 1;
   }
-  const cv::Mat& frame_desc =
-      frame.NumKeypoints() > 0 || points.empty() ? frame.keypoints.descriptors
-                                                 : points.front()->descriptor;
-  if (!points.empty() && (frame.NumKeypoints() > 0 || frame.keypoints_pending)) {
+  if (!points.empty() && kind != nullptr) {
+    const cv::Mat& frame_desc = *kind;
     snap.point_uv.resize(static_cast<Eigen::Index>(points.size()), 2);
     snap.point_descriptors =
         cv::Mat(static_cast<int>(points.size()), frame_desc.cols, frame_desc.type());

@@ -172,18 +172,16 @@ std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(
   // the refinement's window fits; elsewhere the keypoint stays monocular).
   const cv::Mat* right = current_right_;
   const bool stereo = right != nullptr && !right->empty() && options_.stereo.subpixel_window > 0;
-  const int w = options_.stereo.subpixel_window, L = options_.stereo.subpixel_search;
   const PinholeCamera& cam = options_.rig.camera;
   for (int i = 0; i < n; ++i) {
     kp.uv.row(i) = uv[i].transpose();
     local.point_descriptors.row(rows[i]).copyTo(kp.descriptors.row(i));
     if (!stereo) continue;
     const double u_r = uv[i].x() - cam.fx * options_.rig.baseline_m / depths[i];
-    const int ul = static_cast<int>(std::lround(uv[i].x()));
-    const int vv = static_cast<int>(std::lround(uv[i].y()));
-    const int ur0 = static_cast<int>(std::lround(u_r));
-    if (vv - w < 0 || vv + w >= image->rows || ul - w < 0 || ul + w >= image->cols ||
-        ur0 - L - w < 0 || ur0 + L + w >= right->cols) {
+    if (!SubpixelWindowFits(*image, *right, options_.stereo,
+                            static_cast<int>(std::lround(uv[i].x())),
+                            static_cast<int>(std::lround(uv[i].y())),
+                            static_cast<int>(std::lround(u_r)))) {
       continue;
     }
     out->u_right[i] = u_r;

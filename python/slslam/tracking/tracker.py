@@ -671,7 +671,7 @@ class Tracker:
         stereo matching."""
         where = f"frame {index}"
         start = time.perf_counter()
-        raw_left_in, raw_right = left, right
+        raw_left, raw_right = left, right
         # The right image and the left image's lines on helper threads meanwhile (LSD, ORB,
         # onnxruntime and the smoothing release the GIL). The left image is smoothed first, once,
         # for its lines, its detection and the core.
@@ -680,7 +680,7 @@ class Tracker:
         right_side = self._right_side.submit(
             self._smooth if row_search or not detect else self._smooth_and_detect, right
         )
-        raw_left, left = left, self._smooth(left)
+        left = self._smooth(left)
         if lines is None and self._lines_side is not None and self._lines_ahead():
             lines = self._lines_side.submit(self._core.extract_left_lines, left)
         if detect:
@@ -723,7 +723,7 @@ class Tracker:
             inference_ms,
             front_ms,
             stereo,
-            raw_left_in,
+            raw_left,
             raw_right,
             lines,
         )
