@@ -439,18 +439,12 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
                  d.cols, ")");
     loaded_descriptor_type_ = -1;  // checked once
   }
-  // projected_max_frames: the frame is tracked on the map's points placed in it, whether its
-  // keypoints were detected (ahead, in a pipeline) or not, so that the same frames are tracked
-  // the same way in a pipeline and one at a time. Handed back before anything changed.
-  const bool project = CanProject(*frame);
-  std::shared_ptr<const StereoFrame> detected;  // the frame with its own keypoints, if any
-  if (project && !frame->keypoints_pending) detected = frame;
-  const auto refuse_projection = [&]() {
-    refused_projection_index_ = frame->index;
-    if (detected) {  // as the frame handed back comes again
-      frame = detected;
-      return TrackFrame(frame);
-    }
+  // projected_max_frames: a frame given without its keypoints is tracked on the map's points
+  // placed in it, or handed back (before anything changed) to come again with them. A frame
+  // given with its keypoints is tracked on them: the caller decides which frames are detected
+  // (Python's Tracker._detect_ahead, the same way in a pipeline and one frame at a time).
+  const bool project = frame->keypoints_pending && CanProject();
+  const auto refuse_projection = []() {
     TrackResult handed_back;
     handed_back.needs_keypoints = true;
     return handed_back;
@@ -595,8 +589,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       Map& map = atlas_.map(active_);
       map.mutex().AssertHeld();  // locked by LockActiveMap
       // A keyframe takes detected keypoints (new points for the map): a frame on projected ones
-      // that would become one is handed back (below, without the lock: TrackFrame takes it
-      // again), before anything changed.
+      // that would become one is handed back (below), before anything changed.
       want_keyframe = project && !options_.localise_only &&
                       AcceptTracking(*frame, map, tracking, &point_match, &line_match,
                                      /*decide_only=*/true, /*projected=*/true);

@@ -170,8 +170,11 @@ struct TrackerOptions {
   int track_refine_window_px = 5;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
   /// Frames tracked on projected keypoints instead of detected ones, at most this many in a row
-  /// [frames]. While tracking is strong (the frame before held projection_min_inliers point
-  /// inliers), the local map's points that have a patch are projected with the predicted pose
+  /// [frames]. A frame given without keypoints (StereoFrame::keypoints_pending; which frames is
+  /// the caller's choice, Python's Tracker._detect_ahead) is tracked this way while tracking is
+  /// strong (the frame before held projection_min_inliers point inliers); a frame given with its
+  /// keypoints is tracked on them. The local map's points that have a patch are projected with
+  /// the predicted pose
   /// and aligned to their patches in the image (track_refine_window_px; a global shift found on
   /// a few of them first absorbs the prediction's rotation error), their stereo column searched
   /// around the one their depth predicts; the frame is tracked on these, as semi-direct odometry
@@ -476,10 +479,9 @@ class Tracker {
                                            ///< (tracking's thread only)
   const cv::Mat* current_right_ = nullptr;  ///< (as current_left_)
   int projected_run_ = 0;  ///< frames tracked on projected keypoints since the last detected one
-  int refused_projection_index_ = -1;  ///< the frame handed back for detected keypoints
-  // Whether `frame` is tracked on projected keypoints (projected_max_frames): tracking strong,
-  // fewer than projected_max_frames in a row, and not a frame handed back already.
-  bool CanProject(const StereoFrame& frame) const;
+  // Whether a frame given without keypoints is tracked on projected ones (projected_max_frames):
+  // tracking strong and fewer than projected_max_frames in a row.
+  bool CanProject() const;
   // A copy of the frame whose keypoints are the snapshot's points aligned in current_left_
   // (projected_max_frames), with the snapshot's descriptors and stereo columns searched in
   // current_right_.

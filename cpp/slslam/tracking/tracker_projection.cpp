@@ -69,11 +69,10 @@ double SearchPatch(const cv::Mat& image, const cv::Mat& patch, double scale, int
 
 }  // namespace tracker_detail
 
-bool Tracker::CanProject(const StereoFrame& frame) const {
+bool Tracker::CanProject() const {
   return options_.projected_max_frames > 0 && atlas_.size() > 0 && mode_ == Mode::kTracking &&
          have_pose_ && projected_run_ < options_.projected_max_frames &&
-         last_point_inliers_ >= options_.projection_min_inliers &&
-         frame.index != refused_projection_index_;
+         last_point_inliers_ >= options_.projection_min_inliers;
 }
 
 std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(

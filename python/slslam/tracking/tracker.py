@@ -419,6 +419,9 @@ class Tracker:
         # likely place the map's points itself (_detect_ahead); the descriptor kind of the empty
         # set is the front end's own, found on the first detection.
         self._no_keypoints: Keypoints | None = None
+        # _detect_ahead's choices for the frames whose results it may not know yet (index ->
+        # detected, expected keyframe).
+        self._ahead_choices: dict[int, tuple[bool, bool]] = {}
         if load_map is not None:
             path = Path(load_map).expanduser()
             if not path.is_file():
@@ -787,32 +790,55 @@ class Tracker:
 
     def _detect_ahead(self, index: int) -> bool:
         """Whether the point front end runs on frame ``index`` ahead of the core: always, unless
-        ``tracking.projected_max_frames``; then when the core will likely hand the frame back:
-        the newest result known here was not tracked or held fewer point inliers than
-        ``projection_min_inliers``, the frames since the last detected one reach the limit, or a
-        keyframe is due (as many frames since the last keyframe as the median of the last gaps
-        between keyframes). The guess decides time only: the core tracks a frame on projected
-        keypoints by its own rule whether they were detected or not, and hands back one it
-        cannot (detected then, on the core's thread: the cost of a wrong guess)."""
+        ``tracking.projected_max_frames``; then the core tracks a frame given with its keypoints
+        on them and one given without on the map's points placed in it, or hands it back when it
+        cannot (detected then, on the core's thread: the cost of a wrong choice). Detected here:
+        after a result that was not tracked or held fewer point inliers than
+        ``projection_min_inliers``, when ``projected_max_frames`` frames since the last detected
+        one were not, and when a keyframe is due (as many frames since the last keyframe as the
+        median of the last gaps between keyframes; a keyframe needs detected keypoints).
+
+        The choice reads only the results of frames up to ``index - pipeline_frames_ahead - 1``,
+        which a pipeline's worker always knows (it runs at most ``pipeline_frames_ahead`` frames
+        ahead of the core), and its own choices for the frames since. So it is the same in a
+        pipeline and one frame at a time, and so are the poses (with ``track_stream``'s
+        ``frames_ahead`` above the configured value the worker may know fewer and choose
+        otherwise)."""
         tracking = self.config.tracking
         if tracking.projected_max_frames <= 0 or self._no_keypoints is None:
             return True
-        results = self._results[-64:]  # (a copy: the core's thread appends meanwhile)
-        last = results[-1] if results else None
+        lag = tracking.pipeline_frames_ahead + 1
+        known = [r for r in self._results[-64:] if r.index <= index - lag]  # (a copy)
+        last = known[-1] if known else None
+        for old in [k for k in self._ahead_choices if k < index - 64]:
+            del self._ahead_choices[old]
+        since = [
+            (k, choice) for k, choice in self._ahead_choices.items() if index - lag < k < index
+        ]
+
+        def choose(detect: bool, keyframe: bool = False) -> bool:
+            self._ahead_choices[index] = (detect, keyframe)
+            return detect
+
         if (
             last is None
             or last.state != "OK"
             or last.counts.inlier_points < tracking.projection_min_inliers
         ):
-            return True
-        detected = [r.index for r in results if not r.counts.projected]
-        if not detected or index - detected[-1] > tracking.projected_max_frames:
-            return True
-        keyframes = [r.index for r in results if r.counts.keyframe]
+            return choose(True)
+        detected = [r.index for r in known if not r.counts.projected]
+        detected += [k for k, (detect, _) in since if detect]
+        if not detected or index - max(detected) > tracking.projected_max_frames:
+            return choose(True)
+        keyframes = [r.index for r in known if r.counts.keyframe]
         if len(keyframes) < 2:
-            return False
+            return choose(False)
         gaps = np.diff(keyframes[-6:])
-        return index - keyframes[-1] >= max(1, int(np.median(gaps)))
+        expected = [k for k, (_, keyframe) in since if keyframe]
+        last_keyframe = max([keyframes[-1], *expected])
+        if index - last_keyframe >= max(1, int(np.median(gaps))):
+            return choose(True, keyframe=True)
+        return choose(False)
 
     def _lines_ahead(self) -> bool:
         """Whether the left image's lines are extracted beside the point front end: always,
