@@ -174,11 +174,11 @@ struct TrackerOptions {
   /// the caller's choice, Python's Tracker._detect_ahead) is tracked this way while tracking is
   /// strong (the frame before held projection_min_inliers point inliers); a frame given with its
   /// keypoints is tracked on them. The local map's points that have a patch are projected with
-  /// the predicted pose
-  /// and aligned to their patches in the image (track_refine_window_px; a global shift found on
-  /// a few of them first absorbs the prediction's rotation error), their stereo column searched
-  /// around the one their depth predicts; the frame is tracked on these, as semi-direct odometry
-  /// (SVO) does between keyframes. A frame that would become a keyframe, that tracks on fewer
+  /// the predicted pose and aligned to their patches in the image (track_refine_window_px; a
+  /// global shift found on a few of them first absorbs the prediction's rotation error), their
+  /// stereo column searched around the one their depth predicts; the frame is tracked on these,
+  /// as semi-direct odometry (SVO) does between keyframes. A frame that would become a keyframe,
+  /// that tracks on fewer
   /// than projection_min_inliers of them, or that comes after this many projected frames is
   /// handed back for detected keypoints (TrackResult::needs_keypoints; nothing changed), so
   /// keyframes always have detected keypoints. The point front end then runs on a fraction of
