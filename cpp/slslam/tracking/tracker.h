@@ -178,17 +178,16 @@ struct TrackerOptions {
   /// global shift found on a few of them first absorbs the prediction's rotation error), their
   /// stereo column searched around the one their depth predicts; the frame is tracked on these,
   /// as semi-direct odometry (SVO) does between keyframes. A frame that would become a keyframe,
-  /// that tracks on fewer
-  /// than projection_min_inliers of them, or that comes after this many projected frames is
-  /// handed back for detected keypoints (TrackResult::needs_keypoints; nothing changed), so
-  /// keyframes always have detected keypoints. The point front end then runs on a fraction of
-  /// the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated loop at 43.8 /
-  /// 48.6 frames/s pipelined (light 1.0 / 0.15) and XFeat + lines at 16.2 / 16.1 (10.4 / 11.3
-  /// without), but the 600-frame bright loop drifted more (ORB + lines, 3 seeds, mean ATE 0.0133
-  /// -> 0.0153 m: its keyframes, one every 2.3 frames, mostly for new close points, wait for a
-  /// detected frame) while the dark loop, the hard junction and the spin did not; with 1 the
-  /// ATEs held but nothing was saved (benchmarks/README.md, 2026-11-29 e). 0: every frame's
-  /// keypoints are detected
+  /// that tracks on fewer than projection_min_inliers of them, or that comes after this many
+  /// projected frames is handed back for detected keypoints (TrackResult::needs_keypoints;
+  /// nothing changed), so keyframes always have detected keypoints. The point front end then runs
+  /// on a fraction of the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated
+  /// loop at 43.8 / 48.6 frames/s pipelined (light 1.0 / 0.15), but the 600-frame bright loop
+  /// drifted more (3 seeds, mean ATE 0.0133 -> 0.0153 m: its keyframes, one every 2.3 frames,
+  /// mostly for new close points, wait for a detected frame); XFeat + lines with 2 and
+  /// projection_cell_px 16 ran 1.6x the frames/s and drifted 4-21 % more on three of the four
+  /// 600-frame sequences (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints
+  /// are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
