@@ -808,15 +808,21 @@ def test_smooth_if_noisy_returns_a_new_array_only_for_a_noisy_image():
 def test_projected_keypoints_track_between_detections_the_same_way_in_a_pipeline(sim_loop):
     """``tracking.projected_max_frames``: while tracking is strong the core places the local
     map's points in a frame (projected, aligned to their patches) instead of taking detected
-    keypoints, and hands back the frames it cannot (keyframes, after the limit) to be detected.
-    On the bright loop most frames between keyframes are projected, never more than the limit
-    in a row, every keyframe has detected keypoints, the trajectory stays accurate, the
-    pipeline (which chooses ahead which frames to detect) gives the sequential run's poses, and
-    no detection is wasted on a frame then projected."""
+    keypoints, and hands back the frames it cannot (keyframes, after the limit, the frame after
+    a keyframe) to be detected. On the bright loop frames between keyframes are projected, never
+    more than the limit in a row, every keyframe has detected keypoints, the trajectory stays
+    accurate, the pipeline (which chooses ahead which frames to detect) gives the sequential
+    run's poses, and no detection is wasted on a frame then projected."""
     sequence = EurocSequence(sim_loop)
     frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
     base = config("orb", lines=True)
     assert base.tracking.projected_max_frames == 0  # off by default
+    # Keyframes at most every 6 frames (as configs/xfeat.yaml): with ORB's default of 2 the
+    # bright loop makes one every 2-3 frames, and the frame after a keyframe is always detected,
+    # which leaves nothing to project.
+    base = dataclasses.replace(
+        base, tracking=dataclasses.replace(base.tracking, keyframe_min_frames=6)
+    )
     projected = dataclasses.replace(
         base, tracking=dataclasses.replace(base.tracking, projected_max_frames=3)
     )
@@ -828,7 +834,9 @@ def test_projected_keypoints_track_between_detections_the_same_way_in_a_pipeline
     # frames handed back for detection are counted once, when they come again
     assert line_frames == sum(r.counts.lines > 0 for r in results)
     flags = [r.counts.projected for r in results]
-    assert sum(flags) > 0.3 * len(frames), flags
+    # (measured 18 of 80: none in the first 15 and the last 26 frames, two or three of every
+    # four to six between them)
+    assert sum(flags) > 0.15 * len(frames), "".join(map(str, flags))
     assert "1111" not in "".join(map(str, flags))  # at most 3 in a row
     for r in results:
         if r.counts.keyframe:

@@ -443,7 +443,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   // placed in it, or handed back (before anything changed) to come again with them. A frame
   // given with its keypoints is tracked on them: the caller decides which frames are detected
   // (Python's Tracker._detect_ahead, the same way in a pipeline and one frame at a time).
-  const bool project = frame->keypoints_pending && CanProject();
+  const bool project = frame->keypoints_pending && CanProject(*frame);
   const auto refuse_projection = []() {
     TrackResult handed_back;
     handed_back.needs_keypoints = true;

@@ -178,8 +178,10 @@ struct TrackerOptions {
   /// global shift found on a few of them first absorbs the prediction's rotation error), their
   /// stereo column searched around the one their depth predicts; the frame is tracked on these,
   /// as semi-direct odometry (SVO) does between keyframes. A frame that would become a keyframe,
-  /// that tracks on fewer than projection_min_inliers of them, or that comes after this many
-  /// projected frames is handed back for detected keypoints (TrackResult::needs_keypoints;
+  /// that tracks on fewer than projection_min_inliers of them, that comes after this many
+  /// projected frames, or that comes right after a keyframe (its inliers are the keyframe rule's
+  /// reference: measured on a projected frame they understated it, and keyframes came late) is
+  /// handed back for detected keypoints (TrackResult::needs_keypoints;
   /// nothing changed), so keyframes always have detected keypoints. The point front end then runs
   /// on a fraction of the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated
   /// loop at 43.8 / 48.6 frames/s pipelined (light 1.0 / 0.15), but the 600-frame bright loop
@@ -479,8 +481,8 @@ class Tracker {
   const cv::Mat* current_right_ = nullptr;  ///< (as current_left_)
   int projected_run_ = 0;  ///< frames tracked on projected keypoints since the last detected one
   // Whether a frame given without keypoints is tracked on projected ones (projected_max_frames):
-  // tracking strong and fewer than projected_max_frames in a row.
-  bool CanProject() const;
+  // tracking strong, fewer than projected_max_frames in a row, not the frame after a keyframe.
+  bool CanProject(const StereoFrame& frame) const;
   // A copy of the frame whose keypoints are the snapshot's points aligned in current_left_
   // (projected_max_frames), with the snapshot's descriptors and stereo columns searched in
   // current_right_.

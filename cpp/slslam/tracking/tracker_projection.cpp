@@ -69,10 +69,13 @@ double SearchPatch(const cv::Mat& image, const cv::Mat& patch, double scale, int
 
 }  // namespace tracker_detail
 
-bool Tracker::CanProject() const {
+bool Tracker::CanProject(const StereoFrame& frame) const {
+  // (the frame after a keyframe is detected: its inliers are the keyframe rule's reference, see
+  // AcceptTracking; on projected keypoints, one per cell, they understated it)
   return options_.projected_max_frames > 0 && atlas_.size() > 0 && mode_ == Mode::kTracking &&
          have_pose_ && projected_run_ < options_.projected_max_frames &&
-         last_point_inliers_ >= options_.projection_min_inliers;
+         last_point_inliers_ >= options_.projection_min_inliers &&
+         frame.index - last_keyframe_frame_ > 1;
 }
 
 std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(

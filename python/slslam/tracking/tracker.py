@@ -795,8 +795,10 @@ class Tracker:
         cannot (detected then, on the core's thread: the cost of a wrong choice). Detected here:
         after a result that was not tracked or held fewer point inliers than
         ``projection_min_inliers``, when ``projected_max_frames`` frames since the last detected
-        one were not, and when a keyframe is due (as many frames since the last keyframe as the
-        median of the last gaps between keyframes; a keyframe needs detected keypoints).
+        one were not, right after a keyframe (the core detects that frame: its inliers are the
+        keyframe rule's reference), and when a keyframe is due (as many frames since the last
+        keyframe as the median of the last gaps between keyframes; a keyframe needs detected
+        keypoints).
 
         The choice reads only the results of frames up to ``index - pipeline_frames_ahead - 1``,
         which a pipeline's worker always knows (it runs at most ``pipeline_frames_ahead`` frames
@@ -836,6 +838,8 @@ class Tracker:
         gaps = np.diff(keyframes[-6:])
         expected = [k for k, (_, keyframe) in since if keyframe]
         last_keyframe = max([keyframes[-1], *expected])
+        if index - last_keyframe == 1:  # (the core detects the frame after a keyframe)
+            return choose(True)
         if index - last_keyframe >= max(1, int(np.median(gaps))):
             return choose(True, keyframe=True)
         return choose(False)
