@@ -154,11 +154,16 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
     # and keyframes at most every 6 frames while tracking is strong, every frame's lines
     assert config.tracking.keyframe_min_frames == 6
     assert not config.tracking.lines_on_demand and Config().tracking.lines_on_demand
+    # and frames between detections tracked on projected keypoints (off by default)
+    assert config.tracking.projected_max_frames == 2 and Config().tracking.projected_max_frames == 0
+    assert config.tracking.projection_cell_px == 16
     tracking = dataclasses.replace(
         config.tracking,
         stereo_row_search=False,
         keyframe_min_frames=Config().tracking.keyframe_min_frames,
         lines_on_demand=Config().tracking.lines_on_demand,
+        projected_max_frames=Config().tracking.projected_max_frames,
+        projection_cell_px=Config().tracking.projection_cell_px,
     )
     assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
 
