@@ -183,13 +183,13 @@ struct TrackerOptions {
   /// reference: measured on a projected frame they understated it, and keyframes came late) is
   /// handed back for detected keypoints (TrackResult::needs_keypoints;
   /// nothing changed), so keyframes always have detected keypoints. The point front end then runs
-  /// on a fraction of the frames. Off by default: with 3, ORB + lines ran the 150-frame simulated
-  /// loop at 43.8 / 48.6 frames/s pipelined (light 1.0 / 0.15), but the 600-frame bright loop
-  /// drifted more (3 seeds, mean ATE 0.0133 -> 0.0153 m: its keyframes, one every 2.3 frames,
-  /// mostly for new close points, wait for a detected frame); XFeat + lines with 2 and
-  /// projection_cell_px 16 ran 1.6x the frames/s and drifted 4-21 % more on three of the four
-  /// 600-frame sequences (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints
-  /// are detected
+  /// on a fraction of the frames. Off by default: ORB + lines makes a keyframe every 2-3 frames
+  /// in the light (mostly for new close points, which a projected frame cannot see), so little is
+  /// left to project (before the frame after a keyframe was detected, 3 ran it at 43.8 / 48.6
+  /// frames/s on the 150-frame loop but the 600-frame bright loop drifted more, 0.0133 -> 0.0153
+  /// m over 3 seeds). configs/xfeat.yaml sets 2 with projection_cell_px 16: XFeat + lines 1.3x
+  /// the frames/s, the 600-frame sequences' ATE 0.91 - 1.07 of its own without
+  /// (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
