@@ -181,15 +181,15 @@ struct TrackerOptions {
   /// that tracks on fewer than projection_min_inliers of them, that comes after this many
   /// projected frames, or that comes right after a keyframe (its inliers are the keyframe rule's
   /// reference: measured on a projected frame they understated it, and keyframes came late) is
-  /// handed back for detected keypoints (TrackResult::needs_keypoints;
-  /// nothing changed), so keyframes always have detected keypoints. The point front end then runs
-  /// on a fraction of the frames. Off by default: ORB + lines makes a keyframe every 2-3 frames
-  /// in the light (mostly for new close points, which a projected frame cannot see), so little is
-  /// left to project (before the frame after a keyframe was detected, 3 ran it at 43.8 / 48.6
-  /// frames/s on the 150-frame loop but the 600-frame bright loop drifted more, 0.0133 -> 0.0153
-  /// m over 3 seeds). configs/xfeat.yaml sets 2 with projection_cell_px 16: XFeat + lines 1.3x
-  /// the frames/s, the 600-frame sequences' ATE 0.91 - 1.07 of its own without
-  /// (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints are detected
+  /// handed back for detected keypoints (TrackResult::needs_keypoints; nothing changed), so
+  /// keyframes always have detected keypoints. The point front end then runs on a fraction of
+  /// the frames. Off by default: ORB + lines makes a keyframe every 2-3 frames in the light
+  /// (mostly for new close points, which a projected frame cannot see), so little is left to
+  /// project (before the frame after a keyframe was detected, 3 ran it at 43.8 / 48.6 frames/s on
+  /// the 150-frame loop but the 600-frame bright loop drifted more, 0.0133 -> 0.0153 m over 3
+  /// seeds). configs/xfeat.yaml sets 2 with projection_cell_px 16: XFeat + lines 1.26x / 1.39x
+  /// the frames/s (light 1.0 / 0.15), the 600-frame sequences' ATE 0.91 - 1.07 of its own
+  /// without (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
