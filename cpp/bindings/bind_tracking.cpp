@@ -344,6 +344,14 @@ void BindTracking(py::module_& m) {
                      &BundleAdjustmentOptions::line_min_information_per_rad2)
       .def_readwrite("own_solver", &BundleAdjustmentOptions::own_solver)
       .def("check", &BundleAdjustmentOptions::Check);
+  py::class_<TriangulationOptions>(m, "TriangulationOptions",
+                                   "New landmarks from pairs of keyframes (local mapping).")
+      .def(py::init<>())
+      .def_readwrite("neighbours", &TriangulationOptions::neighbours)
+      .def_readwrite("points", &TriangulationOptions::points)
+      .def_readwrite("min_parallax_deg", &TriangulationOptions::min_parallax_deg)
+      .def_readwrite("lines", &TriangulationOptions::lines)
+      .def("check", &TriangulationOptions::Check);
   py::class_<LocalMapperOptions>(m, "LocalMapperOptions", "Local mapping.")
       .def(py::init<>())
       .def_readwrite("local_keyframes", &LocalMapperOptions::local_keyframes)
@@ -351,6 +359,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("cull_keyframes", &LocalMapperOptions::cull_keyframes)
       .def_readwrite("redundant_ratio", &LocalMapperOptions::redundant_ratio)
       .def_readwrite("triangulate", &LocalMapperOptions::triangulate)
+      .def_readwrite("triangulation", &LocalMapperOptions::triangulation)
       .def_readwrite("ba", &LocalMapperOptions::ba)
       .def("check", &LocalMapperOptions::Check);
   py::class_<StereoMatchOptions>(m, "StereoMatchOptions", "Stereo keypoint matching.")

@@ -164,6 +164,8 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
     "lines_on_demand_inliers": ("lines_on_demand_inliers",),
     "denoise_above_noise": ("denoise_above_noise",),
     "local_keyframes": ("mapping.local_keyframes",),
+    "triangulate_points": ("mapping.triangulation.points",),
+    "triangulation_min_parallax_deg": ("mapping.triangulation.min_parallax_deg",),
     "line_weight": ("pose.line_weight", "mapping.ba.line_weight"),
     "line_angle_weight": ("pose.line_angle_weight", "mapping.ba.line_angle_weight"),
     "local_ba_line_prior_weight": ("mapping.ba.line_prior_weight",),
@@ -414,6 +416,13 @@ class TrackingConfig:
     close_depth_baselines: float = _tracking("close_depth_baselines", "[0.1, 1e6]")
     # covisible keyframes in the local map and local BA
     local_keyframes: int = _tracking("local_keyframes", "[1, 1000]")
+    # local mapping also makes points from pairs of keyframes, out of the keypoints stereo left
+    # without a match (flat, ambiguous along the row, far), from their detected positions; false:
+    # points from stereo only (XFeat + lines drifted about half as much in the dark without them,
+    # benchmarks/README.md, 2026-11-29 g)
+    triangulate_points: bool = _tracking("triangulate_points")
+    # ... and only where the two rays meet at this angle at least [deg]
+    triangulation_min_parallax_deg: float = _tracking("triangulation_min_parallax_deg", "[0, 180]")
     # weight of line terms against point terms in both BAs
     line_weight: float = _tracking("line_weight", "[0, 1e6]")
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)

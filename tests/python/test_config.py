@@ -284,3 +284,21 @@ def test_imu_windows_are_checked_against_each_other(tmp_path):
     assert "imu.yaml" in message and "min_window_s" in message and "window_s' (2.0)" in message
     path.write_text("tracking:\n  imu:\n    window_s: 2.0\n    min_window_s: 2.0\n")
     assert load_config(path).tracking.imu.min_window_s == 2.0
+
+
+def test_triangulation_keys_reach_the_core():
+    """tracking.triangulate_points / triangulation_min_parallax_deg: local mapping's
+    TriangulationOptions (points on and 3 degrees by default, the C++ defaults)."""
+    from slslam.datasets.euroc import RectifiedStereoCamera
+    from slslam.tracking.tracker import _core_options
+
+    camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
+    default = _core_options(camera, Config()).mapping.triangulation
+    assert default.points and default.min_parallax_deg == 3.0
+    assert _core.TriangulationOptions().min_parallax_deg == 3.0
+    tracking = dataclasses.replace(
+        Config().tracking, triangulate_points=False, triangulation_min_parallax_deg=5.0
+    )
+    changed = _core_options(camera, dataclasses.replace(Config(), tracking=tracking))
+    assert not changed.mapping.triangulation.points
+    assert changed.mapping.triangulation.min_parallax_deg == 5.0

@@ -299,7 +299,8 @@ TriangulationStats CreateNewLandmarks(Map* map, int keyframe_id, const StereoRig
     const View b = MakeView(*kf2);
     // A baseline shorter than the stereo pair's adds nothing stereo did not (ORB-SLAM3's rule).
     if ((b.center - a.center).norm() < rig.baseline_m) continue;
-    if (b.frame->keypoints.descriptors.type() == a.frame->keypoints.descriptors.type()) {
+    if (options.points &&
+        b.frame->keypoints.descriptors.type() == a.frame->keypoints.descriptors.type()) {
       stats.points += TriangulatePoints(map, a, b, rig, options);
     }
     if (options.lines && a.frame->NumLines() > 0 && b.frame->NumLines() > 0) {

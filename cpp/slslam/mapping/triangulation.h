@@ -29,11 +29,25 @@ struct TriangulationOptions {
   float max_distance_binary = 50.0f;  ///< descriptor bound, ORB (Hamming) [bits]
   float max_distance_float = 0.7f;    ///< descriptor bound, SuperPoint (L2) [-]
   float ratio = 0.8f;                 ///< best / second best descriptor distance [-]
-  double min_parallax_deg = 1.0;      ///< smallest angle between the two rays [deg]
+  /// Smallest angle between the two rays [deg]. 1 (about ORB-SLAM3's) until 2026-11-29: the
+  /// points that stereo left without depth, triangulated at 1-3 degrees, had poor depths, and in
+  /// the dark dusty stretch of the 600-frame loops they pulled the poses. With 3, means of 3
+  /// seeds of the four hard sequences: ORB + lines 0.0130 / 0.136 / 0.124 / 0.0178 -> 0.0126 /
+  /// 0.101 / 0.111 / 0.0160 m, XFeat + lines 0.0198 / 0.304 / 0.298 / 0.0245 -> 0.0151 / 0.159 /
+  /// 0.173 / 0.0171 m (benchmarks/README.md, 2026-11-29 g)
+  double min_parallax_deg = 3.0;
   double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
   double chi2 = 5.991;               ///< reprojection bound in both views (2 dof, 95 %) [-]
   double sigma_px = 1.0;             ///< keypoint sigma [px]
   double line_sigma_px = 3.0;        ///< line endpoint distance sigma [px]
+  /// Points from keyframe pairs. What stereo leaves for them are the keypoints without a
+  /// stereo match: flat, ambiguous along their row, or far; paired by descriptor and
+  /// triangulated from the detected positions, with no patch to align later matches to
+  /// (Tracker::RefineTracks). false: points come from stereo alone. At min_parallax_deg 1,
+  /// without them XFeat + lines drifted about half as much on the dark 600-frame sequences but
+  /// 1.6x as much on the 150- and 300-frame dark loops; min_parallax_deg 3 keeps both
+  /// (benchmarks/README.md, 2026-11-29 g) [-]
+  bool points = true;
   bool lines = true;                 ///< also triangulate lines
   float line_max_lbd = 60.0f;        ///< LBD bound for line pairs [bits]
   float line_ratio = 0.8f;           ///< best / second best LBD distance [-]

@@ -729,6 +729,24 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
   const TriangulationStats stats = CreateNewLandmarks(&map, b->id, rig);
   EXPECT_GT(stats.points, 200);
   EXPECT_GT(stats.lines, 5);
+  // Without points (TriangulationOptions::points, the XFeat preset's setting): the same lines,
+  // no point, and no map point but the anchor.
+  TriangulationOptions lines_only;
+  lines_only.points = false;
+  Map copy;
+  {
+    MutexLock copy_lock(copy.mutex());
+    auto ca = copy.AddKeyFrame(a->cam_from_world, a->frame);
+    auto cb = copy.AddKeyFrame(b->cam_from_world, b->frame);
+    auto c_anchor = copy.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), ca->id);
+    copy.AddPointObservation(c_anchor->id, ca->id, 0);
+    copy.AddPointObservation(c_anchor->id, cb->id, 0);
+    copy.UpdateConnections(cb->id);
+    const TriangulationStats no_points = CreateNewLandmarks(&copy, cb->id, rig, lines_only);
+    EXPECT_EQ(no_points.points, 0);
+    EXPECT_EQ(copy.points().size(), 1u);
+    EXPECT_EQ(no_points.lines, stats.lines);
+  }
   // Every new point lies on a wall; every new line too.
   int on_wall = 0;
   for (const auto& [id, p] : map.points()) {
