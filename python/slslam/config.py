@@ -418,7 +418,8 @@ class TrackingConfig:
     local_keyframes: int = _tracking("local_keyframes", "[1, 1000]")
     # local mapping also makes points from pairs of keyframes, out of the keypoints stereo left
     # without a match (flat, ambiguous along the row, far), from their detected positions; false:
-    # points from stereo only (XFeat + lines drifted about half as much in the dark without them,
+    # points from stereo only (measured: at 1 degree, without them XFeat + lines drifted half as
+    # much on the dark 600-frame sequences but 1.6x as much on the short dark loops,
     # benchmarks/README.md, 2026-11-29 g)
     triangulate_points: bool = _tracking("triangulate_points")
     # ... and only where the two rays meet at this angle at least [deg]

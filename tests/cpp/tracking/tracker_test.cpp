@@ -717,32 +717,35 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
     f->line_has_depth.assign(f->line_has_depth.size(), false);
     return f;
   };
-  TruePose(0, &R, &t);
-  auto a = map.AddKeyFrame(Rigid3d(R, t), mono(0));
-  TruePose(20, &R, &t);
-  auto b = map.AddKeyFrame(Rigid3d(R, t), mono(20));
-  // One shared point links them in the covisibility graph.
-  auto anchor = map.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), a->id);
-  map.AddPointObservation(anchor->id, a->id, 0);
-  map.AddPointObservation(anchor->id, b->id, 0);
-  map.UpdateConnections(b->id);
-  const TriangulationStats stats = CreateNewLandmarks(&map, b->id, rig);
+  const auto frame0 = mono(0), frame20 = mono(20);
+  // Keyframes 0 and 20 in `m`, linked in the covisibility graph by one shared point (returned).
+  auto add_pair = [&](Map& m, int* b_id) {
+    TruePose(0, &R, &t);
+    auto ka = m.AddKeyFrame(Rigid3d(R, t), frame0);
+    TruePose(20, &R, &t);
+    auto kb = m.AddKeyFrame(Rigid3d(R, t), frame20);
+    auto shared = m.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), ka->id);
+    m.AddPointObservation(shared->id, ka->id, 0);
+    m.AddPointObservation(shared->id, kb->id, 0);
+    m.UpdateConnections(kb->id);
+    *b_id = kb->id;
+    return shared->id;
+  };
+  int b_id = -1;
+  const int anchor_id = add_pair(map, &b_id);
+  const TriangulationStats stats = CreateNewLandmarks(&map, b_id, rig);
   EXPECT_GT(stats.points, 200);
   EXPECT_GT(stats.lines, 5);
-  // Without points (TriangulationOptions::points, the XFeat preset's setting): the same lines,
-  // no point, and no map point but the anchor.
+  // Without points (TriangulationOptions::points): the same lines, and no map point but the
+  // shared one.
   TriangulationOptions lines_only;
   lines_only.points = false;
   Map copy;
   {
     MutexLock copy_lock(copy.mutex());
-    auto ca = copy.AddKeyFrame(a->cam_from_world, a->frame);
-    auto cb = copy.AddKeyFrame(b->cam_from_world, b->frame);
-    auto c_anchor = copy.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), ca->id);
-    copy.AddPointObservation(c_anchor->id, ca->id, 0);
-    copy.AddPointObservation(c_anchor->id, cb->id, 0);
-    copy.UpdateConnections(cb->id);
-    const TriangulationStats no_points = CreateNewLandmarks(&copy, cb->id, rig, lines_only);
+    int copy_b_id = -1;
+    add_pair(copy, &copy_b_id);
+    const TriangulationStats no_points = CreateNewLandmarks(&copy, copy_b_id, rig, lines_only);
     EXPECT_EQ(no_points.points, 0);
     EXPECT_EQ(copy.points().size(), 1u);
     EXPECT_EQ(no_points.lines, stats.lines);
@@ -750,7 +753,7 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
   // Every new point lies on a wall; every new line too.
   int on_wall = 0;
   for (const auto& [id, p] : map.points()) {
-    if (id == anchor->id) continue;
+    if (id == anchor_id) continue;
     const Eigen::Vector3d& x = p->position;
     on_wall += std::abs(std::abs(x.x()) - 2.2) < 0.05 || std::abs(std::abs(x.y()) - 1.6) < 0.05;
   }
