@@ -149,10 +149,6 @@ def parse_overrides(items: list[str]) -> dict:
     return tree
 
 
-#: XFeat's preset (configs/xfeat.yaml): the benchmarks start XFeat runs from it.
-XFEAT_PRESET = Path(__file__).resolve().parents[1] / "configs" / "xfeat.yaml"
-
-
 def merged(base: dict, top: dict) -> dict:
     """``base`` with ``top``'s keys over it, nested dicts merged key by key."""
     out = dict(base)
@@ -160,10 +156,3 @@ def merged(base: dict, top: dict) -> dict:
         both = isinstance(value, dict) and isinstance(out.get(key), dict)
         out[key] = merged(out[key], value) if both else value
     return out
-
-
-def with_xfeat_preset(overrides: dict | None) -> dict:
-    """configs/xfeat.yaml's settings with the command line's --set over them."""
-    import yaml
-
-    return merged(yaml.safe_load(XFEAT_PRESET.read_text()), overrides or {})

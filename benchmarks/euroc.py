@@ -46,7 +46,7 @@ import numpy as np
 import yaml
 from evo.core.trajectory import PoseTrajectory3D
 
-from slslam.config import Config
+from slslam.config import Config, default_config
 from slslam.datasets import EurocSequence, is_euroc, read_trajectory
 from slslam.errors import InputError
 from slslam.eval.report import evaluate
@@ -149,14 +149,14 @@ def load_published(path: Path) -> dict:
 
 # -- runs -------------------------------------------------------------------------------------
 def make_configs(names: list[str]) -> dict[str, Config]:
-    base = Config()
     model = os.environ.get("SLSLAM_SUPERPOINT_MODEL") or str(
         SHARED_DATA.parent / "models" / "superpoint_v1" / "superpoint_v1.onnx"
     )
     configs = {}
     for name in names:
         _, frontend, lines = CONFIGS[name]
-        features = dataclasses.replace(base.features, point_frontend=frontend)
+        base = default_config(frontend)  # with the front end's preset (XFeat's)
+        features = base.features
         if frontend == "superpoint":
             if not Path(model).is_file():
                 print(f"{name} skipped: no SuperPoint weights ({model})")

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slslam.config import Config, make_point_frontend
+from slslam.config import default_config, make_point_frontend
 from slslam.datasets.euroc import RectifiedStereoCamera
 from slslam.progress import progress_bar
 from slslam.sim import SimOptions, Simulator
@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     lap = lap_frames(base)
     sim = Simulator(dataclasses.replace(base, frames=lap))
-    config = Config()
+    config = default_config("orb")
     frontend = make_point_frontend(config.features)
     print(
         f"{args.frames} frames, loop lap {lap} frames, front end {type(frontend).__name__}",

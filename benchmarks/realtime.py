@@ -29,10 +29,11 @@ A second table says where the keyframes' time goes (pipelined pass): keyframes m
 mapping's time per keyframe, the local BA's solve within it, and the solve's trust-region steps
 per keyframe with those rejected (``MapStats.local_ba_*``).
 
-XFeat configurations start from configs/xfeat.yaml (its preset), with --set on top. Besides the
-default five, ``*_row`` configurations run the front end on the left image only with the row
-search on the right (``tracking.stereo_row_search``) and ``xfeat_lines_both`` the XFeat preset
-with the network on both images (descriptor stereo matching), for side-by-side ratios.
+XFeat configurations start from its preset (python/slslam/presets/xfeat.yaml), with --set on
+top. Besides the default five, ``*_row`` configurations run the front end on the left image only
+with the row search on the right (``tracking.stereo_row_search``) and ``xfeat_lines_both`` the
+XFeat preset with the network on both images (descriptor stereo matching), for side-by-side
+ratios.
 
 Accuracy: ATE RMSE of the frames with an estimated pose (evo, SE3 alignment) against the
 simulator's ground truth, the tracked ratio and the keyframes. Learned configurations are
@@ -74,7 +75,6 @@ from common import (
     merged,
     parse_overrides,
     speed_reference_ms,
-    with_xfeat_preset,
     write_results,
 )
 
@@ -139,10 +139,8 @@ def config_for(
     name: str, overrides: dict, model: str | None, mapping_thread: bool = False
 ) -> Config:
     _, frontend, lines, settings = CONFIGS[name]
-    overrides = merged(settings, overrides)
-    if frontend == "xfeat":
-        overrides = with_xfeat_preset(overrides)
-    base = config_from_dict(overrides) if overrides else Config()
+    # the front end's preset (XFeat's: python/slslam/presets/xfeat.yaml) under the overrides
+    base = config_from_dict(merged(settings, overrides), point_frontend=frontend)
     superpoint = dataclasses.replace(base.features.superpoint, model_path=model)
     features = dataclasses.replace(base.features, point_frontend=frontend, superpoint=superpoint)
     tracking = dataclasses.replace(base.tracking, use_lines=lines, sequential=not mapping_thread)

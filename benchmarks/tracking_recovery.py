@@ -12,9 +12,9 @@ turn on the spot at t = 10 s (junction_spin, when the simulator offers ``spin_at
 for by name only: the junction at light 0.5 with a 1 s blackout in the middle
 (junction_blackout; ``--frames 160 --set tracking.imu.enabled=false`` is the camera-only pytest's
 run, ``--seeds 0 1 ... 11`` how often it comes back into the one map and where).
-Configurations: ORB + lines with the defaults (orb_lines); XFeat + lines from configs/xfeat.yaml
-(xfeat_lines); ORB + lines with the low-texture fallback off, i.e. plain OpenCV ORB detection as
-before it (orb_lines_plain); ORB points only (orb).
+Configurations: ORB + lines with the defaults (orb_lines); XFeat + lines with its preset
+(python/slslam/presets/xfeat.yaml; xfeat_lines); ORB + lines with the low-texture fallback off,
+i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points only (orb).
 
 Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
 INERTIAL), relocalisations, new maps after a loss, frames the IMU bridged (the simulator writes
@@ -46,7 +46,7 @@ from slslam.config import Config, config_from_dict
 from slslam.sim import SimOptions, Simulator
 from slslam.tracking import run_sequence
 
-from common import RESULTS_DIR, parse_overrides, with_xfeat_preset, write_results
+from common import RESULTS_DIR, parse_overrides, write_results
 
 SEQUENCES = {
     "loop_l100": {"preset": "loop", "light": 1.0},
@@ -68,7 +68,7 @@ CONFIGS = {  # name: (label, point front end, low-texture fallback, lines)
     "orb_lines": ("ORB + lines", "orb", True, True),
     "orb_lines_plain": ("ORB + lines, plain ORB detection", "orb", False, True),
     "orb": ("ORB points", "orb", True, False),
-    "xfeat_lines": ("XFeat + lines (configs/xfeat.yaml)", "xfeat", True, True),
+    "xfeat_lines": ("XFeat + lines (its preset)", "xfeat", True, True),
 }
 ESTIMATED = ("OK", "RELOCALISED", "NEW_MAP")
 
@@ -94,9 +94,8 @@ def simulate(name: str, frames: int, data_dir: Path, seed: int = 0) -> Path | No
 
 def config_for(name: str, overrides: dict | None = None) -> Config:
     _, frontend, fallback, lines = CONFIGS[name]
-    if frontend == "xfeat":
-        overrides = with_xfeat_preset(overrides)
-    base = config_from_dict(overrides) if overrides else Config()
+    # the front end's preset (XFeat's: python/slslam/presets/xfeat.yaml) under the overrides
+    base = config_from_dict(overrides, point_frontend=frontend)
     features = dataclasses.replace(
         base.features, point_frontend=frontend, low_texture_fallback=fallback
     )

@@ -26,6 +26,7 @@ __all__ = [
     "Tracker",
     "TrajectoryFileError",
     "__version__",
+    "default_config",
     "load_config",
     "run_sequence",
 ]
@@ -38,7 +39,7 @@ def __getattr__(name: str):
         from slslam import tracking
 
         return getattr(tracking, name)
-    if name in ("Config", "load_config"):
+    if name in ("Config", "default_config", "load_config"):
         from slslam import config
 
         return getattr(config, name)

@@ -346,7 +346,10 @@ def run_command(
     ] = None,
     config: Annotated[
         Path | None,
-        typer.Option(help="YAML config (keys as in configs/default.yaml); defaults otherwise."),
+        typer.Option(
+            help="YAML config with the keys it changes (all keys: configs/default.yaml); "
+            "without it the defaults: XFeat with its preset."
+        ),
     ] = None,
     max_frames: Annotated[
         int, typer.Option(min=0, help="Track only the first N frames (0 = all).")
@@ -359,7 +362,10 @@ def run_command(
         ),
     ] = None,
     orb: Annotated[
-        bool, typer.Option("--orb", help="Use the ORB point front end (overrides the config).")
+        bool,
+        typer.Option(
+            "--orb", help="Use the ORB point front end with its settings (overrides the config)."
+        ),
     ] = False,
     no_lines: Annotated[
         bool, typer.Option("--no-lines", help="Points only (overrides the config).")
@@ -417,8 +423,11 @@ def run_command(
 
     Writes trajectory.tum (every frame; flushed as it goes), frames.csv (state, counts and stage
     times per frame), map.ply (points and lines), metrics.json and ape.png (ATE against ground
-    truth when the sequence has it), config.yaml. SuperPoint is used when weights are configured
-    ($SLSLAM_SUPERPOINT_MODEL or features.superpoint.model_path), ORB otherwise.
+    truth when the sequence has it), config.yaml (the values the run used). The point front end
+    is XFeat (learned, weights shipped) with the settings it tracks best with
+    (python/slslam/presets/xfeat.yaml, under the config's own keys); SuperPoint with
+    features.point_frontend: superpoint and its weights ($SLSLAM_SUPERPOINT_MODEL or
+    features.superpoint.model_path; ORB without them); ORB with --orb.
     """
     import dataclasses
 
@@ -432,11 +441,8 @@ def run_command(
 
         set_quiet(True)
         logging.getLogger().setLevel(logging.WARNING)
-    cfg = load_config(config)
-    if orb:
-        cfg = dataclasses.replace(
-            cfg, features=dataclasses.replace(cfg.features, point_frontend="orb")
-        )
+    # --orb before the front end's preset is chosen: ORB runs with ORB's settings
+    cfg = load_config(config, point_frontend="orb" if orb else None)
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
     sequence = _open_bag(dataset, left, right, imu, calib)

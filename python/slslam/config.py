@@ -5,9 +5,15 @@ A config file holds only the keys it changes; everything else keeps the default 
 errors that name the file and the key, so a typo never passes silently.
 
     features:
-      point_frontend: superpoint      # superpoint | xfeat | orb
+      point_frontend: superpoint      # xfeat (the default) | superpoint | orb
       superpoint:
         model_path: /models/superpoint_v1.onnx   # overrides $SLSLAM_SUPERPOINT_MODEL
+
+Front-end presets: a point front end may come with the settings it tracks best with
+(``python/slslam/presets/<front end>.yaml``; XFeat, the default, has one). ``config_from_dict``,
+``load_config`` and ``default_config`` apply the preset of the config's front end under the
+config's own keys, so a key the config sets wins. ``Config()`` itself holds the base defaults
+without any preset (the values ``configs/default.yaml`` documents).
 """
 
 from __future__ import annotations
@@ -288,7 +294,7 @@ class DynamicCellConfig:
     # matches a cell needs in a frame to count as evidence (fewer: the cell counts as static)
     min_matches: int = _dynamic_cells("min_matches", "[1, 1000000]")
     # G's width is at least this many times the frame's median match residual, for a front end
-    # that repeats less precisely than ORB (XFeat: 3, configs/xfeat.yaml); 0: sigma_px alone
+    # that repeats less precisely than ORB (XFeat: 2, presets/xfeat.yaml); 0: sigma_px alone
     sigma_median_ratio: float = _dynamic_cells("sigma_median_ratio", "[0, 1000]")
 
 
@@ -296,7 +302,9 @@ class DynamicCellConfig:
 class FeaturesConfig:
     """The point front end."""
 
-    point_frontend: Literal["superpoint", "xfeat", "orb"] = "superpoint"
+    # the learned front end whose weights ship with slslam; its preset (presets/xfeat.yaml) is
+    # applied by config_from_dict / load_config / default_config, not by FeaturesConfig()
+    point_frontend: Literal["superpoint", "xfeat", "orb"] = "xfeat"
     superpoint: SuperPointOptions = field(default_factory=SuperPointOptions)
     xfeat: XFeatOptions = field(default_factory=XFeatOptions)  # weights shipped (Apache-2.0)
     orb: OrbOptions = field(default_factory=OrbOptions)
@@ -687,9 +695,72 @@ def check_config(config: Any, source: Path | None = None, where: str = "config")
         raise ConfigError(source, message)
 
 
-def config_from_dict(data: dict | None, source: Path | None = None) -> Config:
-    """Build and check a :class:`Config` from a (partial) mapping."""
-    config = _build(Config, {} if data is None else data, "config", source)
+#: Each point front end's preset, where it has one (a YAML file of config keys).
+PRESETS_DIR = Path(__file__).resolve().parent / "presets"
+POINT_FRONTENDS: tuple[str, ...] = typing.get_args(
+    typing.get_type_hints(FeaturesConfig)["point_frontend"]
+)
+
+
+def frontend_preset(point_frontend: str) -> dict:
+    """The config keys ``point_frontend`` is tuned with (``presets/<name>.yaml``; {} when it has
+    no preset). A fresh dict on every call."""
+    if point_frontend not in POINT_FRONTENDS:
+        raise ValueError(f"point_frontend must be one of {POINT_FRONTENDS}, got {point_frontend!r}")
+    path = PRESETS_DIR / f"{point_frontend}.yaml"
+    if not path.is_file():
+        return {}
+    data = read_yaml(path, ConfigError, max_bytes=MAX_YAML_BYTES)
+    return data if isinstance(data, dict) else {}
+
+
+def _merged(base: dict, top: dict) -> dict:
+    """``base`` with ``top``'s keys over it, nested mappings merged key by key."""
+    out = dict(base)
+    for key, value in top.items():
+        both = isinstance(value, dict) and isinstance(out.get(key), dict)
+        out[key] = _merged(out[key], value) if both else value
+    return out
+
+
+def _with_preset(data: Any, point_frontend: str | None) -> Any:
+    """``data`` (a config mapping) over its front end's preset; ``point_frontend`` replaces the
+    front end the mapping names. Malformed mappings go through unchanged (``_build`` reports
+    them, naming the key)."""
+    if not isinstance(data, dict):
+        return data
+    features = data.get("features", {})
+    if point_frontend is not None:
+        if not isinstance(features, dict):
+            return data
+        data = _merged(data, {"features": {"point_frontend": point_frontend}})
+        features = data["features"]
+    if not isinstance(features, dict):
+        return data
+    name = features.get("point_frontend", FeaturesConfig.point_frontend)
+    if not isinstance(name, str) or name not in POINT_FRONTENDS:
+        return data
+    return _merged(frontend_preset(name), data)
+
+
+def config_from_dict(
+    data: dict | None,
+    source: Path | None = None,
+    *,
+    point_frontend: str | None = None,
+    preset: bool = True,
+) -> Config:
+    """Build and check a :class:`Config` from a (partial) mapping.
+
+    ``point_frontend`` (when given) replaces the mapping's ``features.point_frontend``; with
+    ``preset`` the chosen front end's preset (:func:`frontend_preset`) fills the keys the mapping
+    does not set. ``preset=False`` keeps the base defaults for them."""
+    data = {} if data is None else data
+    if preset:
+        data = _with_preset(data, point_frontend)
+    elif point_frontend is not None and isinstance(data, dict):
+        data = _merged(data, {"features": {"point_frontend": point_frontend}})
+    config = _build(Config, data, "config", source)
     check_config(config, source)
     try:
         config.features.superpoint.check()
@@ -702,16 +773,26 @@ def config_from_dict(data: dict | None, source: Path | None = None) -> Config:
     return config
 
 
-def load_config(path: str | Path | None) -> Config:
-    """Read a YAML config (None: all defaults)."""
+def default_config(point_frontend: str | None = None) -> Config:
+    """The defaults with the front end's preset: XFeat tuned as ``presets/xfeat.yaml`` says,
+    unless ``point_frontend`` names another front end. What ``slslam run`` uses without
+    ``--config``, and ``slslam.Tracker`` without a config."""
+    return config_from_dict({}, point_frontend=point_frontend)
+
+
+def load_config(
+    path: str | Path | None, *, point_frontend: str | None = None, preset: bool = True
+) -> Config:
+    """Read a YAML config (None: all defaults), with its front end's preset under its keys (see
+    :func:`config_from_dict`)."""
     if path is None:
-        return Config()
+        return config_from_dict({}, point_frontend=point_frontend, preset=preset)
     path = Path(path)
     if not path.is_file():
         raise ConfigError(path, "config file not found")
     # At most 1 MiB, no aliases, C loader: see slslam.yaml_io.
     data = read_yaml(path, ConfigError, max_bytes=MAX_YAML_BYTES)
-    return config_from_dict(data, path)
+    return config_from_dict(data, path, point_frontend=point_frontend, preset=preset)
 
 
 def dump_config(config: Config, path: str | Path, header: str | None = None) -> Path:

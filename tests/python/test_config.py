@@ -9,6 +9,7 @@ from slslam.config import (
     Config,
     ConfigError,
     config_from_dict,
+    default_config,
     dump_config,
     load_config,
     make_point_frontend,
@@ -21,8 +22,11 @@ DEFAULT_YAML = Path(__file__).resolve().parents[2] / "configs" / "default.yaml"
 
 
 def test_documented_defaults_equal_the_code_defaults():
-    assert load_config(DEFAULT_YAML) == Config()
-    assert load_config(None) == Config()
+    """configs/default.yaml holds the base defaults (Config()): it sets every key, so no preset
+    key is left to fill. No file at all gives the default front end's preset (default_config)."""
+    assert load_config(DEFAULT_YAML) == load_config(DEFAULT_YAML, preset=False) == Config()
+    assert load_config(None, preset=False) == Config()
+    assert load_config(None) == default_config() != Config()  # XFeat's preset changes something
 
 
 def test_python_and_cpp_defaults_agree():
@@ -96,14 +100,27 @@ def test_missing_config_file(tmp_path):
 def test_frontend_choice_and_model_path_precedence(tmp_path, monkeypatch, caplog):
     from test_superpoint import tiny_model
 
+    from slslam.features.xfeat import XFeat
+
     monkeypatch.delenv(ENV_MODEL, raising=False)
-    assert isinstance(make_point_frontend(Config().features), Orb)
+    # the default: XFeat, whose weights ship with slslam (no SuperPoint weights needed)
+    assert isinstance(make_point_frontend(Config().features), XFeat)
+    assert "using the ORB front end" not in caplog.text
+    superpoint = default_config("superpoint").features
+    assert isinstance(make_point_frontend(superpoint), Orb)
     assert "using the ORB front end" in caplog.text
     env_model = tiny_model(tmp_path / "env.onnx")
     config_model = tiny_model(tmp_path / "config.onnx")
     monkeypatch.setenv(ENV_MODEL, str(env_model))
-    assert make_point_frontend(Config().features).model_path == env_model
-    config = config_from_dict({"features": {"superpoint": {"model_path": str(config_model)}}})
+    assert make_point_frontend(superpoint).model_path == env_model
+    config = config_from_dict(
+        {
+            "features": {
+                "point_frontend": "superpoint",
+                "superpoint": {"model_path": str(config_model)},
+            }
+        }
+    )
     frontend = make_point_frontend(config.features)
     assert isinstance(frontend, SuperPoint) and frontend.model_path == config_model
     orb = config_from_dict({"features": {"point_frontend": "orb"}})
@@ -127,14 +144,16 @@ def test_dynamic_cell_settings_reach_the_tracker():
     assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)
 
 
-def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_filter():
-    """configs/xfeat.yaml: XFeat with the filter's width following the frame's residuals; every
-    other key at its default."""
+def test_xfeat_is_the_default_front_end_with_its_preset():
+    """XFeat is the default point front end, with its preset (presets/xfeat.yaml) under the
+    config's keys: the filter's width following the frame's residuals, the 8-bit network on the
+    left image with the row search, keyframes at most every 6 frames, every frame's lines,
+    projected frames; every other key at its default."""
     from slslam.datasets.euroc import RectifiedStereoCamera
     from slslam.tracking.tracker import _core_options
 
-    config = load_config(DEFAULT_YAML.parent / "xfeat.yaml")
-    assert config.features.point_frontend == "xfeat"
+    config = default_config()
+    assert config.features.point_frontend == "xfeat" == Config().features.point_frontend
     assert config.features.dynamic_cells.sigma_median_ratio == 2.0
     assert config.features.xfeat.precision == "int8"
     assert config.features.xfeat.intra_op_threads == 2
@@ -147,7 +166,6 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
     assert _core_options(camera, config).stereo.row_search
     rest = dataclasses.replace(
         config.features,
-        point_frontend=Config().features.point_frontend,
         dynamic_cells=Config().features.dynamic_cells,
         xfeat=Config().features.xfeat,
     )
@@ -166,6 +184,53 @@ def test_xfeat_preset_selects_xfeat_the_row_search_and_widens_the_dynamic_cell_f
         projection_cell_px=Config().tracking.projection_cell_px,
     )
     assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
+
+
+def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
+    """A key the config sets wins over the preset; naming XFeat changes nothing; ORB and
+    SuperPoint (no preset) run with the base defaults, also when chosen by --orb's
+    point_frontend over a file that names XFeat; every preset key changes its default."""
+    from slslam.config import frontend_preset
+
+    path = tmp_path / "c.yaml"
+    path.write_text("tracking:\n  keyframe_min_frames: 3\n  use_lines: false\n")
+    config = load_config(path)
+    assert config.tracking.keyframe_min_frames == 3 and not config.tracking.use_lines
+    assert config.tracking.stereo_row_search  # the rest of the preset still applies
+    assert load_config(path, preset=False).tracking.keyframe_min_frames == 3
+    assert not load_config(path, preset=False).tracking.stereo_row_search
+    assert config_from_dict({"features": {"point_frontend": "xfeat"}}) == default_config()
+    for name in ("orb", "superpoint"):
+        assert frontend_preset(name) == {}
+        chosen = config_from_dict({"features": {"point_frontend": name}})
+        assert chosen == dataclasses.replace(
+            Config(), features=dataclasses.replace(Config().features, point_frontend=name)
+        )
+        assert default_config(name) == chosen
+    path.write_text("features:\n  point_frontend: xfeat\n")
+    assert load_config(path, point_frontend="orb") == default_config("orb")
+    assert not default_config("orb").tracking.stereo_row_search
+
+    def leaves(tree: dict, prefix: str = ""):
+        for key, value in tree.items():
+            if isinstance(value, dict):
+                yield from leaves(value, f"{prefix}{key}.")
+            else:
+                yield f"{prefix}{key}", value
+
+    def lookup(config: Config, dotted: str):
+        value = config
+        for part in dotted.split("."):
+            value = getattr(value, part)
+        return value
+
+    preset = dict(leaves(frontend_preset("xfeat")))
+    assert len(preset) >= 10
+    for key, value in preset.items():
+        assert lookup(default_config(), key) == value, key
+        assert lookup(Config(), key) != value, f"{key}: the preset repeats the default"
+    with pytest.raises(ValueError, match="point_frontend"):
+        frontend_preset("../default")
 
 
 def test_every_mirrored_default_equals_the_cpp_default():

@@ -24,7 +24,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from slslam.cli import main
-from slslam.config import Config, ConfigError, check_config, load_config, option_range
+from slslam.config import (
+    Config,
+    ConfigError,
+    check_config,
+    default_config,
+    load_config,
+    option_range,
+)
 from slslam.datasets import CameraCalibration
 from slslam.datasets.trajectory_io import read_trajectory
 from slslam.errors import CalibrationError, InputError, TrajectoryFileError
@@ -300,7 +307,7 @@ def test_binary_garbage_configs(tmp_path, data):
     except ConfigError as exc:
         assert_one_line_error(exc, path)
     else:  # garbage that happens to be YAML holding nothing: the defaults
-        assert config == Config()
+        assert config == default_config()
 
 
 @SETTINGS
@@ -314,7 +321,7 @@ def test_text_garbage_configs(tmp_path, text):
     except ConfigError as exc:
         assert_one_line_error(exc, path)
     else:
-        assert config == Config()
+        assert config == default_config()
 
 
 # ----------------------------------------------------------------------------------------------

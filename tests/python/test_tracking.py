@@ -817,7 +817,7 @@ def test_projected_keypoints_track_between_detections_the_same_way_in_a_pipeline
     frames = [(f.left, f.right, f.t_ns * 1e-9) for f in sequence]
     base = config("orb", lines=True)
     assert base.tracking.projected_max_frames == 0  # off by default
-    # Keyframes at most every 6 frames (as configs/xfeat.yaml): with ORB's default of 2 the
+    # Keyframes at most every 6 frames (as XFeat's preset): with ORB's default of 2 the
     # bright loop makes one every 2-3 frames, and the frame after a keyframe is always detected,
     # which leaves nothing to project.
     base = dataclasses.replace(

@@ -98,7 +98,7 @@ def test_any_size_is_padded_and_keypoints_stay_inside(xfeat):
 
 
 def test_threads_that_sleep_give_the_same_keypoints(xfeat):
-    """intra_op_spinning False (configs/xfeat.yaml) reaches onnxruntime's session, and the
+    """intra_op_spinning False (XFeat's preset) reaches onnxruntime's session, and the
     network's outputs do not change with it or with the thread count."""
     spin_key = "session.intra_op.allow_spinning"
     sleeping = XFeat(XFeatOptions(intra_op_threads=2, intra_op_spinning=False))
@@ -249,7 +249,7 @@ def test_bad_model_files_are_named(tmp_path):
 def test_config_selects_xfeat_and_checks_its_ranges():
     config = config_from_dict({"features": {"point_frontend": "xfeat"}})
     assert isinstance(make_point_frontend(config.features), XFeat)
-    assert FeaturesConfig().point_frontend != "xfeat"  # not the default until measured
+    assert FeaturesConfig().point_frontend == "xfeat"  # the default (benchmarks/README.md)
     with pytest.raises(ConfigError, match="detection_threshold"):
         config_from_dict({"features": {"xfeat": {"detection_threshold": 1.5}}})
     with pytest.raises(ConfigError, match="max_keypoints"):

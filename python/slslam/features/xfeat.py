@@ -34,7 +34,7 @@ against 0.039 m with the heatmap value (benchmarks/README.md).
 Keypoints are whole pixels. The keypoint head sees one 8 x 8 cell at a time, so a keypoint repeats
 exactly under shifts by whole cells and within about 1.3 px rms along a shift that moves the
 content off the cell grid (EuRoC image, 3-13 px shifts; tests/python/test_xfeat.py). With
-``subpixel`` (set by configs/xfeat.yaml) each is moved to the vertex of a Gaussian fitted to the
+``subpixel`` (set by XFeat's preset) each is moved to the vertex of a Gaussian fitted to the
 heatmap around it, per axis (``refine_subpixel``).
 """
 

@@ -48,7 +48,7 @@ import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
 from scipy.spatial.transform import Rotation
 
-from slslam.config import Config, check_config, dump_config
+from slslam.config import Config, check_config, default_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
 from slslam.datasets.rosbag import is_rosbag
 from slslam.errors import DatasetError, InputError
@@ -412,7 +412,7 @@ def run_sequence(
             ``EurocSequence``, a ``slslam.datasets.rosbag.RosbagSequence`` or anything with
             ``camera``, ``len``, ``sequence[i]`` -> ``StereoFrame`` and ``groundtruth_path``.
         out_dir: output folder, created when missing.
-        config: configuration; defaults when None.
+        config: configuration; ``default_config()`` when None (XFeat with its preset).
         max_frames: track only the first N frames.
         progress: show progress (a live bar on a terminal, a line every 10 s in a log).
         frontend: a point front end to use instead of the configured one.
@@ -425,7 +425,7 @@ def run_sequence(
         load_map: start from a saved map file (the first frames relocalise in it).
         localise_only: with ``load_map``, track without changing the map.
     """
-    config = config or Config()
+    config = config or default_config()
     check_config(config)
     sequence = open_dataset(dataset) if isinstance(dataset, str | os.PathLike) else dataset
     gt = _groundtruth(sequence, groundtruth)  # a bad ground truth fails before any tracking

@@ -46,6 +46,7 @@ from slslam.config import (
     LOOP_CLOSING_TO_CORE,
     TRACKING_TO_CORE,
     Config,
+    default_config,
     make_point_frontend,
 )
 from slslam.datasets.euroc import RectifiedStereoCamera
@@ -374,7 +375,8 @@ class Tracker:
 
     Args:
         camera: rectified stereo intrinsics and baseline (``EurocSequence.camera``).
-        config: configuration (``slslam.load_config``); defaults when None.
+        config: configuration (``slslam.load_config``); ``slslam.default_config()`` (XFeat
+            with its preset) when None.
         frontend: a point front end with ``detect(image) -> Keypoints``; by default the one the
             config names (SuperPoint, or ORB when no SuperPoint weights are configured).
     """
@@ -387,7 +389,7 @@ class Tracker:
         load_map: str | Path | None = None,
         localise_only: bool = False,
     ) -> None:
-        self.config = config or Config()
+        self.config = config or default_config()
         self.camera = camera
         self.frontend = (
             frontend if frontend is not None else make_point_frontend(self.config.features)
