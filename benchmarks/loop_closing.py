@@ -164,6 +164,7 @@ def main() -> None:
                 again = run_sequence(
                     sequence,
                     args.out / name / "localise_only",
+                    with_loops(True, args.threaded, overrides),  # the front end that made the map
                     progress=False,
                     load_map=save,
                     localise_only=True,

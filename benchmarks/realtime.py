@@ -29,11 +29,11 @@ A second table says where the keyframes' time goes (pipelined pass): keyframes m
 mapping's time per keyframe, the local BA's solve within it, and the solve's trust-region steps
 per keyframe with those rejected (``MapStats.local_ba_*``).
 
-XFeat configurations start from its preset (python/slslam/presets/xfeat.yaml), with --set on
-top. Besides the default five, ``*_row`` configurations run the front end on the left image only
-with the row search on the right (``tracking.stereo_row_search``) and ``xfeat_lines_both`` the
-XFeat preset with the network on both images (descriptor stereo matching), for side-by-side
-ratios.
+XFeat and ORB configurations start from their presets (python/slslam/presets/), with --set on
+top; both run their front end on the left image only, with the row search on the right
+(``tracking.stereo_row_search``). Besides the default five, ``superpoint_lines_row`` runs
+SuperPoint that way, and ``*_both`` configurations run ORB or XFeat on both images (descriptor
+stereo matching), for side-by-side ratios.
 
 Accuracy: ATE RMSE of the frames with an estimated pose (evo, SE3 alignment) against the
 simulator's ground truth, the tracked ratio and the keyframes. Learned configurations are
@@ -88,10 +88,12 @@ SHARED_SUPERPOINT = (
 ROW_SEARCH = {"tracking": {"stereo_row_search": True}}
 BOTH_IMAGES = {"tracking": {"stereo_row_search": False}}
 CONFIGS = {  # name: (label, point front end, lines, settings under --set)
+    # ORB's preset (python/slslam/presets/orb.yaml): left image only, the row search on the right
     "orb": ("ORB points", "orb", False, {}),
     "orb_lines": ("ORB + lines", "orb", True, {}),
-    "orb_row": ("ORB points, left + row search", "orb", False, ROW_SEARCH),
-    "orb_lines_row": ("ORB + lines, left + row search", "orb", True, ROW_SEARCH),
+    # before ORB's preset: ORB on both images, descriptor stereo matching
+    "orb_both": ("ORB points, both images", "orb", False, BOTH_IMAGES),
+    "orb_lines_both": ("ORB + lines, both images", "orb", True, BOTH_IMAGES),
     "xfeat": ("XFeat points", "xfeat", False, {}),
     "xfeat_lines": ("XFeat + lines", "xfeat", True, {}),
     # the preset before the row search: the network on both images, descriptor stereo matching

@@ -12,8 +12,8 @@ turn on the spot at t = 10 s (junction_spin, when the simulator offers ``spin_at
 for by name only: the junction at light 0.5 with a 1 s blackout in the middle
 (junction_blackout; ``--frames 160 --set tracking.imu.enabled=false`` is the camera-only pytest's
 run, ``--seeds 0 1 ... 11`` how often it comes back into the one map and where).
-Configurations: ORB + lines with the defaults (orb_lines); XFeat + lines with its preset
-(python/slslam/presets/xfeat.yaml; xfeat_lines); ORB + lines with the low-texture fallback off,
+Configurations, each with its front end's preset (python/slslam/presets/): ORB + lines
+(orb_lines); XFeat + lines (xfeat_lines); ORB + lines with the low-texture fallback off,
 i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points only (orb).
 
 Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
@@ -68,7 +68,7 @@ CONFIGS = {  # name: (label, point front end, low-texture fallback, lines)
     "orb_lines": ("ORB + lines", "orb", True, True),
     "orb_lines_plain": ("ORB + lines, plain ORB detection", "orb", False, True),
     "orb": ("ORB points", "orb", True, False),
-    "xfeat_lines": ("XFeat + lines (its preset)", "xfeat", True, True),
+    "xfeat_lines": ("XFeat + lines", "xfeat", True, True),
 }
 ESTIMATED = ("OK", "RELOCALISED", "NEW_MAP")
 

@@ -10,10 +10,10 @@ errors that name the file and the key, so a typo never passes silently.
         model_path: /models/superpoint_v1.onnx   # overrides $SLSLAM_SUPERPOINT_MODEL
 
 Front-end presets: a point front end may come with the settings it tracks best with
-(``python/slslam/presets/<front end>.yaml``; XFeat, the default, has one). ``config_from_dict``,
-``load_config`` and ``default_config`` apply the preset of the config's front end under the
-config's own keys, so a key the config sets wins. ``Config()`` itself holds the base defaults
-without any preset (the values ``configs/default.yaml`` documents).
+(``python/slslam/presets/<front end>.yaml``: XFeat, the default, and ORB have one).
+``config_from_dict``, ``load_config`` and ``default_config`` apply the preset of the config's
+front end under the config's own keys, so a key the config sets wins. ``Config()`` itself holds
+the base defaults without any preset (the values ``configs/default.yaml`` documents).
 """
 
 from __future__ import annotations

@@ -187,9 +187,10 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
 
 
 def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
-    """A key the config sets wins over the preset; naming XFeat changes nothing; ORB and
-    SuperPoint (no preset) run with the base defaults, also when chosen by --orb's
-    point_frontend over a file that names XFeat; every preset key changes its default."""
+    """A key the config sets wins over the preset; naming XFeat changes nothing; ORB's preset
+    (the row search) applies also when ORB is chosen by --orb's point_frontend over a file that
+    names XFeat, without XFeat's; SuperPoint (no preset) runs with the base defaults; every
+    preset key changes its default."""
     from slslam.config import frontend_preset
 
     path = tmp_path / "c.yaml"
@@ -200,16 +201,20 @@ def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
     assert load_config(path, preset=False).tracking.keyframe_min_frames == 3
     assert not load_config(path, preset=False).tracking.stereo_row_search
     assert config_from_dict({"features": {"point_frontend": "xfeat"}}) == default_config()
-    for name in ("orb", "superpoint"):
-        assert frontend_preset(name) == {}
-        chosen = config_from_dict({"features": {"point_frontend": name}})
-        assert chosen == dataclasses.replace(
-            Config(), features=dataclasses.replace(Config().features, point_frontend=name)
-        )
-        assert default_config(name) == chosen
+    assert frontend_preset("superpoint") == {}
+    superpoint = config_from_dict({"features": {"point_frontend": "superpoint"}})
+    assert superpoint == dataclasses.replace(
+        Config(), features=dataclasses.replace(Config().features, point_frontend="superpoint")
+    )
+    assert default_config("superpoint") == superpoint
+    orb = config_from_dict({"features": {"point_frontend": "orb"}})
+    assert orb == default_config("orb")
+    assert orb.tracking == dataclasses.replace(Config().tracking, stereo_row_search=True)
+    assert orb.features == dataclasses.replace(Config().features, point_frontend="orb")
     path.write_text("features:\n  point_frontend: xfeat\n")
-    assert load_config(path, point_frontend="orb") == default_config("orb")
-    assert not default_config("orb").tracking.stereo_row_search
+    assert load_config(path, point_frontend="orb") == orb
+    path.write_text("features:\n  point_frontend: orb\ntracking:\n  stereo_row_search: false\n")
+    assert not load_config(path).tracking.stereo_row_search  # the file's key wins
 
     def leaves(tree: dict, prefix: str = ""):
         for key, value in tree.items():
@@ -224,11 +229,12 @@ def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
             value = getattr(value, part)
         return value
 
-    preset = dict(leaves(frontend_preset("xfeat")))
-    assert len(preset) >= 10
-    for key, value in preset.items():
-        assert lookup(default_config(), key) == value, key
-        assert lookup(Config(), key) != value, f"{key}: the preset repeats the default"
+    for name, least in (("xfeat", 10), ("orb", 1)):
+        preset = dict(leaves(frontend_preset(name)))
+        assert len(preset) >= least
+        for key, value in preset.items():
+            assert lookup(default_config(name), key) == value, key
+            assert lookup(Config(), key) != value, f"{key}: the preset repeats the default"
     with pytest.raises(ValueError, match="point_frontend"):
         frontend_preset("../default")
 

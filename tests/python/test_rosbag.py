@@ -4,7 +4,6 @@ gives the same trajectory on the bag as on the ASL folder, through the API and `
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import cv2
@@ -13,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from slslam.cli import app
-from slslam.config import Config
+from slslam.config import Config, default_config
 from slslam.datasets import EurocSequence
 from slslam.datasets.rosbag import (
     RosbagSequence,
@@ -153,10 +152,8 @@ def calibration(asl: Path) -> list[Path]:
 
 
 def orb_config() -> Config:
-    base = Config()
-    return dataclasses.replace(
-        base, features=dataclasses.replace(base.features, point_frontend="orb")
-    )
+    """ORB with its preset, as a config file naming ORB gives it (the CLI test below)."""
+    return default_config("orb")
 
 
 @pytest.fixture(scope="module")
