@@ -706,6 +706,34 @@ def vocab_info_command(
     )
 
 
+@app.command("config")
+def config_command(
+    config: Annotated[
+        Path | None,
+        typer.Option(help="YAML config with the keys it changes (as `slslam run --config`)."),
+    ] = None,
+    orb: Annotated[
+        bool, typer.Option("--orb", help="ORB with its preset (as `slslam run --orb`).")
+    ] = False,
+    out: Annotated[
+        Path | None, typer.Option(help="Write the YAML to this file instead of printing it.")
+    ] = None,
+) -> None:
+    """Print the complete configuration `slslam run` would use: every key, with the point front
+    end's preset (python/slslam/presets/) under the config's own keys. The output loads with
+    --config as it is."""
+    from slslam.config import config_to_yaml, dump_config, load_config
+
+    cfg = load_config(config, point_frontend="orb" if orb else None)
+    options = (f" --config {config}" if config is not None else "") + (" --orb" if orb else "")
+    header = f"slslam {__version__}: the configuration of `slslam run{options}`"
+    if out is not None:
+        dump_config(cfg, out, header=header)
+        Console().print(f"wrote {out}")
+    else:
+        sys.stdout.write(config_to_yaml(cfg, header))
+
+
 @app.command("version")
 def version_command() -> None:
     """Print the slslam version and the C++ core it loads."""

@@ -800,12 +800,16 @@ def dump_config(config: Config, path: str | Path, header: str | None = None) -> 
     ``header`` lines go first as YAML comments (the file still loads with ``load_config``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    data = dataclasses.asdict(config)
-    text = yaml.safe_dump(_plain(data), sort_keys=False)
+    path.write_text(config_to_yaml(config, header), encoding="utf-8")
+    return path
+
+
+def config_to_yaml(config: Config, header: str | None = None) -> str:
+    """The complete configuration as YAML text (what ``dump_config`` writes)."""
+    text = yaml.safe_dump(_plain(dataclasses.asdict(config)), sort_keys=False)
     if header:
         text = "".join(f"# {line}\n" for line in header.splitlines()) + text
-    path.write_text(text, encoding="utf-8")
-    return path
+    return text
 
 
 def _plain(value: Any) -> Any:

@@ -17,7 +17,7 @@ def test_help_lists_every_subcommand():
     result = subprocess.run(
         [sys.executable, "-m", "slslam", "--help"], capture_output=True, text=True, check=True
     )
-    for command in ("eval", "info", "rectify", "demo", "version"):
+    for command in ("eval", "info", "rectify", "demo", "config", "version"):
         assert command in result.stdout
 
 
@@ -52,3 +52,26 @@ def test_bad_dataset_paths_give_one_error_line(args, capsys):
 
 def test_usage_error_exit_code():
     assert main(["eval"]) == 2
+
+
+def test_config_prints_what_run_uses_and_loads_back(tmp_path, capsys):
+    """`slslam config` prints every key with the front end's preset under the file's keys; its
+    output loads as a config giving the same configuration (--orb: ORB's preset)."""
+    from slslam.config import default_config, load_config
+
+    assert main(["config"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("# slslam ") and "point_frontend: xfeat" in text
+    printed = tmp_path / "printed.yaml"
+    printed.write_text(text)
+    assert load_config(printed) == default_config()
+    mine = tmp_path / "mine.yaml"
+    mine.write_text("tracking:\n  keyframe_min_frames: 4\n")
+    out = tmp_path / "effective.yaml"
+    assert main(["config", "--config", str(mine), "--orb", "--out", str(out)]) == 0
+    effective = load_config(out)
+    assert effective.features.point_frontend == "orb"
+    assert effective.tracking.keyframe_min_frames == 4  # the file's key
+    assert effective.tracking.stereo_row_search  # ORB's preset
+    assert effective == load_config(mine, point_frontend="orb")
+    assert main(["config", "--config", str(tmp_path / "missing.yaml")]) == 2
