@@ -147,12 +147,3 @@ def parse_overrides(items: list[str]) -> dict:
             node = node.setdefault(part, {})
         node[leaf] = yaml.safe_load(value)
     return tree
-
-
-def merged(base: dict, top: dict) -> dict:
-    """``base`` with ``top``'s keys over it, nested dicts merged key by key."""
-    out = dict(base)
-    for key, value in top.items():
-        both = isinstance(value, dict) and isinstance(out.get(key), dict)
-        out[key] = merged(out[key], value) if both else value
-    return out

@@ -61,7 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slslam.config import Config, config_from_dict
+from slslam.config import Config, config_from_dict, merged
 from slslam.datasets import EurocSequence
 from slslam.eval.report import evaluate
 from slslam.features.superpoint import ENV_MODEL
@@ -72,7 +72,6 @@ from slslam.tracking.run import tracked_trajectory
 from common import (
     RESULTS_DIR,
     machine_line,
-    merged,
     parse_overrides,
     speed_reference_ms,
     write_results,
@@ -144,7 +143,7 @@ def config_for(
     # the front end's preset (XFeat's: python/slslam/presets/xfeat.yaml) under the overrides
     base = config_from_dict(merged(settings, overrides), point_frontend=frontend)
     superpoint = dataclasses.replace(base.features.superpoint, model_path=model)
-    features = dataclasses.replace(base.features, point_frontend=frontend, superpoint=superpoint)
+    features = dataclasses.replace(base.features, superpoint=superpoint)
     tracking = dataclasses.replace(base.tracking, use_lines=lines, sequential=not mapping_thread)
     return dataclasses.replace(base, features=features, tracking=tracking)
 

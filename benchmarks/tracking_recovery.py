@@ -96,9 +96,7 @@ def config_for(name: str, overrides: dict | None = None) -> Config:
     _, frontend, fallback, lines = CONFIGS[name]
     # the front end's preset (XFeat's: python/slslam/presets/xfeat.yaml) under the overrides
     base = config_from_dict(overrides, point_frontend=frontend)
-    features = dataclasses.replace(
-        base.features, point_frontend=frontend, low_texture_fallback=fallback
-    )
+    features = dataclasses.replace(base.features, low_texture_fallback=fallback)
     tracking = dataclasses.replace(base.tracking, use_lines=lines)
     return dataclasses.replace(base, features=features, tracking=tracking)
 

@@ -714,33 +714,35 @@ def frontend_preset(point_frontend: str) -> dict:
     return data if isinstance(data, dict) else {}
 
 
-def _merged(base: dict, top: dict) -> dict:
-    """``base`` with ``top``'s keys over it, nested mappings merged key by key."""
+def merged(base: dict, top: dict) -> dict:
+    """``base`` with ``top``'s keys over it, nested mappings merged key by key (config mappings;
+    the benchmarks merge their --set overrides with it too)."""
     out = dict(base)
     for key, value in top.items():
         both = isinstance(value, dict) and isinstance(out.get(key), dict)
-        out[key] = _merged(out[key], value) if both else value
+        out[key] = merged(out[key], value) if both else value
     return out
 
 
-def _with_preset(data: Any, point_frontend: str | None) -> Any:
-    """``data`` (a config mapping) over its front end's preset; ``point_frontend`` replaces the
-    front end the mapping names. Malformed mappings go through unchanged (``_build`` reports
-    them, naming the key)."""
+def _features_mapping(data: Any) -> dict | None:
+    """The ``features`` mapping of a config mapping ({} when absent), None when malformed
+    (``_build`` reports it, naming the key)."""
     if not isinstance(data, dict):
-        return data
+        return None
     features = data.get("features", {})
-    if point_frontend is not None:
-        if not isinstance(features, dict):
-            return data
-        data = _merged(data, {"features": {"point_frontend": point_frontend}})
-        features = data["features"]
-    if not isinstance(features, dict):
+    return features if isinstance(features, dict) else None
+
+
+def _with_preset(data: Any) -> Any:
+    """``data`` (a config mapping) over the preset of the front end it names (the default
+    front end when it names none). Malformed mappings go through unchanged."""
+    features = _features_mapping(data)
+    if features is None:
         return data
     name = features.get("point_frontend", FeaturesConfig.point_frontend)
     if not isinstance(name, str) or name not in POINT_FRONTENDS:
         return data
-    return _merged(frontend_preset(name), data)
+    return merged(frontend_preset(name), data)
 
 
 def config_from_dict(
@@ -756,10 +758,10 @@ def config_from_dict(
     ``preset`` the chosen front end's preset (:func:`frontend_preset`) fills the keys the mapping
     does not set. ``preset=False`` keeps the base defaults for them."""
     data = {} if data is None else data
+    if point_frontend is not None and _features_mapping(data) is not None:
+        data = merged(data, {"features": {"point_frontend": point_frontend}})
     if preset:
-        data = _with_preset(data, point_frontend)
-    elif point_frontend is not None and isinstance(data, dict):
-        data = _merged(data, {"features": {"point_frontend": point_frontend}})
+        data = _with_preset(data)
     config = _build(Config, data, "config", source)
     check_config(config, source)
     try:
