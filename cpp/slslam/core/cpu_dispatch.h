@@ -10,7 +10,11 @@
     !defined(SLSLAM_SANITIZED)
 #define SLSLAM_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
 #define SLSLAM_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+// Loops over long float rows (the stereo row search's costs): AVX-512's 16 lanes where the CPU
+// has them.
+#define SLSLAM_AVX512_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define SLSLAM_POPCNT_CLONES
 #define SLSLAM_AVX2_CLONES
+#define SLSLAM_AVX512_CLONES
 #endif

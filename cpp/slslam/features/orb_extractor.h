@@ -44,7 +44,8 @@ struct OrbOptions {
 
 // Detects ORB keypoints on an 8-bit gray image. Descriptors are 32-byte rows (CV_8U); scores are
 // FAST scores (adaptive) or Harris responses (plain). An image without texture yields zero
-// keypoints, not an error.
+// keypoints, not an error. Adaptive extraction runs the pyramid levels on OpenCV's threads
+// (cv::setNumThreads); the result does not depend on their number.
 Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options = {});
 
 // Standard deviation of white noise in an 8-bit gray image [gray levels], by Immerkaer's

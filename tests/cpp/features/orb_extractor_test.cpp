@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -49,6 +50,26 @@ TEST(OrbExtractor, LowContrastHalfStillGetsKeypoints) {
   EXPECT_GT(dark_after, 4 * std::max(dark_before, 25));
   // The bright half keeps a fair share too.
   EXPECT_GT(CountIn(after, cv::Rect(0, 0, 376, 480)), 250);
+}
+
+TEST(OrbExtractor, OneThreadGivesTheKeypointsAndDescriptorsOfSeveral) {
+  // The pyramid levels are extracted in parallel and joined in level order.
+  cv::Mat image = Texture(752, 480, 100, 90, 3);
+  Texture(376, 480, 40, 12, 4).copyTo(image(cv::Rect(376, 0, 376, 480)));
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  const Keypoints serial = ExtractOrb(image);
+  cv::setNumThreads(std::max(threads, 4));
+  const Keypoints parallel = ExtractOrb(image);
+  cv::setNumThreads(threads);
+  ASSERT_GT(serial.size(), 500);
+  ASSERT_EQ(serial.size(), parallel.size());
+  EXPECT_TRUE(serial.uv == parallel.uv);
+  EXPECT_TRUE(serial.octave == parallel.octave);
+  EXPECT_EQ(cv::norm(serial.descriptors, parallel.descriptors, cv::NORM_HAMMING), 0.0);
+  int coarse = 0;  // keypoints from every part of the pyramid
+  for (int i = 0; i < serial.size(); ++i) coarse += serial.octave(i) >= 4;
+  EXPECT_GT(coarse, 0);
 }
 
 TEST(OrbExtractor, FlatImageGivesNoKeypoints) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "slslam/features/orb_extractor.h"
@@ -208,6 +209,32 @@ TEST(StereoFrameTest, RowSearchFindsTheDisparityWithoutRightKeypoints) {
     }
     EXPECT_LT(worst, 0.1) << disparity;
   }
+}
+
+TEST(StereoFrameTest, RowSearchAndRefinementGiveTheSameColumnsOnOneThreadAsOnSeveral) {
+  // Both split their keypoints over OpenCV's threads; each keypoint's result is its own.
+  const StereoRig rig = Rig();
+  StereoMatchOptions options;
+  options.row_search = true;
+  const auto [left, right] = ShiftedPair(23.4);
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  StereoFrame serial = UnmatchedGridFrame(23.4);
+  MatchStereoByRowSearch(left, right, rig, options, &serial);
+  RefineStereoSubpixel(left, right, rig, options, &serial);
+  cv::setNumThreads(std::max(threads, 4));  // more stripes than cores still splits the work
+  StereoFrame parallel = UnmatchedGridFrame(23.4);
+  MatchStereoByRowSearch(left, right, rig, options, &parallel);
+  RefineStereoSubpixel(left, right, rig, options, &parallel);
+  cv::setNumThreads(threads);
+  ASSERT_EQ(serial.u_right.size(), parallel.u_right.size());
+  int matched = 0;
+  for (size_t i = 0; i < serial.u_right.size(); ++i) {
+    EXPECT_EQ(serial.u_right[i], parallel.u_right[i]) << i;
+    EXPECT_EQ(serial.depth[i], parallel.depth[i]) << i;
+    matched += serial.u_right[i] >= 0.0;
+  }
+  EXPECT_GT(matched, 0);
 }
 
 TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
