@@ -1,10 +1,10 @@
 #include "slslam/features/descriptor_matcher.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 #include <opencv2/features2d.hpp>
@@ -121,14 +121,67 @@ Eigen::VectorXi GuidedMatch(
           "descriptors must be CV_8U (binary) or CV_32F (float)");
 
   // Bucket the keypoints; a window of radius r around a point lies in the 3 x 3 buckets around it.
+  // The buckets are one flat grid over the keypoints' cells (counted, then filled: the keypoints
+  // of a bucket in index order, as pushing them one by one gave), not a hash map of vectors: its
+  // allocations were most of this function's time (benchmarks/README.md, 2026-11-29 i).
   const float cell = options.radius_px;
-  std::unordered_map<int64_t, std::vector<int>> buckets;
-  auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffff); };
-  for (Eigen::Index j = 0; j < keypoints.rows(); ++j) {
-    const int64_t cx = static_cast<int64_t>(std::floor(keypoints(j, 0) / cell));
-    const int64_t cy = static_cast<int64_t>(std::floor(keypoints(j, 1) / cell));
-    buckets[key(cx, cy)].push_back(static_cast<int>(j));
+  const Eigen::Index n_keypoints = keypoints.rows();
+  std::vector<int64_t> cell_x(n_keypoints), cell_y(n_keypoints);
+  int64_t min_cx = std::numeric_limits<int64_t>::max();
+  int64_t max_cx = std::numeric_limits<int64_t>::min();
+  int64_t min_cy = min_cx, max_cy = max_cx;
+  for (Eigen::Index j = 0; j < n_keypoints; ++j) {
+    cell_x[j] = static_cast<int64_t>(std::floor(keypoints(j, 0) / cell));
+    cell_y[j] = static_cast<int64_t>(std::floor(keypoints(j, 1) / cell));
+    min_cx = std::min(min_cx, cell_x[j]);
+    max_cx = std::max(max_cx, cell_x[j]);
+    min_cy = std::min(min_cy, cell_y[j]);
+    max_cy = std::max(max_cy, cell_y[j]);
   }
+  const int64_t grid_w = max_cx - min_cx + 1, grid_h = max_cy - min_cy + 1;
+  // (keypoints far outside the image could make a grid larger than the keypoints: a sparse map
+  // of the occupied cells then, sorted, as the hash map was)
+  const int64_t dense_cells = 4 * static_cast<int64_t>(n_keypoints) + 4096;
+  const bool dense = grid_w > 0 && grid_h > 0 && grid_w <= dense_cells &&
+                     grid_h <= dense_cells && grid_w * grid_h <= dense_cells;
+  std::vector<int> start, members(n_keypoints);
+  std::vector<int64_t> occupied;  // sparse: the occupied cells' keys, sorted
+  const auto dense_key = [&](int64_t cx, int64_t cy) {
+    return (cy - min_cy) * grid_w + (cx - min_cx);
+  };
+  const auto sparse_key = [](int64_t cx, int64_t cy) {
+    return static_cast<int64_t>(static_cast<uint64_t>(cx) << 32) ^ (cy & 0xffffffff);
+  };
+  std::vector<int64_t> key_of(n_keypoints);
+  if (dense) {
+    for (Eigen::Index j = 0; j < n_keypoints; ++j) key_of[j] = dense_key(cell_x[j], cell_y[j]);
+    start.assign(static_cast<size_t>(grid_w * grid_h) + 1, 0);
+  } else {
+    for (Eigen::Index j = 0; j < n_keypoints; ++j) key_of[j] = sparse_key(cell_x[j], cell_y[j]);
+    occupied = key_of;
+    std::sort(occupied.begin(), occupied.end());
+    occupied.erase(std::unique(occupied.begin(), occupied.end()), occupied.end());
+    for (int64_t& k : key_of) {
+      k = std::lower_bound(occupied.begin(), occupied.end(), k) - occupied.begin();
+    }
+    start.assign(occupied.size() + 1, 0);
+  }
+  for (Eigen::Index j = 0; j < n_keypoints; ++j) ++start[static_cast<size_t>(key_of[j]) + 1];
+  for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (Eigen::Index j = 0; j < n_keypoints; ++j) {
+      members[fill[static_cast<size_t>(key_of[j])]++] = static_cast<int>(j);
+    }
+  }
+  // The bucket of cell (cx, cy): its slot, or -1 when no keypoint lies in it.
+  const auto bucket = [&](int64_t cx, int64_t cy) -> int64_t {
+    if (cx < min_cx || cx > max_cx || cy < min_cy || cy > max_cy) return -1;
+    if (dense) return dense_key(cx, cy);
+    const int64_t key = sparse_key(cx, cy);
+    const auto it = std::lower_bound(occupied.begin(), occupied.end(), key);
+    return it != occupied.end() && *it == key ? it - occupied.begin() : -1;
+  };
   OneToOne one_to_one(static_cast<int>(keypoints.rows()));
   const float r2 = options.radius_px * options.radius_px;
   for (Eigen::Index i = 0; i < predicted.rows(); ++i) {
@@ -139,9 +192,10 @@ Eigen::VectorXi GuidedMatch(
     BestTwo best(std::numeric_limits<float>::infinity());
     for (int64_t dy = -1; dy <= 1; ++dy) {
       for (int64_t dx = -1; dx <= 1; ++dx) {
-        const auto it = buckets.find(key(cx + dx, cy + dy));
-        if (it == buckets.end()) continue;
-        for (int j : it->second) {
+        const int64_t b = bucket(cx + dx, cy + dy);
+        if (b < 0) continue;
+        for (int m = start[static_cast<size_t>(b)]; m < start[static_cast<size_t>(b) + 1]; ++m) {
+          const int j = members[static_cast<size_t>(m)];
           const float du = keypoints(j, 0) - u, dv = keypoints(j, 1) - v;
           if (du * du + dv * dv > r2) continue;
           best.Add(

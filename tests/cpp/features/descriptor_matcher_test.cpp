@@ -114,6 +114,39 @@ TEST(GuidedMatch, FindsTheNearbyKeypointAndIgnoresFarTwins) {
   EXPECT_EQ(GuidedMatch(predicted, query, keypoints, train, tight)(0), -1);
 }
 
+TEST(GuidedMatch, KeypointsFarOutsideTheImageChangeNoMatch) {
+  // Random binary descriptors, queries predicted near keypoints: the buckets form one dense grid.
+  // Keypoints a million pixels away (and at negative coordinates) make the grid sparse; the
+  // matches of the others must stay as they were, ties (equal distances) included.
+  cv::RNG rng(7);
+  const int n = 400;
+  Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> keypoints(n, 2), predicted(n, 2);
+  cv::Mat train(n, 32, CV_8U), query(n, 32, CV_8U);
+  rng.fill(train, cv::RNG::UNIFORM, 0, 256);
+  for (int i = 0; i < n; ++i) {
+    keypoints(i, 0) = rng.uniform(0.0f, 752.0f);
+    keypoints(i, 1) = rng.uniform(0.0f, 480.0f);
+    predicted(i, 0) = keypoints(i, 0) + rng.uniform(-6.0f, 6.0f);
+    predicted(i, 1) = keypoints(i, 1) + rng.uniform(-6.0f, 6.0f);
+    train.row(i).copyTo(query.row(i));
+    for (int b = 0; b < 3; ++b) query.at<uint8_t>(i, rng.uniform(0, 32)) ^= 1;  // a few bits off
+  }
+  train.row(5).copyTo(train.row(6));  // twins: a tie for the queries near both
+  keypoints.row(6) = keypoints.row(5).array() + 2.0f;
+  GuidedMatchOptions options;
+  options.max_distance = 64.0f;  // bits (binary descriptors)
+  const Eigen::VectorXi dense = GuidedMatch(predicted, query, keypoints, train, options);
+  Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> more(n + 2, 2);
+  more.topRows(n) = keypoints;
+  more.row(n) << 1.0e6f, 2.0e6f;
+  more.row(n + 1) << -3.0e6f, -1.0e6f;
+  cv::Mat more_train;
+  cv::vconcat(train, train.rowRange(0, 2), more_train);
+  const Eigen::VectorXi sparse = GuidedMatch(predicted, query, more, more_train, options);
+  EXPECT_TRUE(dense == sparse);
+  EXPECT_GT((dense.array() >= 0).count(), n / 2);
+}
+
 TEST(GuidedMatch, AKeypointGoesToTheBetterQueryOnly) {
   Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> predicted(2, 2), keypoints(1, 2);
   predicted << 10, 10, 12, 10;
