@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <opencv2/core/utility.hpp>
 
 #include "slslam/features/line_segment.h"
 #include "slslam/tracking/tracker_internal.h"
@@ -371,23 +372,32 @@ void Tracker::RefineTracks(const StereoFrame& frame, const LocalMapSnapshot& loc
   tracking->refined_uv.assign(tracking->keypoints.size(), Eigen::Vector2f::Constant(kNaN));
   if (options_.track_refine_window_px <= 0 || image == nullptr || image->empty()) return;
   const float max_sq = options_.track_refine_max_px * options_.track_refine_max_px;
-  for (size_t i = 0; i < tracking->keypoints.size(); ++i) {
-    const int row = tracking->point_ids[i];
-    const cv::Mat& patch = local.point_patches[row];
-    if (patch.empty()) continue;
-    // The patch grows as the point comes closer: image pixels per patch pixel.
-    const double depth = (pred_cam_from_world * local.point_w[row]).z();
-    if (depth <= 0.05) continue;
-    const double scale = local.point_patch_depth_m[row] / depth;
-    if (scale < 0.5 || scale > 2.0) continue;
-    const int k = tracking->keypoints[i];
-    double u = frame.keypoints.uv(k, 0), v = frame.keypoints.uv(k, 1);
-    constexpr double kMinNcc = 0.8;  // (a patch that no longer looks like the point: keep it)
-    if (!tracker_detail::AlignPatch(*image, patch, scale, kMinNcc, &u, &v)) continue;
-    const Eigen::Vector2f refined(static_cast<float>(u), static_cast<float>(v));
-    if ((refined - frame.keypoints.uv.row(k).transpose()).squaredNorm() > max_sq) continue;
-    tracking->refined_uv[i] = refined;
-  }
+  // The matches in parallel stripes on OpenCV's threads: each writes its own refined_uv entry
+  // (AlignPatch's buffers are per thread). A third of a tracked frame's time in the core on one
+  // thread (ORB points, py-spy; benchmarks/README.md, 2026-11-29 i).
+  const int n = static_cast<int>(tracking->keypoints.size());
+  cv::parallel_for_(
+      cv::Range(0, n),
+      [&](const cv::Range& range) {
+        for (int i = range.start; i < range.end; ++i) {
+          const int row = tracking->point_ids[i];
+          const cv::Mat& patch = local.point_patches[row];
+          if (patch.empty()) continue;
+          // The patch grows as the point comes closer: image pixels per patch pixel.
+          const double depth = (pred_cam_from_world * local.point_w[row]).z();
+          if (depth <= 0.05) continue;
+          const double scale = local.point_patch_depth_m[row] / depth;
+          if (scale < 0.5 || scale > 2.0) continue;
+          const int k = tracking->keypoints[i];
+          double u = frame.keypoints.uv(k, 0), v = frame.keypoints.uv(k, 1);
+          constexpr double kMinNcc = 0.8;  // (a patch that no longer looks like the point)
+          if (!tracker_detail::AlignPatch(*image, patch, scale, kMinNcc, &u, &v)) continue;
+          const Eigen::Vector2f refined(static_cast<float>(u), static_cast<float>(v));
+          if ((refined - frame.keypoints.uv.row(k).transpose()).squaredNorm() > max_sq) continue;
+          tracking->refined_uv[i] = refined;
+        }
+      },
+      4);
 }
 
 std::shared_ptr<const StereoFrame> Tracker::WithRefinedKeypoints(
