@@ -144,8 +144,9 @@ namespace {
 // (side^2 x count per keypoint: with the 15 x 15 patch the largest part of stereo matching).
 // Contiguous in k, so it vectorises; compiled three times, and the loader picks the AVX-512 or
 // AVX2 version where the CPU has it (slslam is built without -march so wheels run anywhere):
-// AVX-512 over AVX2, row search and refinement of 1,000 ORB keypoints 5.9 -> 4.7 ms. Each cost[k]
-// is summed in the same order in every version, so they give the same floats.
+// AVX-512 over AVX2, row search and refinement of 1,000 ORB keypoints 5.9 -> 4.7 ms (one pair of
+// runs: this machine's noise is of that order; 16-bit lanes instead were no faster, 2026-11-29 i).
+// Each cost[k] is summed in the same order in every version, so they give the same floats.
 SLSLAM_AVX512_CLONES void AccumulateRowSearchCosts(const float* patch, int side, const float* strip,
                                                  int width, const float* mean_right, int count,
                                                  float* cost) {
