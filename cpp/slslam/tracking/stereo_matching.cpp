@@ -205,6 +205,26 @@ void RightStrip(const cv::Mat& right, int v, int w, int x0, int count, std::vect
   }
 }
 
+// The (2w+1)^2 left patch around (ul, v) minus its mean, row-major into `patch`, the mean from
+// an integer sum as RightStrip's (so the same floats in the row search and the refinement).
+// Returns the patch's integer sum. An integer sum, not a float one: that is one chain of
+// dependent additions the compiler may not reorder (a third of the row search's time outside
+// its cost loop, 2026-11-29 i).
+int CenteredLeftPatch(const cv::Mat& left, int ul, int v, int w, float* patch) {
+  const int side = 2 * w + 1;
+  int left_sum = 0;
+  for (int dy = -w; dy <= w; ++dy) {
+    const uchar* row = left.ptr<uchar>(v + dy) + ul;
+    for (int dx = -w; dx <= w; ++dx) left_sum += row[dx];
+  }
+  const float mean_left = static_cast<float>(left_sum) / static_cast<float>(side * side);
+  for (int dy = 0; dy < side; ++dy) {
+    const uchar* row = left.ptr<uchar>(v - w + dy) + (ul - w);
+    for (int dx = 0; dx < side; ++dx) patch[dy * side + dx] = row[dx] - mean_left;
+  }
+  return left_sum;
+}
+
 }  // namespace
 
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
@@ -240,23 +260,14 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
       const int hi = std::min(right.cols - 1 - w, ul - d_min + 1);
       const int count = hi - lo + 1;
       if (count < 3) continue;
-      // Sums in integers: a float sum is one chain of dependent additions, which the compiler
-      // may not reorder (it was a third of the row search's time outside its cost loop).
-      int left_sum = 0;
-      for (int dy = -w; dy <= w; ++dy) {
-        const uchar* row = left.ptr<uchar>(v + dy) + ul;
-        for (int dx = -w; dx <= w; ++dx) left_sum += row[dx];
-      }
-      const float mean_left = static_cast<float>(left_sum) / area;
+      const int left_sum = CenteredLeftPatch(left, ul, v, w, patch.data());
+      // The patch's absolute deviation from its mean, in integers too: the sum of
+      // |area x - sum| is area times it.
       const int area_i = side * side;
-      int scaled_deviation = 0;  // sum of |area x - sum|: area times the absolute deviation
+      int scaled_deviation = 0;
       for (int dy = -w; dy <= w; ++dy) {
         const uchar* row = left.ptr<uchar>(v + dy) + ul;
-        float* out = patch.data() + (dy + w) * side + w;
-        for (int dx = -w; dx <= w; ++dx) {
-          out[dx] = static_cast<float>(row[dx]) - mean_left;
-          scaled_deviation += std::abs(area_i * row[dx] - left_sum);
-        }
+        for (int dx = -w; dx <= w; ++dx) scaled_deviation += std::abs(area_i * row[dx] - left_sum);
       }
       const float deviation = static_cast<float>(scaled_deviation) / area;
       if (deviation < options.row_search_min_texture * area) continue;  // flat: no reliable match
@@ -324,7 +335,6 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
   const int side = 2 * w + 1;
   const int count = 2 * L + 1;      // columns tried
   const int width = count + 2 * w;  // right columns their patches cover
-  const float area = static_cast<float>(side * side);
   // Keypoints in parallel stripes, as MatchStereoByRowSearch.
   const auto refine = [&](const cv::Range& range) {
     std::vector<float> sad(count), patch(side * side), strip, mean_right;
@@ -337,17 +347,7 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
       if (!SubpixelWindowFits(left, right, options, ul, v, ur0)) {
         continue;  // too close to the border to refine: keep the descriptor match
       }
-      // The left patch's mean from an integer sum, as RightStrip's.
-      int left_sum = 0;
-      for (int dy = -w; dy <= w; ++dy) {
-        const uchar* row = left.ptr<uchar>(v + dy);
-        for (int dx = -w; dx <= w; ++dx) left_sum += row[ul + dx];
-      }
-      const float mean_left = static_cast<float>(left_sum) / area;
-      for (int dy = 0; dy < side; ++dy) {
-        const uchar* row_l = left.ptr<uchar>(v - w + dy) + (ul - w);
-        for (int dx = 0; dx < side; ++dx) patch[dy * side + dx] = row_l[dx] - mean_left;
-      }
+      CenteredLeftPatch(left, ul, v, w, patch.data());
       RightStrip(right, v, w, ur0 - L - w, count, &strip, &column_sum, &mean_right);
       std::fill(sad.begin(), sad.end(), 0.0f);
       AccumulateSubpixelCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
