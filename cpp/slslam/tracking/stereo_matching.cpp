@@ -140,23 +140,57 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
 
 namespace {
 
-// cost[k] += sum over the patch of |(L - mean_L) - (R - mean_R[k])|, the row search's inner loop
+// cost[k] = sum over the patch of |(L - mean_L) - (R - mean_R[k])|, the row search's inner loop
 // (side^2 x count per keypoint: with the 15 x 15 patch the largest part of stereo matching).
-// Contiguous in k, so it vectorises; compiled three times, and the loader picks the AVX-512 or
-// AVX2 version where the CPU has it (slslam is built without -march so wheels run anywhere):
-// AVX-512 over AVX2, row search and refinement of 1,000 ORB keypoints 5.9 -> 4.7 ms (one pair of
-// runs: this machine's noise is of that order; 16-bit lanes instead were no faster, 2026-11-29 i).
-// Each cost[k] is summed in the same order in every version, so they give the same floats.
+// Blocks of kRowSearchBlock columns are summed over the whole patch in registers (GCC's vector
+// extensions: two 16-float vectors, four AVX2 or eight SSE registers in the other clones), each
+// block stored once: summing into `cost` tap by tap loaded and stored every column for every
+// tap, and that traffic, not the arithmetic, bounded the loop (perf annotate: the load, add and
+// store of cost[k] were 40 % of its samples). The last block overlaps the one before it when
+// `count` is not a multiple (columns computed twice give the same floats); fewer columns than a
+// block are summed one tap at a time. Compiled three times, and the loader picks the AVX-512 or
+// AVX2 version where the CPU has it (slslam is built without -march so wheels run anywhere).
+// Each cost[k] is summed in the patch's row-major order in every path and every version (no
+// multiplication, so no contraction into FMA), so they give the same floats.
+constexpr int kRowSearchBlock = 32;
+typedef float RowSearchVector __attribute__((vector_size(64), aligned(4), may_alias));
+typedef int32_t RowSearchMask __attribute__((vector_size(64)));
+
 SLSLAM_AVX512_CLONES void AccumulateRowSearchCosts(const float* patch, int side, const float* strip,
                                                  int width, const float* mean_right, int count,
                                                  float* cost) {
-  for (int dy = 0; dy < side; ++dy) {
-    const float* row = strip + static_cast<size_t>(dy) * width;
-    for (int dx = 0; dx < side; ++dx) {
-      const float a = patch[dy * side + dx];
-      const float* r = row + dx;
-      for (int k = 0; k < count; ++k) cost[k] += std::abs(a + mean_right[k] - r[k]);
+  if (count < kRowSearchBlock) {
+    for (int k = 0; k < count; ++k) cost[k] = 0.0f;
+    for (int dy = 0; dy < side; ++dy) {
+      const float* row = strip + static_cast<size_t>(dy) * width;
+      for (int dx = 0; dx < side; ++dx) {
+        const float a = patch[dy * side + dx];
+        const float* r = row + dx;
+        for (int k = 0; k < count; ++k) cost[k] += std::abs(a + mean_right[k] - r[k]);
+      }
     }
+    return;
+  }
+  const RowSearchMask abs_mask = RowSearchMask{} + 0x7fffffff;
+  for (int start = 0; start < count; start += kRowSearchBlock) {
+    const int k0 = std::min(start, count - kRowSearchBlock);
+    const RowSearchVector mean0 = *reinterpret_cast<const RowSearchVector*>(mean_right + k0);
+    const RowSearchVector mean1 = *reinterpret_cast<const RowSearchVector*>(mean_right + k0 + 16);
+    RowSearchVector sum0 = RowSearchVector{}, sum1 = RowSearchVector{};
+    for (int dy = 0; dy < side; ++dy) {
+      const float* row = strip + static_cast<size_t>(dy) * width + k0;
+      for (int dx = 0; dx < side; ++dx) {
+        const float a = patch[dy * side + dx];
+        const RowSearchVector r0 = *reinterpret_cast<const RowSearchVector*>(row + dx);
+        const RowSearchVector r1 = *reinterpret_cast<const RowSearchVector*>(row + dx + 16);
+        const RowSearchVector d0 = (a + mean0) - r0;
+        const RowSearchVector d1 = (a + mean1) - r1;
+        sum0 += reinterpret_cast<RowSearchVector>(reinterpret_cast<RowSearchMask>(d0) & abs_mask);
+        sum1 += reinterpret_cast<RowSearchVector>(reinterpret_cast<RowSearchMask>(d1) & abs_mask);
+      }
+    }
+    *reinterpret_cast<RowSearchVector*>(cost + k0) = sum0;
+    *reinterpret_cast<RowSearchVector*>(cost + k0 + 16) = sum1;
   }
 }
 
@@ -274,7 +308,7 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
       // The strip: 2w+1 right rows over columns [lo - w, hi + w].
       const int width = count + 2 * w;
       RightStrip(right, v, w, lo - w, count, &strip, &column_sum, &mean_right);
-      cost.assign(count, 0.0f);
+      cost.resize(count);  // (set by AccumulateRowSearchCosts)
       AccumulateRowSearchCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
                                cost.data());
       int best = 0;

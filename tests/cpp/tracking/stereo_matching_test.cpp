@@ -1,6 +1,7 @@
 // Stereo keypoint matching and its subpixel refinement on a textured pair with a known disparity.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -235,6 +236,103 @@ TEST(StereoFrameTest, RowSearchAndRefinementGiveTheSameColumnsOnOneThreadAsOnSev
     matched += serial.u_right[i] >= 0.0;
   }
   EXPECT_GT(matched, 0);
+}
+
+// The row search as its header describes it, one column at a time in double: the integer right
+// column of keypoint (u, v), or -1.
+double PlainRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoMatchOptions& options,
+                      int u, int v) {
+  const int w = options.row_search_window, side = 2 * w + 1;
+  if (v - w < 0 || v + w >= left.rows || u - w < 0 || u + w >= left.cols) return -1.0;
+  const int lo = std::max(w, u - static_cast<int>(std::floor(options.max_disparity_px)) - 1);
+  const int hi =
+      std::min(right.cols - 1 - w, u - static_cast<int>(std::ceil(options.min_disparity_px)) + 1);
+  if (hi - lo + 1 < 3) return -1.0;
+  const auto patch_mean = [&](const cv::Mat& image, int x) {
+    double sum = 0.0;
+    for (int dy = -w; dy <= w; ++dy) {
+      for (int dx = -w; dx <= w; ++dx) sum += image.at<uchar>(v + dy, x + dx);
+    }
+    return sum / (side * side);
+  };
+  const double mean_left = patch_mean(left, u);
+  double deviation = 0.0;
+  for (int dy = -w; dy <= w; ++dy) {
+    for (int dx = -w; dx <= w; ++dx) {
+      deviation += std::abs(left.at<uchar>(v + dy, u + dx) - mean_left);
+    }
+  }
+  if (deviation < options.row_search_min_texture * side * side) return -1.0;
+  std::vector<double> cost;
+  for (int x = lo; x <= hi; ++x) {
+    const double mean_right = patch_mean(right, x);
+    double c = 0.0;
+    for (int dy = -w; dy <= w; ++dy) {
+      for (int dx = -w; dx <= w; ++dx) {
+        c += std::abs((left.at<uchar>(v + dy, u + dx) - mean_left) -
+                      (right.at<uchar>(v + dy, x + dx) - mean_right));
+      }
+    }
+    cost.push_back(c);
+  }
+  const int count = static_cast<int>(cost.size());
+  const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  if (best == 0 || best == count - 1 || cost[best] > options.row_search_max_cost * deviation) {
+    return -1.0;
+  }
+  double second = std::numeric_limits<double>::max();
+  for (int k = 1; k + 1 < count; ++k) {
+    if (std::abs(k - best) > 1 && cost[k] <= cost[k - 1] && cost[k] <= cost[k + 1]) {
+      second = std::min(second, cost[k]);
+    }
+  }
+  if (best > 1 && cost[0] < cost[1]) second = std::min(second, cost[0]);
+  if (best < count - 2 && cost[count - 1] < cost[count - 2]) {
+    second = std::min(second, cost[count - 1]);
+  }
+  if (second < std::numeric_limits<double>::max() &&
+      cost[best] >= options.row_search_ratio * second) {
+    return -1.0;
+  }
+  return lo + best;
+}
+
+TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
+  // Keypoints from the left edge on, so that the columns searched run from a few (fewer than
+  // one register block of the cost loop) to the whole disparity range (several blocks, the last
+  // one overlapping), on a pair with a repeated pattern beside the texture.
+  const StereoRig rig = Rig();
+  StereoMatchOptions options;
+  options.row_search = true;
+  options.max_disparity_px = 70.0f;
+  auto [left, right] = ShiftedPair(17.6);
+  for (int v = 120; v < 240; ++v) {
+    for (int u = 0; u < 320; ++u) {
+      left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
+    }
+  }
+  StereoFrame frame;
+  std::vector<Eigen::Vector2f> uv;
+  for (int v = 8; v < 232; v += 13) {
+    for (int u = 9; u < 312; u += 7) uv.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  }
+  frame.keypoints.uv.resize(static_cast<Eigen::Index>(uv.size()), 2);
+  for (size_t i = 0; i < uv.size(); ++i) {
+    frame.keypoints.uv.row(static_cast<Eigen::Index>(i)) = uv[i].transpose();
+  }
+  frame.u_right.assign(uv.size(), -1.0);
+  frame.depth.assign(uv.size(), -1.0);
+  MatchStereoByRowSearch(left, right, rig, options, &frame);
+  int matched = 0, refused = 0;
+  for (size_t i = 0; i < uv.size(); ++i) {
+    const double expected = PlainRowSearch(left, right, options, static_cast<int>(uv[i].x()),
+                                           static_cast<int>(uv[i].y()));
+    EXPECT_EQ(frame.u_right[i], expected) << uv[i].transpose();
+    matched += expected >= 0.0;
+    refused += expected < 0.0 && uv[i].y() >= 120.0f;
+  }
+  EXPECT_GT(matched, 100);
+  EXPECT_GT(refused, 100);  // (the repeated pattern)
 }
 
 TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
