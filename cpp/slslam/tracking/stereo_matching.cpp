@@ -212,7 +212,7 @@ SLSLAM_AVX2_CLONES void AccumulateSubpixelCosts(const float* patch, int side, co
 
 // The 2w+1 right rows around row v over columns [x0, x0 + count + 2w) as float (`strip`, row-major,
 // width count + 2w), and the mean of each of the `count` (2w+1)^2 patches centred on columns
-// x0 + w + k. The means come from column sums and a sliding window: O(width) per row, not
+// x0 + w + k. The means come from column sums and their prefix sums: O(width) per row, not
 // O(side * count), and integer sums, so they are the same floats as summing every pixel. The row
 // search and the subpixel refinement both take their right patches from here.
 void RightStrip(const cv::Mat& right, int v, int w, int x0, int count, std::vector<float>* strip,
@@ -230,31 +230,47 @@ void RightStrip(const cv::Mat& right, int v, int w, int x0, int count, std::vect
       (*column_sum)[x] += row[x];
     }
   }
+  // Prefix sums of the column sums, then each window's sum as a difference of two: the divisions
+  // are independent (vectorised), where a sliding window chained each to the one before.
+  std::vector<int>& prefix = *column_sum;
+  int running = 0;
+  for (int x = 0; x < width; ++x) {
+    const int column = prefix[x];
+    prefix[x] = running;  // sum of columns [0, x)
+    running += column;
+  }
+  prefix.push_back(running);
   mean_right->resize(count);
-  int window_sum = 0;
-  for (int x = 0; x < side; ++x) window_sum += (*column_sum)[x];
   for (int k = 0; k < count; ++k) {
-    if (k > 0) window_sum += (*column_sum)[k + side - 1] - (*column_sum)[k - 1];
-    (*mean_right)[k] = static_cast<float>(window_sum) / area;
+    (*mean_right)[k] = static_cast<float>(prefix[k + side] - prefix[k]) / area;
   }
 }
 
 // The (2w+1)^2 left patch around (ul, v) minus its mean, row-major into `patch`, the mean from
 // an integer sum as RightStrip's (so the same floats in the row search and the refinement).
-// Returns the patch's integer sum. An integer sum, not a float one: that is one chain of
-// dependent additions the compiler may not reorder (a third of the row search's time outside
-// its cost loop, 2026-11-29 i).
-int CenteredLeftPatch(const cv::Mat& left, int ul, int v, int w, float* patch) {
+// Returns the patch's integer sum; `scaled_deviation`, when given, receives the sum of
+// |area x - sum| over the patch (area times its absolute deviation from its mean, in integers).
+// The pixels are gathered into `values` (side^2 ints) first, so the sums run over one flat array
+// the compiler vectorises instead of rows of 2w+1 (an integer sum, not a float one: a float sum
+// is one chain of dependent additions the compiler may not reorder).
+int CenteredLeftPatch(const cv::Mat& left, int ul, int v, int w, float* patch,
+                      std::vector<int>* values, int* scaled_deviation = nullptr) {
   const int side = 2 * w + 1;
-  int left_sum = 0;
-  for (int dy = -w; dy <= w; ++dy) {
-    const uchar* row = left.ptr<uchar>(v + dy) + ul;
-    for (int dx = -w; dx <= w; ++dx) left_sum += row[dx];
-  }
-  const float mean_left = static_cast<float>(left_sum) / static_cast<float>(side * side);
+  const int area = side * side;
+  values->resize(area);
+  int* x = values->data();
   for (int dy = 0; dy < side; ++dy) {
     const uchar* row = left.ptr<uchar>(v - w + dy) + (ul - w);
-    for (int dx = 0; dx < side; ++dx) patch[dy * side + dx] = row[dx] - mean_left;
+    for (int dx = 0; dx < side; ++dx) x[dy * side + dx] = row[dx];
+  }
+  int left_sum = 0;
+  for (int i = 0; i < area; ++i) left_sum += x[i];
+  const float mean_left = static_cast<float>(left_sum) / static_cast<float>(area);
+  for (int i = 0; i < area; ++i) patch[i] = static_cast<float>(x[i]) - mean_left;
+  if (scaled_deviation != nullptr) {
+    int deviation = 0;
+    for (int i = 0; i < area; ++i) deviation += std::abs(area * x[i] - left_sum);
+    *scaled_deviation = deviation;
   }
   return left_sum;
 }
@@ -282,7 +298,7 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
     std::vector<float> patch(side * side);  // left patch minus its mean, row-major
     std::vector<float> strip;               // right rows of the search range, as float
     std::vector<float> mean_right, cost;
-    std::vector<int> column_sum;
+    std::vector<int> column_sum, values;
     for (int i = range.start; i < range.end; ++i) {
       if (frame->u_right[i] >= 0.0) continue;
       const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
@@ -294,15 +310,10 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
       const int hi = std::min(right.cols - 1 - w, ul - d_min + 1);
       const int count = hi - lo + 1;
       if (count < 3) continue;
-      const int left_sum = CenteredLeftPatch(left, ul, v, w, patch.data());
       // The patch's absolute deviation from its mean, in integers too: the sum of
       // |area x - sum| is area times it.
-      const int area_i = side * side;
       int scaled_deviation = 0;
-      for (int dy = -w; dy <= w; ++dy) {
-        const uchar* row = left.ptr<uchar>(v + dy) + ul;
-        for (int dx = -w; dx <= w; ++dx) scaled_deviation += std::abs(area_i * row[dx] - left_sum);
-      }
+      CenteredLeftPatch(left, ul, v, w, patch.data(), &values, &scaled_deviation);
       const float deviation = static_cast<float>(scaled_deviation) / area;
       if (deviation < options.row_search_min_texture * area) continue;  // flat: no reliable match
       // The strip: 2w+1 right rows over columns [lo - w, hi + w].
@@ -372,7 +383,7 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
   // Keypoints in parallel stripes, as MatchStereoByRowSearch.
   const auto refine = [&](const cv::Range& range) {
     std::vector<float> sad(count), patch(side * side), strip, mean_right;
-    std::vector<int> column_sum;
+    std::vector<int> column_sum, values;
     for (int i = range.start; i < range.end; ++i) {
       if (frame->u_right[i] < 0.0) continue;
       const int ul = static_cast<int>(std::lround(frame->keypoints.uv(i, 0)));
@@ -381,7 +392,7 @@ void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const Stere
       if (!SubpixelWindowFits(left, right, options, ul, v, ur0)) {
         continue;  // too close to the border to refine: keep the descriptor match
       }
-      CenteredLeftPatch(left, ul, v, w, patch.data());
+      CenteredLeftPatch(left, ul, v, w, patch.data(), &values);
       RightStrip(right, v, w, ur0 - L - w, count, &strip, &column_sum, &mean_right);
       std::fill(sad.begin(), sad.end(), 0.0f);
       AccumulateSubpixelCosts(patch.data(), side, strip.data(), width, mean_right.data(), count,
