@@ -80,10 +80,10 @@ class TrackerSession {
                     const py::array& right_image, const PixelArray& left_uv,
                     const py::array& left_descriptors, const PixelArray& right_uv,
                     const py::array& right_descriptors,
-                    const std::shared_ptr<LeftLines>& left_lines) {
+                    const std::shared_ptr<LeftLines>& left_lines, bool noisy) {
     return TrackPrepared(*Prepare(index, timestamp, left_image, right_image, left_uv,
                                   left_descriptors, right_uv, right_descriptors, left_lines,
-                                  /*keypoints_pending=*/false));
+                                  /*keypoints_pending=*/false, noisy));
   }
 
   // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
@@ -96,7 +96,7 @@ class TrackerSession {
                                          const PixelArray& right_uv,
                                          const py::array& right_descriptors,
                                          const std::shared_ptr<LeftLines>& left_lines,
-                                         bool keypoints_pending) const {
+                                         bool keypoints_pending, bool noisy) const {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
@@ -119,6 +119,7 @@ class TrackerSession {
                    kr.size(), " given)");
       p->frame->keypoints_pending = true;
     }
+    p->frame->noisy = noisy;
     return p;
   }
 
@@ -480,6 +481,11 @@ void BindTracking(py::module_& m) {
       .def_readwrite("projection_min_inliers", &TrackerOptions::projection_min_inliers)
       .def_readwrite("projection_search_px", &TrackerOptions::projection_search_px)
       .def_readwrite("projection_cell_px", &TrackerOptions::projection_cell_px)
+      .def_readwrite("unaligned_sigma_factor", &TrackerOptions::unaligned_sigma_factor)
+      .def_readwrite("unaligned_min_aligned", &TrackerOptions::unaligned_min_aligned)
+      .def_readwrite("unaligned_max_turn_deg_per_frame",
+                     &TrackerOptions::unaligned_max_turn_deg_per_frame)
+      .def_readwrite("unaligned_min_noisy_frames", &TrackerOptions::unaligned_min_noisy_frames)
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
@@ -584,18 +590,20 @@ void BindTracking(py::module_& m) {
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           py::arg("left_lines") = nullptr,
+           py::arg("left_lines") = nullptr, py::arg("noisy") = false,
            "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
-           "image's lines from extract_left_lines on this left image (None: extracted here).")
+           "image's lines from extract_left_lines on this left image (None: extracted here). "
+           "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor).")
       .def("prepare", &TrackerSession::Prepare, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
            py::arg("left_lines") = nullptr, py::arg("keypoints_pending") = false,
+           py::arg("noisy") = false,
            "track's first part without the session's lock: the frame's stereo matching (and "
            "its lines unless left_lines or lines on demand), for a thread ahead of the core. "
            "track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints "
            "given; tracking.projected_max_frames): the tracker places the map's points in the "
-           "frame, or returns needs_keypoints.")
+           "frame, or returns needs_keypoints. noisy: as track's.")
       .def("track_prepared", &TrackerSession::TrackPrepared, py::arg("frame"),
            "track's second part on a frame from prepare (once, in frame order): the tracker and "
            "local mapping; returns its FrameOutput.")

@@ -1469,6 +1469,30 @@ class TrackerOptions:
     def track_refine_window_px(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
+    def unaligned_max_turn_deg_per_frame(self) -> float:
+        ...
+    @unaligned_max_turn_deg_per_frame.setter
+    def unaligned_max_turn_deg_per_frame(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def unaligned_min_aligned(self) -> int:
+        ...
+    @unaligned_min_aligned.setter
+    def unaligned_min_aligned(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def unaligned_min_noisy_frames(self) -> int:
+        ...
+    @unaligned_min_noisy_frames.setter
+    def unaligned_min_noisy_frames(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def unaligned_sigma_factor(self) -> float:
+        ...
+    @unaligned_sigma_factor.setter
+    def unaligned_sigma_factor(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def weak_keyframe_frames(self) -> int:
         ...
     @weak_keyframe_frames.setter
@@ -1590,17 +1614,17 @@ class TrackerCore:
         """
         Points and lines; settle: first waits for local mapping (and applies an overlapped local BA), else the map as it stands.
         """
-    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False) -> PreparedFrame:
+    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False, noisy: bool = False) -> PreparedFrame:
         """
-        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints.
+        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints. noisy: as track's.
         """
     def save_map(self, path: str, version: str) -> None:
         """
         Writes every live map (versioned binary, checksummed); waits for mapping.
         """
-    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None) -> FrameOutput:
+    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, noisy: bool = False) -> FrameOutput:
         """
-        Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here).
+        Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here). noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor).
         """
     def track_prepared(self, frame: PreparedFrame) -> FrameOutput:
         """

@@ -144,6 +144,10 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "point_sigma_px",
         "track_refine_window_px",
         "track_refine_max_px",
+        "unaligned_sigma_factor",
+        "unaligned_min_aligned",
+        "unaligned_max_turn_deg_per_frame",
+        "unaligned_min_noisy_frames",
         "projected_max_frames",
         "projection_min_inliers",
         "projection_search_px",
@@ -496,6 +500,21 @@ class TrackingConfig:
     track_refine_window_px: int = _tracking("track_refine_window_px", "[0, 50]")
     # an alignment that moves the keypoint further than this is not taken [px]
     track_refine_max_px: float = _tracking("track_refine_max_px", "[0.1, 10000]")
+    # in a frame smoothed as noisy with at least unaligned_min_aligned matches aligned to their
+    # map points' patches, the matches that could not be aligned enter the motion-only BA with
+    # their sigma times this (detected keypoints follow a small image motion only in part; see
+    # benchmarks/README.md) [-]; 1: all alike
+    unaligned_sigma_factor: float = _tracking("unaligned_sigma_factor", "[1, 1000]")
+    # aligned matches a noisy frame needs for unaligned_sigma_factor to apply [-]
+    unaligned_min_aligned: int = _tracking("unaligned_min_aligned", "[0, 1000000]")
+    # ... and while the camera turned by at most this between the last two frames (a turn on the
+    # spot weighs all matches alike) [deg per frame]
+    unaligned_max_turn_deg_per_frame: float = _tracking(
+        "unaligned_max_turn_deg_per_frame", "[0, 180]"
+    )
+    # ... and in a run of at least this many frames smoothed as noisy (a flickering lamp, light
+    # about the smoothing's bound: frames alternately smoothed keep their weights) [frames]
+    unaligned_min_noisy_frames: int = _tracking("unaligned_min_noisy_frames", "[0, 1000000]")
     # frames tracked on projected keypoints, at most this many in a row: while tracking is strong
     # the local map's points are projected with the predicted pose and aligned to their patches
     # (semi-direct, as SVO between keyframes), and the point front end runs only on the frames

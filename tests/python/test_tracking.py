@@ -862,3 +862,38 @@ def test_projected_keypoints_track_between_detections_the_same_way_in_a_pipeline
     _, ate = _positions_and_ate(sequence, {"detected": base, "projected": projected})
     # Measured 0.0030 m (detected) and 0.0034 m (projected) on these 80 frames.
     assert ate["projected"] < 0.01, ate
+
+
+def test_unaligned_matches_weigh_less_only_in_noisy_frames_with_enough_aligned(tmp_path):
+    """tracking.unaligned_sigma_factor: on dark frames (the Python tracker smooths them as noisy
+    and tells the core) the matches not aligned to their map points' patches weigh less, which
+    moves the poses; gated off by a count of aligned matches no frame reaches, or on bright
+    frames (never smoothed), the poses are those of factor 1 to the last bit."""
+    frames = 30
+
+    def simulate(light: float) -> EurocSequence:
+        out = tmp_path / f"loop_{light}"
+        options = SimOptions(preset="loop", light=light, frames=frames, lidar=False)
+        Simulator(options).write(out, progress=False)
+        return EurocSequence(out)
+
+    def poses(sequence: EurocSequence, factor: float, min_aligned: int) -> np.ndarray:
+        base = config("orb", lines=False)
+        tracking = dataclasses.replace(
+            base.tracking,
+            unaligned_sigma_factor=factor,
+            unaligned_min_aligned=min_aligned,
+            unaligned_min_noisy_frames=0,
+        )
+        with Tracker(sequence.camera, dataclasses.replace(base, tracking=tracking)) as tracker:
+            for i in range(frames):
+                f = sequence[i]
+                assert tracker.track(f.left, f.right, f.t_ns * 1e-9).tracked
+            return np.asarray(tracker.trajectory()[1])
+
+    dark = simulate(0.15)
+    plain = poses(dark, 1.0, 0)
+    assert not np.array_equal(poses(dark, 3.0, 0), plain)
+    assert np.array_equal(poses(dark, 3.0, 10**9), plain)
+    bright = simulate(1.0)
+    assert np.array_equal(poses(bright, 3.0, 0), poses(bright, 1.0, 0))

@@ -37,6 +37,9 @@ struct StereoFrame {
   /// empty, and the tracker either places the local map's points in the image itself (aligned
   /// to their patches) or asks for the frame again with detected keypoints
   bool keypoints_pending = false;
+  /// the left image was smoothed as noisy before the front end saw it (dark, high gain: slslam's
+  /// Python Tracker sets it; TrackerOptions::unaligned_sigma_factor applies only then)
+  bool noisy = false;
 
   int NumKeypoints() const { return keypoints.size(); }
   int NumLines() const { return static_cast<int>(lines.size()); }

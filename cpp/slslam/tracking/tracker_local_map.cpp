@@ -199,12 +199,28 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
   // Motion-only BA.
   const auto opt_start = Clock::now();
   std::vector<PointObservation> points(out.point_ids.size());
+  // A noisy frame with enough aligned matches: the unaligned ones weigh less
+  // (unaligned_sigma_factor).
+  double unaligned_sigma_px = options_.point_sigma_px;
+  // (the turn of the motion model's last step, velocity_: the frame before from the one before)
+  const double turn_cos = std::clamp(0.5 * (velocity_.rotation.trace() - 1.0), -1.0, 1.0);
+  const double turn_deg = std::acos(turn_cos) * 180.0 / 3.14159265358979323846;
+  if (frame.noisy && noisy_run_ >= options_.unaligned_min_noisy_frames &&
+      options_.unaligned_sigma_factor > 1.0 &&
+      turn_deg <= options_.unaligned_max_turn_deg_per_frame) {
+    int aligned = 0;
+    for (const Eigen::Vector2f& uv : out.refined_uv) aligned += std::isfinite(uv.x()) ? 1 : 0;
+    if (aligned >= options_.unaligned_min_aligned) {
+      unaligned_sigma_px *= options_.unaligned_sigma_factor;
+    }
+  }
   for (size_t i = 0; i < out.point_ids.size(); ++i) {
     const int k = out.keypoints[i];
     points[i].point_w = local.point_w[out.point_ids[i]];
     points[i].stereo = frame.u_right[k] >= 0.0;
     points[i].observed = tracker_detail::ObservedPixel(frame, k, out.refined_uv[i]);
-    points[i].sigma_px = options_.point_sigma_px;
+    points[i].sigma_px =
+        std::isfinite(out.refined_uv[i].x()) ? options_.point_sigma_px : unaligned_sigma_px;
   }
   std::vector<LineObservation> lines(line_rows.size());
   for (size_t i = 0; i < line_rows.size(); ++i) {

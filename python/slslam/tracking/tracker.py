@@ -718,6 +718,7 @@ class Tracker:
             np.ascontiguousarray(kr.descriptors),
             left_lines,
             keypoints_pending=not detect,
+            noisy=left is not raw_left,  # (smoothed as noisy: tracking.unaligned_sigma_factor)
         )
         front_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(
