@@ -74,7 +74,8 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
 // smoothed, with fewer wrong than the descriptors' matches). The integer column is stored;
 // RefineStereoSubpixel refines it as a descriptor match. Keypoints with a match already keep it.
 // About (2w+1)^2 x (disparity range) absolute differences per keypoint (225 x for the default),
-// in contiguous float rows that are vectorised (an AVX2 version where the CPU has it).
+// vectorised over 32 columns at a time whose sums stay in registers (AVX-512 or AVX2 versions
+// where the CPU has them); keypoints in parallel stripes on OpenCV's threads.
 void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,
                             const StereoMatchOptions& options, StereoFrame* frame);
 
