@@ -485,7 +485,6 @@ void BindTracking(py::module_& m) {
       .def_readwrite("unaligned_min_aligned", &TrackerOptions::unaligned_min_aligned)
       .def_readwrite("unaligned_max_turn_deg_per_frame",
                      &TrackerOptions::unaligned_max_turn_deg_per_frame)
-      .def_readwrite("unaligned_min_noisy_frames", &TrackerOptions::unaligned_min_noisy_frames)
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)

@@ -147,7 +147,6 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "unaligned_sigma_factor",
         "unaligned_min_aligned",
         "unaligned_max_turn_deg_per_frame",
-        "unaligned_min_noisy_frames",
         "projected_max_frames",
         "projection_min_inliers",
         "projection_search_px",
@@ -512,9 +511,6 @@ class TrackingConfig:
     unaligned_max_turn_deg_per_frame: float = _tracking(
         "unaligned_max_turn_deg_per_frame", "[0, 180]"
     )
-    # ... and in a run of at least this many frames smoothed as noisy (a flickering lamp, light
-    # about the smoothing's bound: frames alternately smoothed keep their weights) [frames]
-    unaligned_min_noisy_frames: int = _tracking("unaligned_min_noisy_frames", "[0, 1000000]")
     # frames tracked on projected keypoints, at most this many in a row: while tracking is strong
     # the local map's points are projected with the predicted pose and aligned to their patches
     # (semi-direct, as SVO between keyframes), and the point front end runs only on the frames

@@ -883,7 +883,6 @@ def test_unaligned_matches_weigh_less_only_in_noisy_frames_with_enough_aligned(t
             base.tracking,
             unaligned_sigma_factor=factor,
             unaligned_min_aligned=min_aligned,
-            unaligned_min_noisy_frames=0,
         )
         with Tracker(sequence.camera, dataclasses.replace(base, tracking=tracking)) as tracker:
             for i in range(frames):

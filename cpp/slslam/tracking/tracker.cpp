@@ -427,10 +427,6 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
 
 TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   TrackResult result;
-  if (frame->index != noisy_run_index_) {
-    noisy_run_ = frame->noisy ? noisy_run_ + 1 : 0;
-    noisy_run_index_ = frame->index;
-  }
   Require(!frame->left_lines_pending || (complete_left_lines_ && *complete_left_lines_),
           "a frame built without its left lines (lines_on_demand) needs Track's "
           "complete_left_lines");

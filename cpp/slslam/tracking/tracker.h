@@ -180,18 +180,13 @@ struct TrackerOptions {
   /// aligned already). Off: XFeat + lines with 3 (the other gates as below), seeds 0-2 of the
   /// 600-frame sequences: dusty dark loop 0.166 -> 0.145 m and hard junction 0.173 -> 0.157 m
   /// (means), bright loop the same poses, but the spin 0.0181 -> 0.0219 m and the 150-frame dark
-  /// loop of realtime.py 0.0082 -> 0.0093 m (benchmarks/README.md, 2026-11-29 j). 1: every match
+  /// loop of realtime.py 0.0082 -> 0.0090 m (benchmarks/README.md, 2026-11-29 j). 1: every match
   /// with point_sigma_px [-]
   double unaligned_sigma_factor = 1.0;
   int unaligned_min_aligned = 30;  ///< see unaligned_sigma_factor [-]
   /// ... and while the camera turned by at most this between the last two frames (the motion
   /// model's rotation) [deg per frame]
   double unaligned_max_turn_deg_per_frame = 1.5;
-  /// ... and in a run of at least this many noisy frames (light hovering about the smoothing's
-  /// bound, a flickering lamp: frames alternately smoothed keep their weights) [frames]. 10 on
-  /// seed 0 drifted more than 0 on the spin, the dusty loop and the hard junction alike; 0 was
-  /// the setting measured over three seeds above
-  int unaligned_min_noisy_frames = 0;
   /// Frames tracked on projected keypoints instead of detected ones, at most this many in a row
   /// [frames]. A frame given without keypoints (StereoFrame::keypoints_pending; which frames is
   /// the caller's choice, Python's Tracker._detect_ahead) is tracked this way while tracking is
@@ -536,8 +531,6 @@ class Tracker {
   bool have_pose_ = false;
   Rigid3d last_cam_from_world_;
   Rigid3d velocity_;  ///< last camera from the camera before: T_last * T_prev^-1
-  int noisy_run_ = 0;         ///< noisy frames in a row up to the current one (StereoFrame::noisy)
-  int noisy_run_index_ = -1;  ///< the frame noisy_run_ counted last (a frame given twice counts once)
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   double last_keyframe_time_s_ = 0.0;  ///< timestamp of the frame of the last keyframe [s]

@@ -200,14 +200,13 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
   const auto opt_start = Clock::now();
   std::vector<PointObservation> points(out.point_ids.size());
   // A noisy frame with enough aligned matches: the unaligned ones weigh less
-  // (unaligned_sigma_factor). Tracking's own frames only (refine_image given): velocity_ and
-  // noisy_run_ are the tracking thread's, and loop verification runs this on the mapping thread.
+  // (unaligned_sigma_factor). Tracking's own frames only (refine_image given): velocity_ is
+  // the tracking thread's, and loop verification runs this on the mapping thread.
   double unaligned_sigma_px = options_.point_sigma_px;
-  if (refine_image != nullptr && frame.noisy && options_.unaligned_sigma_factor > 1.0 &&
-      noisy_run_ >= options_.unaligned_min_noisy_frames) {
+  if (refine_image != nullptr && frame.noisy && options_.unaligned_sigma_factor > 1.0) {
     // (the turn of the motion model's last step: the frame before from the one before)
-    const double turn_cos = std::clamp(0.5 * (velocity_.rotation.trace() - 1.0), -1.0, 1.0);
-    const double turn_deg = std::acos(turn_cos) * 180.0 / 3.14159265358979323846;
+    const double turn_deg =
+        Eigen::AngleAxisd(velocity_.rotation).angle() * 180.0 / 3.14159265358979323846;
     int aligned = 0;
     for (const Eigen::Vector2f& uv : out.refined_uv) aligned += std::isfinite(uv.x()) ? 1 : 0;
     if (turn_deg <= options_.unaligned_max_turn_deg_per_frame &&

@@ -68,7 +68,6 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.unaligned_min_aligned", unaligned_min_aligned, 0, kMaxCount);
   CheckInRange("tracking.unaligned_max_turn_deg_per_frame", unaligned_max_turn_deg_per_frame, 0.0,
                180.0);
-  CheckInRange("tracking.unaligned_min_noisy_frames", unaligned_min_noisy_frames, 0, kMaxCount);
   CheckInRange("tracking.projected_max_frames", projected_max_frames, 0, kMaxCount);
   CheckInRange("tracking.projection_min_inliers", projection_min_inliers, 0, kMaxCount);
   CheckInRange("tracking.projection_search_px", projection_search_px, 0, 64);

@@ -316,7 +316,6 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(unaligned_min_aligned, "tracking.unaligned_min_aligned", 0, 1e9, "[]"),
        FIELD(unaligned_max_turn_deg_per_frame, "tracking.unaligned_max_turn_deg_per_frame", 0,
              180, "[]"),
-       FIELD(unaligned_min_noisy_frames, "tracking.unaligned_min_noisy_frames", 0, 1e9, "[]"),
        FIELD(projected_max_frames, "tracking.projected_max_frames", 0, 1e9, "[]"),
        FIELD(projection_min_inliers, "tracking.projection_min_inliers", 0, 1e9, "[]"),
        FIELD(projection_search_px, "tracking.projection_search_px", 0, 64, "[]"),

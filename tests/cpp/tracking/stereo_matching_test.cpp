@@ -42,18 +42,33 @@ std::pair<cv::Mat, cv::Mat> ShiftedPair(double disparity) {
   return {left, right};
 }
 
-// Frame with keypoints on a grid, each matched (by "descriptors") to the integer column.
-StereoFrame GridFrame(double disparity) {
-  StereoFrame frame;
+// Frame with keypoints at (u, v) for u in [u0, u1) by du and v in [v0, v1) by dv, row by row,
+// none matched yet (u_right and depth -1).
+StereoFrame KeypointGridFrame(int u0, int u1, int du, int v0, int v1, int dv) {
   std::vector<Eigen::Vector2f> uv;
-  for (int v = 30; v < 210; v += 20) {
-    for (int u = 60; u < 300; u += 20) uv.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  for (int v = v0; v < v1; v += dv) {
+    for (int u = u0; u < u1; u += du) uv.emplace_back(static_cast<float>(u), static_cast<float>(v));
   }
+  StereoFrame frame;
   frame.keypoints.uv.resize(static_cast<Eigen::Index>(uv.size()), 2);
   for (size_t i = 0; i < uv.size(); ++i) {
     frame.keypoints.uv.row(static_cast<Eigen::Index>(i)) = uv[i].transpose();
-    frame.u_right.push_back(uv[i].x() - std::round(disparity));
-    frame.depth.push_back(1.0);
+  }
+  frame.u_right.assign(uv.size(), -1.0);
+  frame.depth.assign(uv.size(), -1.0);
+  return frame;
+}
+
+// The grid of left keypoints of most tests here, with no right match yet (no right-image
+// keypoints).
+StereoFrame UnmatchedGridFrame() { return KeypointGridFrame(60, 300, 20, 30, 210, 20); }
+
+// The same grid, each keypoint matched (by "descriptors") to the integer column.
+StereoFrame GridFrame(double disparity) {
+  StereoFrame frame = UnmatchedGridFrame();
+  for (int i = 0; i < frame.NumKeypoints(); ++i) {
+    frame.u_right[i] = frame.keypoints.uv(i, 0) - std::round(disparity);
+    frame.depth[i] = 1.0;
   }
   return frame;
 }
@@ -173,21 +188,13 @@ TEST(StereoFrameTest, AWrongDescriptorMatchLosesItsDepth) {
   EXPECT_LT(kept, 0.1 * frame.NumKeypoints());
 }
 
-// The same grid of left keypoints with no right match yet (no right-image keypoints).
-StereoFrame UnmatchedGridFrame(double disparity) {
-  StereoFrame frame = GridFrame(disparity);
-  frame.u_right.assign(frame.u_right.size(), -1.0);
-  frame.depth.assign(frame.depth.size(), -1.0);
-  return frame;
-}
-
 TEST(StereoFrameTest, RowSearchFindsTheDisparityWithoutRightKeypoints) {
   const StereoRig rig = Rig();
   StereoMatchOptions options;
   options.row_search = true;
   for (double disparity : {7.3, 12.5, 40.8}) {
     const auto [left, right] = ShiftedPair(disparity);
-    StereoFrame frame = UnmatchedGridFrame(disparity);
+    StereoFrame frame = UnmatchedGridFrame();
     MatchStereoByRowSearch(left, right, rig, options, &frame);
     int matched = 0;
     double worst_integer = 0.0;
@@ -220,11 +227,11 @@ TEST(StereoFrameTest, RowSearchAndRefinementGiveTheSameColumnsOnOneThreadAsOnSev
   const auto [left, right] = ShiftedPair(23.4);
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  StereoFrame serial = UnmatchedGridFrame(23.4);
+  StereoFrame serial = UnmatchedGridFrame();
   MatchStereoByRowSearch(left, right, rig, options, &serial);
   RefineStereoSubpixel(left, right, rig, options, &serial);
   cv::setNumThreads(std::max(threads, 4));  // more stripes than cores still splits the work
-  StereoFrame parallel = UnmatchedGridFrame(23.4);
+  StereoFrame parallel = UnmatchedGridFrame();
   MatchStereoByRowSearch(left, right, rig, options, &parallel);
   RefineStereoSubpixel(left, right, rig, options, &parallel);
   cv::setNumThreads(threads);
@@ -311,25 +318,16 @@ TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
       left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
     }
   }
-  StereoFrame frame;
-  std::vector<Eigen::Vector2f> uv;
-  for (int v = 8; v < 232; v += 13) {
-    for (int u = 9; u < 312; u += 7) uv.emplace_back(static_cast<float>(u), static_cast<float>(v));
-  }
-  frame.keypoints.uv.resize(static_cast<Eigen::Index>(uv.size()), 2);
-  for (size_t i = 0; i < uv.size(); ++i) {
-    frame.keypoints.uv.row(static_cast<Eigen::Index>(i)) = uv[i].transpose();
-  }
-  frame.u_right.assign(uv.size(), -1.0);
-  frame.depth.assign(uv.size(), -1.0);
+  StereoFrame frame = KeypointGridFrame(9, 312, 7, 8, 232, 13);
   MatchStereoByRowSearch(left, right, rig, options, &frame);
   int matched = 0, refused = 0;
-  for (size_t i = 0; i < uv.size(); ++i) {
-    const double expected = PlainRowSearch(left, right, options, static_cast<int>(uv[i].x()),
-                                           static_cast<int>(uv[i].y()));
-    EXPECT_EQ(frame.u_right[i], expected) << uv[i].transpose();
+  for (int i = 0; i < frame.NumKeypoints(); ++i) {
+    const int u = static_cast<int>(frame.keypoints.uv(i, 0));
+    const int v = static_cast<int>(frame.keypoints.uv(i, 1));
+    const double expected = PlainRowSearch(left, right, options, u, v);
+    EXPECT_EQ(frame.u_right[i], expected) << u << " " << v;
     matched += expected >= 0.0;
-    refused += expected < 0.0 && uv[i].y() >= 120.0f;
+    refused += expected < 0.0 && v >= 120;
   }
   EXPECT_GT(matched, 100);
   EXPECT_GT(refused, 100);  // (the repeated pattern)
@@ -341,7 +339,7 @@ TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
   options.row_search = true;
   // Flat images: no texture, no match.
   const cv::Mat flat(240, 320, CV_8U, cv::Scalar(90));
-  StereoFrame frame = UnmatchedGridFrame(10.0);
+  StereoFrame frame = UnmatchedGridFrame();
   MatchStereoByRowSearch(flat, flat, rig, options, &frame);
   for (double d : frame.depth) EXPECT_LT(d, 0.0);
   // Vertical stripes with a 9 px period: every 9th column fits as well as the true one.
@@ -349,12 +347,12 @@ TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
   for (int v = 0; v < stripes.rows; ++v) {
     for (int u = 0; u < stripes.cols; ++u) stripes.at<uchar>(v, u) = (u % 9) < 4 ? 40 : 200;
   }
-  frame = UnmatchedGridFrame(10.0);
+  frame = UnmatchedGridFrame();
   MatchStereoByRowSearch(stripes, stripes, rig, options, &frame);
   for (double d : frame.depth) EXPECT_LT(d, 0.0);
   // A match already made (by descriptors) is kept as it is.
   const auto [left, right] = ShiftedPair(12.0);
-  frame = UnmatchedGridFrame(12.0);
+  frame = UnmatchedGridFrame();
   frame.u_right[0] = 3.0;
   frame.depth[0] = 7.0;
   MatchStereoByRowSearch(left, right, rig, options, &frame);
@@ -378,13 +376,13 @@ TEST(StereoFrameTest, RowSearchMatchesANoisyPairSmoothedAndLeavesTheImagesAsThey
     out.convertTo(*image, CV_8U);
   }
   const cv::Mat left_before = left.clone(), right_before = right.clone();
-  StereoFrame smoothed = UnmatchedGridFrame(12.0);
+  StereoFrame smoothed = UnmatchedGridFrame();
   const double above_noise = StereoFrontendOptions{}.denoise_above_noise;
   MatchStereoByRowSearch(SmoothIfNoisy(left, above_noise), SmoothIfNoisy(right, above_noise), rig,
                          options, &smoothed);
   EXPECT_EQ(cv::norm(left, left_before, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(right, right_before, cv::NORM_INF), 0.0);
-  StereoFrame raw = UnmatchedGridFrame(12.0);
+  StereoFrame raw = UnmatchedGridFrame();
   MatchStereoByRowSearch(left, right, rig, options, &raw);
   int with = 0, without = 0, wrong = 0;
   for (int i = 0; i < smoothed.NumKeypoints(); ++i) {
