@@ -94,6 +94,12 @@ def write_config(path: Path, key: str, value) -> Path:
 RELATED = {
     "tracking.imu.window_s": ("min_window_s", min),
     "tracking.imu.min_window_s": ("window_s", max),
+    # projected frames align patches of at least 5 x 5 (TrackerOptions::Check; XFeat's preset
+    # projects)
+    "tracking.track_refine_window_px": (
+        "projected_max_frames",
+        lambda window, projected: projected if window >= 2 else 0,
+    ),
 }
 
 
@@ -101,8 +107,10 @@ def write_valid_config(path: Path, key: str, value) -> Path:
     tree = nested(key, value)
     if key in RELATED:
         other, pick = RELATED[key]
-        imu = tree["tracking"]["imu"]
-        imu[other] = pick(value, getattr(Config().tracking.imu, other))
+        section, default = tree, Config()
+        for part in key.split(".")[:-1]:
+            section, default = section[part], getattr(default, part)
+        section[other] = pick(value, getattr(default, other))
     path.write_text(yaml.safe_dump(tree))
     return path
 
