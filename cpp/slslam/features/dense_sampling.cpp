@@ -1,9 +1,11 @@
 #include "slslam/features/dense_sampling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "slslam/core/check.h"
+#include "slslam/core/cpu_dispatch.h"
 
 namespace slslam {
 namespace {
@@ -28,6 +30,27 @@ int Taps(double t, bool cubic, double* w) {
   return -1;
 }
 
+// The keypoints' accumulation, one channel vector per tap: acc[c] += w * tap[c] over the taps
+// in the same order as a per-channel loop would, so each channel's sum is the same double.
+// Compiled for AVX2 too (core/cpu_dispatch.h; no FMA: the products are rounded as in the plain
+// build), the channel loop in four-wide double lanes.
+SLSLAM_AVX2_CLONES void AccumulateTaps(const float* __restrict pixels, int channels, int map_height,
+                                       int map_width, int taps, int x_first, int y_first,
+                                       const double* wx, const double* wy, double* __restrict acc) {
+  for (int c = 0; c < channels; ++c) acc[c] = 0.0;
+  for (int b = 0; b < taps; ++b) {
+    const int yi = y_first + b;
+    if (yi < 0 || yi >= map_height) continue;
+    for (int a = 0; a < taps; ++a) {
+      const int xi = x_first + a;
+      if (xi < 0 || xi >= map_width) continue;
+      const double w = wy[b] * wx[a];
+      const float* tap = pixels + (static_cast<size_t>(yi) * map_width + xi) * channels;
+      for (int c = 0; c < channels; ++c) acc[c] += w * tap[c];
+    }
+  }
+}
+
 }  // namespace
 
 DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_height,
@@ -42,6 +65,23 @@ DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_h
   const int channels = static_cast<int>(map.rows());
   const int taps = cubic ? 4 : 2;
   DenseSamples out(uv.rows(), channels);
+  if (uv.rows() == 0 || channels == 0) return out;
+  // The map pixel-major (each pixel's channels side by side), made once: a tap then reads its
+  // channels from consecutive memory instead of one value per channel plane (64 cache lines a
+  // tap for XFeat's descriptors). 2.4 % of XFeat + lines' CPU before (perf).
+  const Eigen::Index pixels = map.cols();
+  std::vector<float> by_pixel(static_cast<size_t>(pixels) * channels);
+  // (in blocks of 16 pixels: each plane's 16 values are one cache line, and the block's
+  // channels stay in L1 while they are written)
+  constexpr Eigen::Index kBlock = 16;
+  for (Eigen::Index begin = 0; begin < pixels; begin += kBlock) {
+    const Eigen::Index end = std::min(pixels, begin + kBlock);
+    for (int c = 0; c < channels; ++c) {
+      for (Eigen::Index at = begin; at < end; ++at) {
+        by_pixel[static_cast<size_t>(at) * channels + c] = map(c, at);
+      }
+    }
+  }
   std::vector<double> acc(channels);
   for (Eigen::Index i = 0; i < uv.rows(); ++i) {
     const double x = static_cast<double>(uv(i, 0)) * map_width / (input_width - 1) - 0.5;
@@ -50,18 +90,9 @@ DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_h
     double wx[4], wy[4];
     const int first = Taps(x - x0, cubic, wx);
     Taps(y - y0, cubic, wy);
-    std::fill(acc.begin(), acc.end(), 0.0);
-    for (int b = 0; b < taps; ++b) {
-      const int yi = static_cast<int>(y0) + first + b;
-      if (yi < 0 || yi >= map_height) continue;
-      for (int a = 0; a < taps; ++a) {
-        const int xi = static_cast<int>(x0) + first + a;
-        if (xi < 0 || xi >= map_width) continue;
-        const double w = wy[b] * wx[a];
-        const Eigen::Index at = static_cast<Eigen::Index>(yi) * map_width + xi;
-        for (int c = 0; c < channels; ++c) acc[c] += w * map(c, at);
-      }
-    }
+    AccumulateTaps(by_pixel.data(), channels, map_height, map_width, taps,
+                   static_cast<int>(x0) + first, static_cast<int>(y0) + first, wx, wy,
+                   acc.data());
     for (int c = 0; c < channels; ++c) out(i, c) = static_cast<float>(acc[c]);
   }
   return out;
