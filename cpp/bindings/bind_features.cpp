@@ -52,6 +52,17 @@ void BindFeatures(py::module_& m) {
       "32).");
 
   m.def(
+      "estimate_noise_sigma",
+      [](const py::array& image) {
+        const cv::Mat img = WrapGray(image, "image");
+        py::gil_scoped_release release;
+        return EstimateNoiseSigma(img);
+      },
+      py::arg("image"),
+      "Standard deviation of white noise in a uint8 gray image [gray levels] (Immerkaer 1996: "
+      "the 3 x 3 mask [1 -2 1]^T [1 -2 1], the L1 norm of its response over the inner pixels).");
+
+  m.def(
       "smooth_if_noisy",
       [](const py::array& image, double above_noise) -> py::array {
         const cv::Mat img = WrapGray(image, "image");
