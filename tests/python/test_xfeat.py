@@ -82,6 +82,31 @@ def test_real_image_keypoints_are_spread_unit_and_survive_a_shift(xfeat):
         assert np.mean(np.linalg.norm(delta, axis=1) <= tolerance_px) > fraction, shift
 
 
+def test_select_describes_only_the_kept_keypoints_with_the_same_result(xfeat):
+    """The tracker's grid limit inside detect (select): the same keypoints and descriptors as
+    limiting what detect returned, in the selection's order; an empty selection is empty."""
+    image = _simulated_image(1.0)
+    full = xfeat.detect(image)
+    rng = np.random.default_rng(3)
+    keep = np.sort(rng.choice(len(full), size=len(full) // 3, replace=False))
+    seen = {}
+
+    def select(uv, scores):
+        seen["n"] = len(uv)
+        np.testing.assert_array_equal(uv, full.uv)  # given before anything is described
+        np.testing.assert_array_equal(scores, full.scores)
+        return keep
+
+    limited = xfeat.detect(image, select=select)
+    assert seen["n"] == len(full) and len(limited) == len(keep)
+    expected = full.select(keep)
+    np.testing.assert_array_equal(limited.uv, expected.uv)
+    np.testing.assert_array_equal(limited.scores, expected.scores)
+    np.testing.assert_array_equal(limited.descriptors, expected.descriptors)
+    none = xfeat.detect(image, select=lambda uv, scores: np.zeros(0, dtype=np.int64))
+    assert len(none) == 0 and none.descriptors.shape == (0, DESCRIPTOR_DIM)
+
+
 def test_flat_images_give_no_keypoints(xfeat):
     for level in (0, 128, 255):
         assert len(xfeat.detect(np.full((480, 752), level, dtype=np.uint8))) == 0

@@ -40,6 +40,7 @@ heatmap around it, per axis (``refine_subpixel``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -243,9 +244,17 @@ class XFeat:
         outputs = self.session.run(list(OUTPUTS), {INPUT: padded[None, None]})
         return {name: out[0] for name, out in zip(OUTPUTS, outputs, strict=True)}
 
-    def detect(self, image: np.ndarray, threshold: float | None = None) -> Keypoints:
+    def detect(
+        self,
+        image: np.ndarray,
+        threshold: float | None = None,
+        select: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    ) -> Keypoints:
         """Keypoints of one uint8 gray image; ``threshold`` overrides the options' detection
-        threshold (the tracker's low-texture fallback detects at a lower one)."""
+        threshold (the tracker's low-texture fallback detects at a lower one). ``select``, given
+        the (N, 2) float32 positions and (N,) scores, returns the indices of the keypoints to
+        keep (the tracker's grid limit): only those are described, and returned in that order
+        (descriptor sampling is the costliest step after the network)."""
         image = check_gray_image(image)
         o = self.options
         net = self.infer(denoise(image, o.denoise_above_noise))
@@ -262,6 +271,9 @@ class XFeat:
         order = order[rank[order] > 0]
         uv, scores = uv[order], scores[order].astype(np.float32)
         uv = refine_subpixel(heat, uv) if o.subpixel else uv.astype(np.float32)
+        if select is not None and len(uv) > 0:
+            keep = np.asarray(select(uv, scores), dtype=np.int64)
+            uv, scores = uv[keep], scores[keep]
         descriptors = sample_map(net["descriptors"], uv, input_hw, cubic=True)
         norm = np.linalg.norm(descriptors, axis=1, keepdims=True)
         descriptors = (descriptors / np.maximum(norm, 1e-12)).astype(np.float32)

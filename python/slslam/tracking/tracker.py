@@ -407,7 +407,9 @@ class Tracker:
         self._weak_threshold: float | None = None
         features = self.config.features
         threshold = getattr(getattr(self.frontend, "options", None), "detection_threshold", None)
-        accepts = "threshold" in inspect.signature(self.frontend.detect).parameters
+        parameters = inspect.signature(self.frontend.detect).parameters
+        accepts = "threshold" in parameters
+        self._detect_selects = "select" in parameters
         if features.low_texture_fallback and threshold is not None and accepts:
             self._weak_threshold = threshold * features.low_texture_ratio
             self._grid.strong_score = threshold
@@ -514,20 +516,29 @@ class Tracker:
         return self._detect(smoothed if self._detect_smoothed else raw)
 
     def _detect(self, image: np.ndarray) -> Keypoints:
+        """The front end's keypoints of ``image`` limited per grid cell (features.grid). A front
+        end whose ``detect`` takes ``select`` (XFeat) applies the limit itself, before it samples
+        descriptors: only the kept keypoints are described (the same keypoints and descriptors)."""
+
+        def limit(uv: np.ndarray, scores: np.ndarray) -> np.ndarray:
+            keep = _core.grid_limit(
+                np.ascontiguousarray(uv, dtype=np.float32),
+                np.ascontiguousarray(scores, dtype=np.float32),
+                image.shape[1],
+                image.shape[0],
+                self._grid,
+            )
+            return np.asarray(keep, dtype=np.int64)
+
+        options: dict = {}
         if self._weak_threshold is not None:
-            keypoints = self.frontend.detect(image, threshold=self._weak_threshold)
-        else:
-            keypoints = self.frontend.detect(image)
+            options["threshold"] = self._weak_threshold
+        if self._detect_selects:
+            return self.frontend.detect(image, select=limit, **options)
+        keypoints = self.frontend.detect(image, **options)
         if len(keypoints) == 0:
             return keypoints
-        keep = _core.grid_limit(
-            np.ascontiguousarray(keypoints.uv, dtype=np.float32),
-            np.ascontiguousarray(keypoints.scores, dtype=np.float32),
-            image.shape[1],
-            image.shape[0],
-            self._grid,
-        )
-        return keypoints.select(np.asarray(keep))
+        return keypoints.select(limit(keypoints.uv, keypoints.scores))
 
     def track(self, left: np.ndarray, right: np.ndarray, timestamp: float) -> TrackResult:
         """Tracks one rectified stereo pair taken at ``timestamp`` seconds.
