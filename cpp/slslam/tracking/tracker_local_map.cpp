@@ -259,38 +259,70 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
 
 namespace tracker_detail {
 
+namespace {
+
 // Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
-// image pixels apart, row-major into `out`; the grid must lie inside [0, cols - 1] x
-// [0, rows - 1]. The column taps are computed once: they are the same on every row. Returns the
-// samples' sum.
-double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out) {
+// image pixels apart, row-major into `out` (the grid inside [0, cols - 1] x [0, rows - 1]). The
+// column taps are the same on every row, so each image row's horizontal interpolation is made
+// once: a grid row's lower image row is usually the next grid row's upper one (scale near 1),
+// and that row is reused, the same floats. (AVX2 gathers of the taps were no faster on this
+// machine's CPU: measured, not kept.)
+void SampleGridValues(const cv::Mat& image, double x, double y, int w, double scale,
+                      float* out) {
   const int size = 2 * w + 1;
-  static thread_local std::vector<float> col_ax;  // (no allocation per call)
+  static thread_local std::vector<float> col_ax, upper, lower;  // (no allocation per call)
   static thread_local std::vector<int> col_x0, col_x1;
   col_ax.resize(size);
   col_x0.resize(size);
   col_x1.resize(size);
+  upper.resize(size);
+  lower.resize(size);
   for (int c = -w; c <= w; ++c) {
     const double sx = x + c * scale;
     col_x0[c + w] = static_cast<int>(sx);
     col_x1[c + w] = std::min(col_x0[c + w] + 1, image.cols - 1);
     col_ax[c + w] = static_cast<float>(sx - col_x0[c + w]);
   }
-  double sum = 0.0;
+  const auto interpolate_row = [&](int y_row, float* row_out) {
+    const uchar* row = image.ptr<uchar>(y_row);
+    for (int c = 0; c < size; ++c) {
+      const float ax = col_ax[c];
+      row_out[c] = (1.0f - ax) * row[col_x0[c]] + ax * row[col_x1[c]];
+    }
+  };
+  int upper_row = -1, lower_row = -1;  // the image rows `upper` and `lower` hold
   for (int r = -w, k = 0; r <= w; ++r) {
     const double sy = y + r * scale;
     const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.rows - 1);
     const float ay = static_cast<float>(sy - y0);
-    const uchar* r0 = image.ptr<uchar>(y0);
-    const uchar* r1 = image.ptr<uchar>(y1);
-    for (int c = 0; c < size; ++c, ++k) {
-      const float ax = col_ax[c];
-      const float top = (1.0f - ax) * r0[col_x0[c]] + ax * r0[col_x1[c]];
-      const float bottom = (1.0f - ax) * r1[col_x0[c]] + ax * r1[col_x1[c]];
-      out[k] = (1.0f - ay) * top + ay * bottom;
-      sum += out[k];
+    if (y0 != upper_row) {
+      if (y0 == lower_row) {
+        std::swap(upper, lower);
+        std::swap(upper_row, lower_row);
+      } else {
+        interpolate_row(y0, upper.data());
+        upper_row = y0;
+      }
     }
+    if (y1 != lower_row) {
+      if (y1 == upper_row) {
+        lower = upper;  // (the last image row: y1 clamped to y0)
+      } else {
+        interpolate_row(y1, lower.data());
+      }
+      lower_row = y1;
+    }
+    for (int c = 0; c < size; ++c, ++k) out[k] = (1.0f - ay) * upper[c] + ay * lower[c];
   }
+}
+
+}  // namespace
+
+double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out) {
+  SampleGridValues(image, x, y, w, scale, out);
+  const int n = (2 * w + 1) * (2 * w + 1);
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += out[k];
   return sum;
 }
 

@@ -1,7 +1,9 @@
 // The tracker's keypoint refinement: a map point's patch aligned to a later image (shifted,
 // scaled, brighter), and refused on flat images and on a patch of something else; the coarse
 // search that starts projected points (TrackerOptions::projected_max_frames).
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -66,6 +68,50 @@ TEST(PatchAlignment, RefusesFlatImagesAndOtherPatches) {
   EXPECT_FALSE(AlignPatch(image, other, 1.0, 0.8, &u, &v));
   // Near the border there is no patch to take.
   EXPECT_TRUE(SamplePatch(image, 3.0, 100.0, 5).empty());
+}
+
+TEST(PatchSampling, GivesEachSampleAsAPlainBilinearInterpolation) {
+  // The grid reuses an image row's horizontal interpolation between grid rows: at every scale
+  // (grid rows on the same, adjacent or farther image rows), at the last image row (the lower
+  // row clamped to it), near the buffer's end and on a view into a larger image, each sample is
+  // the plain interpolation's float, and the sum theirs.
+  const cv::Mat full = Texture(7, 70, 100);
+  for (const cv::Mat& image : {full.rowRange(0, 60).colRange(0, 80).clone(),
+                               full(cv::Rect(10, 5, 80, 60))}) {
+    const int w = 5, size = 2 * w + 1;
+    std::vector<float> out(size * size);
+    for (double scale : {0.5, 0.73, 1.0, 1.02, 1.5, 2.0}) {
+      const double bottom = 59.0 - w * scale;
+      for (const cv::Point2d& centre :
+           {cv::Point2d(40.3, 30.7), cv::Point2d(40.0, 30.0), cv::Point2d(60.9, bottom),
+            cv::Point2d(25.5, bottom + 0.4), cv::Point2d(77.5 - w * scale, bottom)}) {
+        if (centre.y + w * scale > image.rows - 1.0 || centre.x + w * scale > image.cols - 1.0) {
+          continue;
+        }
+        const double sum =
+            tracker_detail::SampleGrid(image, centre.x, centre.y, w, scale, out.data());
+        double expected_sum = 0.0;
+        for (int r = -w, k = 0; r <= w; ++r) {
+          const double sy = centre.y + r * scale;
+          const int y0 = static_cast<int>(sy), y1 = std::min(y0 + 1, image.rows - 1);
+          const float ay = static_cast<float>(sy - y0);
+          for (int c = -w; c <= w; ++c, ++k) {
+            const double sx = centre.x + c * scale;
+            const int x0 = static_cast<int>(sx), x1 = std::min(x0 + 1, image.cols - 1);
+            const float ax = static_cast<float>(sx - x0);
+            const float top =
+                (1.0f - ax) * image.at<uchar>(y0, x0) + ax * image.at<uchar>(y0, x1);
+            const float low =
+                (1.0f - ax) * image.at<uchar>(y1, x0) + ax * image.at<uchar>(y1, x1);
+            const float expected = (1.0f - ay) * top + ay * low;
+            ASSERT_EQ(out[k], expected) << "scale " << scale << ", sample " << k;
+            expected_sum += expected;
+          }
+        }
+        EXPECT_EQ(sum, expected_sum);
+      }
+    }
+  }
 }
 
 TEST(PatchSearch, FindsAShiftBeyondTheAlignmentsReachThenAlignsIt) {
