@@ -158,6 +158,24 @@ std::shared_ptr<MapPoint> Map::point(int id) const {
   return it == points_.end() ? nullptr : it->second;
 }
 
+std::vector<MapPoint*> Map::PointsOf(const std::vector<int>& ascending_ids) const {
+  std::vector<MapPoint*> out(ascending_ids.size(), nullptr);
+  auto it = points_.begin();
+  constexpr int kSteps = 8;  // steps along the container before a search from the root
+  for (size_t i = 0; i < ascending_ids.size(); ++i) {
+    const int id = ascending_ids[i];
+    Require(i == 0 || ascending_ids[i - 1] <= id, "PointsOf needs ascending ids");
+    int steps = 0;
+    while (it != points_.end() && it->first < id && steps < kSteps) {
+      ++it;
+      ++steps;
+    }
+    if (it != points_.end() && it->first < id) it = points_.lower_bound(id);
+    if (it != points_.end() && it->first == id) out[i] = it->second.get();
+  }
+  return out;
+}
+
 std::shared_ptr<MapLine> Map::line(int id) const {
   auto it = lines_.find(id);
   return it == lines_.end() ? nullptr : it->second;

@@ -108,6 +108,10 @@ class Map {
 
   std::shared_ptr<KeyFrame> keyframe(int id) const SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapPoint> point(int id) const SLSLAM_REQUIRES(mutex_);
+  // The points of ascending ids (nullptr where there is none), by one walk along the ordered
+  // container instead of a tree search each: valid while the lock is held.
+  std::vector<MapPoint*> PointsOf(const std::vector<int>& ascending_ids) const
+      SLSLAM_REQUIRES(mutex_);
   std::shared_ptr<MapLine> line(int id) const SLSLAM_REQUIRES(mutex_);
   const std::map<int, std::shared_ptr<KeyFrame>>& keyframes() const SLSLAM_REQUIRES(mutex_) {
     return keyframes_;

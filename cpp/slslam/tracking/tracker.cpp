@@ -344,8 +344,15 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   int reference = 0;
   if (auto kf = map.keyframe(last_keyframe_)) {
     const int min_obs = map.keyframes().size() <= 2 ? 2 : 3;
+    // (the ids sorted for one walk along the map's ordered points, Map::PointsOf, which gives a
+    // repeated id each time: the same count as a search per keypoint)
+    std::vector<int> ids;
+    ids.reserve(kf->point_ids.size());
     for (int pid : kf->point_ids) {
-      auto p = pid >= 0 ? map.point(pid) : nullptr;
+      if (pid >= 0) ids.push_back(pid);
+    }
+    std::sort(ids.begin(), ids.end());
+    for (const MapPoint* p : map.PointsOf(ids)) {
       if (p && !p->bad && static_cast<int>(p->observations.size()) >= min_obs) ++reference;
     }
   }

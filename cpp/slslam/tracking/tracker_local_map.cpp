@@ -58,12 +58,13 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
   }
 
   // Points in front of the predicted camera and inside the image.
-  std::vector<std::shared_ptr<MapPoint>> points;
+  std::vector<MapPoint*> points;
   std::vector<Eigen::Vector2f> predicted;
   // The descriptors' kind: the frame's (none for a frame without keypoints)
   const cv::Mat* kind = frame.NumKeypoints() > 0 ? &frame.keypoints.descriptors : nullptr;
-  for (int pid : point_ids) {
-    auto p = map.point(pid);
+  // (one walk along the map's ordered points for the ascending ids: a tree search per id was
+  // 0.6 % of an XFeat + lines run, perf)
+  for (MapPoint* p : map.PointsOf(point_ids)) {
     if (!p || p->bad) continue;
     const Eigen::Vector3d x_c = pred_cam_from_world * p->position;
     if (x_c.z() <= 0.05) continue;

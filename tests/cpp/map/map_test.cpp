@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <vector>
 
 namespace slslam {
 namespace {
@@ -33,6 +36,30 @@ TEST(Map, CulledKeyFrameKeepsItsPoseThroughItsParent) {
   ASSERT_TRUE(map.KeyFramePose(b->id, &pose));
   EXPECT_TRUE(pose.rotation.isApprox(R_b * dR, 1e-12));
   EXPECT_FALSE(map.KeyFramePose(99, &pose));
+}
+
+TEST(Map, PointsOfAscendingIdsAreTheLookedUpPoints) {
+  // One walk along the ordered points (a few steps, else a search): every id as point(id) gives
+  // it, missing and erased ids null, repeats, jumps beyond the walk's steps and ids past the end.
+  Map map;
+  auto kf = map.AddKeyFrame(Rigid3d(), EmptyFrame());
+  const cv::Mat descriptor = cv::Mat::zeros(1, 32, CV_8U);
+  std::vector<int> ids;
+  for (int i = 0; i < 60; ++i) {
+    ids.push_back(map.AddPoint(Eigen::Vector3d(i, 0, 1), descriptor, kf->id)->id);
+  }
+  for (int i = 0; i < 60; i += 7) map.ErasePoint(ids[i]);
+  const std::vector<int> query = {ids[0] - 5, ids[1], ids[1], ids[2], ids[7], ids[8], ids[30],
+                                  ids[31], ids[59], ids[59] + 1, ids[59] + 100};
+  const std::vector<MapPoint*> found = map.PointsOf(query);
+  ASSERT_EQ(found.size(), query.size());
+  for (size_t i = 0; i < query.size(); ++i) {
+    EXPECT_EQ(found[i], map.point(query[i]).get()) << "id " << query[i];
+  }
+  EXPECT_NE(found[1], nullptr);
+  EXPECT_EQ(found[4], nullptr);  // erased
+  EXPECT_TRUE(map.PointsOf({}).empty());
+  EXPECT_THROW(map.PointsOf({ids[2], ids[1]}), std::exception);
 }
 
 TEST(Map, AbsorbKeepsIdsUniqueAcrossMapsSharingIds) {
