@@ -260,16 +260,13 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
 
 namespace tracker_detail {
 
-namespace {
-
 // Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
-// image pixels apart, row-major into `out` (the grid inside [0, cols - 1] x [0, rows - 1]). The
-// column taps are the same on every row, so each image row's horizontal interpolation is made
-// once: a grid row's lower image row is usually the next grid row's upper one (scale near 1),
-// and that row is reused, the same floats. (AVX2 gathers of the taps were no faster on this
-// machine's CPU: measured, not kept.)
-void SampleGridValues(const cv::Mat& image, double x, double y, int w, double scale,
-                      float* out) {
+// image pixels apart, row-major into `out` (the grid inside [0, cols - 1] x [0, rows - 1]);
+// returns their sum. The column taps are the same on every row, so each image row's horizontal
+// interpolation is made once: a grid row's lower image row is usually the next grid row's upper
+// one (scale near 1), and that row is reused, the same floats. (AVX2 gathers of the taps were
+// no faster on this machine's CPU: measured, not kept.)
+double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out) {
   const int size = 2 * w + 1;
   static thread_local std::vector<float> col_ax, upper, lower;  // (no allocation per call)
   static thread_local std::vector<int> col_x0, col_x1;
@@ -315,15 +312,8 @@ void SampleGridValues(const cv::Mat& image, double x, double y, int w, double sc
     }
     for (int c = 0; c < size; ++c, ++k) out[k] = (1.0f - ay) * upper[c] + ay * lower[c];
   }
-}
-
-}  // namespace
-
-double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out) {
-  SampleGridValues(image, x, y, w, scale, out);
-  const int n = (2 * w + 1) * (2 * w + 1);
   double sum = 0.0;
-  for (int k = 0; k < n; ++k) sum += out[k];
+  for (int k = 0; k < size * size; ++k) sum += out[k];
   return sum;
 }
 
