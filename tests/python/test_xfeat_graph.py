@@ -179,16 +179,28 @@ def test_optimise_refuses_another_graph_and_the_export_names_the_file(tmp_path):
     model.graph.node.remove(next(n for n in model.graph.node if n.op_type == "ReduceMean"))
     with pytest.raises(xfeat_graph.GraphRewriteError, match="channel mean"):
         xfeat_graph.optimise(model)
-    # a ReLU read twice: the phase layout would leak
+    # a ReLU read by another node, or a graph output: the phase layout would leak
+    for read_by in ("node", "output"):
+        model = _xfeat_like()
+        relu = model.graph.node[3]  # block1.0's ReLU
+        assert relu.op_type == "Relu"
+        if read_by == "node":
+            model.graph.node.append(helper.make_node("Identity", [relu.output[0]], ["leak"]))
+        else:
+            model.graph.output.append(
+                helper.make_tensor_value_info(
+                    relu.output[0], TensorProto.FLOAT, ["n", "c", "h", "w"]
+                )
+            )
+        with pytest.raises(xfeat_graph.GraphRewriteError, match="through one ReLU alone"):
+            xfeat_graph.phase_convolutions(model)
+    # an unshuffle of another block size is left alone
     model = _xfeat_like()
-    relu = model.graph.node[3]  # block1.0's ReLU
-    assert relu.op_type == "Relu"
-    model.graph.output.append(
-        helper.make_tensor_value_info(relu.output[0], TensorProto.FLOAT, ["n", "c", "h", "w"])
-    )
-    model.graph.node.append(helper.make_node("Identity", [relu.output[0]], ["leak"]))
-    with pytest.raises(xfeat_graph.GraphRewriteError, match="through one ReLU alone"):
-        xfeat_graph.phase_convolutions(model)
+    shape = next(t for t in model.graph.initializer if t.name == "s1")
+    shape.CopyFrom(numpy_helper.from_array(np.array([1, 1, 16, 4, 24, 4], np.int64), "s1"))
+    target = next(t for t in model.graph.initializer if t.name == "s2")
+    target.CopyFrom(numpy_helper.from_array(np.array([1, 16, 16, 24], np.int64), "s2"))
+    assert xfeat_graph.unshuffle_as_space_to_depth(model) == 0
 
     from slslam.features.xfeat_export import write_optimised
 
@@ -207,3 +219,28 @@ def test_the_shipped_file_is_the_rewritten_graph():
     ops = [n.op_type for n in onnx.load(str(SHIPPED_MODEL)).graph.node]
     assert "ReduceMean" not in ops and "Transpose" not in ops
     assert ops.count("SpaceToDepth") == 2
+
+
+def test_shipped_int8_file_sees_the_whole_gray_range():
+    """The image enters the 8-bit network unquantised (the instance normalisation stays in float,
+    xfeat_quantize.FLOAT_NODES): gray levels above the calibration frames' brightest (176) are
+    not clipped, so an image and its copy clipped at 176 give different keypoint logits."""
+    from slslam.features.xfeat import SHIPPED_INT8_MODEL
+
+    if not SHIPPED_INT8_MODEL.is_file():
+        pytest.skip(f"{SHIPPED_INT8_MODEL} is not installed")
+    model = onnx.load(str(SHIPPED_INT8_MODEL))
+    readers = [n.op_type for n in model.graph.node if "image" in n.input]
+    assert readers == ["InstanceNormalization"]
+    image = np.random.default_rng(3).integers(0, 256, (1, 1, 96, 128)).astype(np.float32)
+    logits = [_run(model, {"image": x})[1] for x in (image, np.minimum(image, 176.0))]
+    assert np.abs(logits[0] - logits[1]).max() > 1.0
+
+
+def test_quantising_another_graph_names_the_file(tmp_path):
+    from slslam.features.xfeat_quantize import quantize_xfeat
+
+    source = tmp_path / "other.onnx"
+    onnx.save(_xfeat_like(), str(source))
+    with pytest.raises(ModelError, match=r"other\.onnx.*keep in float"):
+        quantize_xfeat(tmp_path / "x8.onnx", images=[np.zeros((64, 96), np.uint8)], source=source)

@@ -127,18 +127,21 @@ def write_optimised(traced: Path, out: Path, atol: float = 1e-4) -> None:
     model = onnx.load(str(traced))
     try:
         optimise(model)
-    except GraphRewriteError as exc:
+    except (GraphRewriteError, onnx.checker.ValidationError) as exc:
         raise ModelError(traced, f"not the XFeat graph this export rewrites ({exc})") from None
     onnx.save(model, str(out))
     image = np.random.default_rng(0).integers(0, 256, (1, 1, 352, 640)).astype(np.float32)
     providers = ["CPUExecutionProvider"]
-    before = ort.InferenceSession(str(traced), providers=providers).run(None, {INPUT: image})
-    after = ort.InferenceSession(str(out), providers=providers).run(None, {INPUT: image})
-    for name, a, b in zip(OUTPUTS, before, after, strict=True):
-        scale = max(1.0, float(np.abs(a).max()))
-        if a.shape != b.shape or float(np.abs(a - b).max()) > atol * scale:
-            out.unlink()
-            raise ModelError(out, f"the rewritten graph's {name} differs from the traced one's")
+    try:
+        before = ort.InferenceSession(str(traced), providers=providers).run(None, {INPUT: image})
+        after = ort.InferenceSession(str(out), providers=providers).run(None, {INPUT: image})
+        for name, a, b in zip(OUTPUTS, before, after, strict=True):
+            scale = max(1.0, float(np.abs(a).max()))
+            if a.shape != b.shape or float(np.abs(a - b).max()) > atol * scale:
+                raise ModelError(out, f"the rewritten graph's {name} differs from the traced one's")
+    except Exception:
+        out.unlink(missing_ok=True)  # (onnxruntime raises its own types)
+        raise
 
 
 def _trace(torch, net, out: Path) -> None:

@@ -5,10 +5,7 @@ that the rewritten file gives the same outputs (float rounding apart) on a rando
 keeps it. Four rewrites, each exact in real arithmetic:
 
 1. **The channel mean of a one-channel input** (the network starts with ``x.mean(dim=1)``, for
-   colour images) is the input itself: the ``ReduceMean`` goes. In the 8-bit file the mean's
-   output was also quantised on the calibration images' range (gray levels up to 176 on the
-   simulated frames, in steps of 0.69): brighter pixels were clipped there before the network saw
-   them.
+   colour images) is the input itself: the ``ReduceMean`` goes.
 2. **The keypoint head's 8 x 8 space-to-depth** (``pixel_unshuffle``, which PyTorch exports as
    reshapes around a six-dimensional ``Transpose``) becomes ONNX's ``SpaceToDepth``: the same
    channel order for a one-channel image (``(row * 8 + column) * C + c`` with C = 1).
@@ -152,11 +149,71 @@ def drop_single_channel_mean(model) -> int:
     return removed
 
 
+def _static_hw(model, name: str) -> tuple[int, int] | None:
+    """(H, W) of a [1, 1, H, W] tensor whose sides shape inference fixes, else None."""
+    import onnx
+
+    inferred = onnx.shape_inference.infer_shapes(model).graph
+    for value in list(inferred.value_info) + list(inferred.input):
+        if value.name == name:
+            dims = value.type.tensor_type.shape.dim
+            if len(dims) == 4 and all(d.HasField("dim_value") for d in dims[2:]):
+                return dims[2].dim_value, dims[3].dim_value
+    return None
+
+
+def _is_space_to_depth(model, chain, start: str, end: str, producer: dict) -> bool:
+    """Whether the nodes of ``chain`` (with the constants they read) turn a random [1, 1, H, W]
+    tensor ``start`` into its space-to-depth with block UNSHUFFLE_BLOCK (DCR order) as ``end``."""
+    import onnx
+    import onnxruntime as ort
+
+    graph = model.graph
+    inside = {n.output[0] for n in chain}
+    constants = [
+        producer[name]
+        for node in chain
+        for name in node.input[1:]
+        if name in producer and name not in inside and producer[name].op_type == "Constant"
+    ]
+    initializers = [t for t in graph.initializer if any(t.name in node.input[1:] for node in chain)]
+    order = {id(n): i for i, n in enumerate(graph.node)}
+    nodes = constants + sorted(chain, key=lambda n: order[id(n)])
+    block = UNSHUFFLE_BLOCK
+    h, w = _static_hw(model, start) or (4 * block, 6 * block)
+    if h % block or w % block:
+        return False
+    mini = onnx.helper.make_model(
+        onnx.helper.make_graph(
+            nodes,
+            "unshuffle",
+            [onnx.helper.make_tensor_value_info(start, onnx.TensorProto.FLOAT, [1, 1, h, w])],
+            [onnx.helper.make_tensor_value_info(end, onnx.TensorProto.FLOAT, None)],
+            initializers,
+        ),
+        opset_imports=list(model.opset_import),
+    )
+    mini.ir_version = model.ir_version
+    x = np.random.default_rng(0).normal(size=(1, 1, h, w)).astype(np.float32)
+    expected = (
+        x.reshape(h // block, block, w // block, block)
+        .transpose(1, 3, 0, 2)
+        .reshape(1, block * block, h // block, w // block)
+    )
+    try:
+        session = ort.InferenceSession(mini.SerializeToString(), providers=["CPUExecutionProvider"])
+        (got,) = session.run(None, {start: x})
+    except Exception:  # onnxruntime raises its own types: not a chain it can run alone
+        return False
+    return got.shape == expected.shape and bool(np.array_equal(got, expected))
+
+
 def unshuffle_as_space_to_depth(model) -> int:
     """Replaces PyTorch's export of ``pixel_unshuffle`` on a one-channel image (Unsqueeze /
     Reshape ... a ``Transpose`` with perm [0, 1, 3, 5, 2, 4] ... Reshape / Squeeze) by one
-    ``SpaceToDepth``; the number replaced. The block size is :data:`UNSHUFFLE_BLOCK`; the export
-    checks the outputs afterwards."""
+    ``SpaceToDepth``; the number replaced. A chain is replaced only if, run alone on a random
+    one-channel image, it gives that image's space-to-depth with block :data:`UNSHUFFLE_BLOCK`
+    exactly."""
     import onnx
 
     graph = model.graph
@@ -178,6 +235,8 @@ def unshuffle_as_space_to_depth(model) -> int:
             end = consumers[end][0].output[0]
         if any(len(consumers.get(n.output[0], [])) != 1 for n in chain if n.output[0] != end):
             continue  # an intermediate tensor used elsewhere: leave the chain alone
+        if not _is_space_to_depth(model, chain, start, end, producer):
+            continue  # another block size, several channels, another order: not this rewrite
         position = min(list(graph.node).index(n) for n in chain)
         for node in chain:
             graph.node.remove(node)
@@ -217,8 +276,10 @@ def phase_convolutions(model, chain=BLOCK1_PHASES) -> None:
         if f_out != f_in:
             raise GraphRewriteError(f"{name} gives phase form {f_out}, {next_name} reads {f_in}")
         # conv -> Relu -> next conv, nothing else reading either tensor
+        outputs = {value.name for value in graph.output}
         relu = consumers.get(by_name[name].output[0], [])
         ok = len(relu) == 1 and relu[0].op_type == "Relu"
+        ok = ok and not {by_name[name].output[0], relu[0].output[0]} & outputs
         after = consumers.get(relu[0].output[0], []) if ok else []
         if not (ok and len(after) == 1 and after[0].name == next_name):
             raise GraphRewriteError(f"{name} does not feed {next_name} through one ReLU alone")
@@ -287,15 +348,15 @@ def pooled_skip_on_phases(model, pool: str = SKIP_POOL, conv: str = SKIP_CONV) -
         raise GraphRewriteError(f"no skip branch {pool} -> {conv} in the graph")
     pool_node, conv_node = by_name[pool], by_name[conv]
     phases = [
-        n for n in graph.node if n.op_type == "SpaceToDepth" and n.input[0] == pool_node.input[0]
+        n
+        for n in graph.node
+        if n.op_type == "SpaceToDepth"
+        and n.input[0] == pool_node.input[0]
+        and _attributes(n).get("blocksize") == 4
     ]
     attributes = _attributes(pool_node)
-    block = UNSHUFFLE_BLOCK
-    if phases:
-        block = _attributes(phases[0]).get("blocksize")
     if (
         not phases
-        or block != 4
         or list(attributes.get("kernel_shape", [])) != [4, 4]
         or list(attributes.get("strides", [])) != [4, 4]
         or any(attributes.get("pads", [0, 0, 0, 0]))
@@ -336,5 +397,25 @@ def optimise(model):
         raise GraphRewriteError("expected one pixel_unshuffle (reshapes around a Transpose)")
     phase_convolutions(model)
     pooled_skip_on_phases(model)
+    _sort_topologically(model.graph)
     onnx.checker.check_model(model)
     return model
+
+
+def _sort_topologically(graph) -> None:
+    """Nodes in an order where each comes after the producers of its inputs (the rewrites put
+    new nodes where the replaced ones were); the original order among the ready ones."""
+    available = {value.name for value in graph.input} | {t.name for t in graph.initializer}
+    available.add("")  # an omitted optional input
+    pending = list(graph.node)
+    ordered = []
+    while pending:
+        ready = [n for n in pending if all(name in available for name in n.input)]
+        if not ready:
+            raise GraphRewriteError(f"the rewritten graph has a cycle at {pending[0].name}")
+        for node in ready:
+            available.update(node.output)
+        ordered += ready
+        pending = [n for n in pending if all(n is not r for r in ready)]
+    del graph.node[:]
+    graph.node.extend(ordered)

@@ -33,13 +33,14 @@ from slslam.features.xfeat_export import sha256
 #: Calibration of the shipped file: the simulated loop at these light levels, these frames.
 CALIBRATION_LIGHTS = (1.0, 0.15)
 CALIBRATION_FRAMES = tuple(range(0, 84, 7))
-#: Convolutions left in float: the keypoint head (four 1 x 1 convolutions on the 8 x 8 pixel
-#: blocks of the image, at an eighth of its rows and columns). Its logits place the keypoints, to
-#: sub-pixel precision on their heatmap; in 8 bits the keypoints moved a median 0.072 px from the
-#: float network's (90th percentile 0.24 px), with the head in float 0.031 px (0.13 px), on six
-#: frames of the simulated loop at both light levels; about a millisecond more a frame on two
-#: cores (benchmarks/README.md, 2026-11-30).
-FLOAT_NODES = tuple(
+#: Nodes left in float. The input's instance normalisation: quantising its input (the image)
+#: clipped gray levels above the calibration frames' brightest (176 on the simulated loop) before
+#: the network saw them. The keypoint head (four 1 x 1 convolutions on the 8 x 8 pixel blocks of
+#: the image, at an eighth of its rows and columns): its logits place the keypoints, to sub-pixel
+#: precision on their heatmap; in 8 bits the keypoints moved a median 0.072 px from the float
+#: network's (90th percentile 0.24 px), with the head in float 0.031 px (0.13 px), on six frames
+#: of the simulated loop at both light levels, in the same time (benchmarks/README.md, 2026-11-30).
+FLOAT_NODES = ("/net/norm/InstanceNormalization",) + tuple(
     f"/net/keypoint_head/keypoint_head.{i}/{'Conv' if i == 3 else 'layer/layer.0/Conv'}"
     for i in range(4)
 )
@@ -69,10 +70,15 @@ def simulated_calibration_images(
     return images
 
 
-def _node_names(path: Path) -> set[str]:
+def _float_nodes(path: Path, source: Path) -> list[str]:
+    """FLOAT_NODES, all of which the graph must have (another export's names: ModelError)."""
     import onnx
 
-    return {node.name for node in onnx.load(str(path)).graph.node}
+    names = {node.name for node in onnx.load(str(path)).graph.node}
+    missing = [name for name in FLOAT_NODES if name not in names]
+    if missing:
+        raise ModelError(source, f"no node {missing[0]} to keep in float: not XFeat's export")
+    return list(FLOAT_NODES)
 
 
 def quantize_xfeat(
@@ -127,7 +133,7 @@ def quantize_xfeat(
                 reduce_range=True,  # 7-bit weights: no 16-bit saturation without VNNI (above)
                 activation_type=QuantType.QUInt8,
                 weight_type=QuantType.QInt8,
-                nodes_to_exclude=[n for n in FLOAT_NODES if n in _node_names(prepared)],
+                nodes_to_exclude=_float_nodes(prepared, source),
             )
         finally:
             logging.getLogger().removeFilter(quiet)
