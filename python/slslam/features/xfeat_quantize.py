@@ -88,13 +88,17 @@ def quantize_xfeat(
     calibrated on ``images`` (uint8 gray, any size; default: the simulated frames above).
     Returns the facts PROVENANCE.md records."""
     import onnxruntime as ort
-    from onnxruntime.quantization import (
-        CalibrationDataReader,
-        QuantFormat,
-        QuantType,
-        quantize_static,
-    )
-    from onnxruntime.quantization.shape_inference import quant_pre_process
+
+    try:
+        from onnxruntime.quantization import (
+            CalibrationDataReader,
+            QuantFormat,
+            QuantType,
+            quantize_static,
+        )
+        from onnxruntime.quantization.shape_inference import quant_pre_process
+    except ImportError as exc:  # onnxruntime's quantisation needs the onnx package
+        raise ModelError(None, f"quantising XFeat needs onnx: pip install onnx ({exc})") from None
 
     source = Path(source) if source else SHIPPED_MODEL
     if not source.is_file():
