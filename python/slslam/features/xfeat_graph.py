@@ -272,11 +272,11 @@ def phase_convolutions(model, chain=BLOCK1_PHASES) -> None:
         raise GraphRewriteError(f"no convolution {missing[0]} in the graph")
     if chain[-1][2] != 1:
         raise GraphRewriteError("the last convolution of a phase chain must give a plain tensor")
+    outputs = {value.name for value in graph.output}
     for (name, _, f_out), (next_name, f_in, _) in itertools.pairwise(chain):
         if f_out != f_in:
             raise GraphRewriteError(f"{name} gives phase form {f_out}, {next_name} reads {f_in}")
         # conv -> Relu -> next conv, nothing else reading either tensor
-        outputs = {value.name for value in graph.output}
         relu = consumers.get(by_name[name].output[0], [])
         ok = len(relu) == 1 and relu[0].op_type == "Relu"
         ok = ok and not {by_name[name].output[0], relu[0].output[0]} & outputs
@@ -416,6 +416,7 @@ def _sort_topologically(graph) -> None:
         for node in ready:
             available.update(node.output)
         ordered += ready
-        pending = [n for n in pending if all(n is not r for r in ready)]
+        taken = {id(n) for n in ready}
+        pending = [n for n in pending if id(n) not in taken]
     del graph.node[:]
     graph.node.extend(ordered)
