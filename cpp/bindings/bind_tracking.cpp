@@ -470,6 +470,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("line_max_lbd", &TrackerOptions::line_max_lbd)
       .def_readwrite("keyframe_max_frames", &TrackerOptions::keyframe_max_frames)
       .def_readwrite("keyframe_min_frames", &TrackerOptions::keyframe_min_frames)
+      .def_readwrite("keyframe_min_frames_noisy", &TrackerOptions::keyframe_min_frames_noisy)
       .def_readwrite("keyframe_min_interval_s", &TrackerOptions::keyframe_min_interval_s)
       .def_readwrite("keyframe_track_ratio", &TrackerOptions::keyframe_track_ratio)
       .def_readwrite("close_depth_baselines", &TrackerOptions::close_depth_baselines)

@@ -137,6 +137,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "line_max_lbd",
         "keyframe_max_frames",
         "keyframe_min_frames",
+        "keyframe_min_frames_noisy",
         "keyframe_min_interval_s",
         "keyframe_track_ratio",
         "keyframe_min_inliers",
@@ -417,6 +418,8 @@ class TrackingConfig:
     keyframe_max_frames: int = _tracking("keyframe_max_frames", "[1, 1e6]")
     # no keyframe sooner than this after the last while tracking is strong [frames]
     keyframe_min_frames: int = _tracking("keyframe_min_frames", "[0, 1000]")
+    # ... in a noisy (dark, smoothed) frame instead [frames] (-1: keyframe_min_frames)
+    keyframe_min_frames_noisy: int = _tracking("keyframe_min_frames_noisy", "[-1, 1000]")
     # ... nor sooner than this [s] (a gap in time, the same at any camera rate; 0: none)
     keyframe_min_interval_s: float = _tracking("keyframe_min_interval_s", "[0, 1000]")
     # tracked / reference keyframe points below: keyframe

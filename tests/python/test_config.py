@@ -147,8 +147,8 @@ def test_dynamic_cell_settings_reach_the_tracker():
 def test_xfeat_is_the_default_front_end_with_its_preset():
     """XFeat is the default point front end, with its preset (presets/xfeat.yaml) under the
     config's keys: the filter's width following the frame's residuals, the 8-bit network on the
-    left image with the row search, keyframes at most every 6 frames, every frame's lines,
-    projected frames; every other key at its default."""
+    left image with the row search, keyframes at most every 6 frames (5 in noisy frames), every
+    frame's lines, projected frames; every other key at its default."""
     from slslam.datasets.euroc import RectifiedStereoCamera
     from slslam.tracking.tracker import _core_options
 
@@ -171,6 +171,8 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
     )
     # and keyframes at most every 6 frames while tracking is strong, every frame's lines
     assert config.tracking.keyframe_min_frames == 6
+    assert config.tracking.keyframe_min_frames_noisy == 5
+    assert Config().tracking.keyframe_min_frames_noisy == -1  # (off: keyframe_min_frames)
     assert not config.tracking.lines_on_demand and Config().tracking.lines_on_demand
     # and frames between detections tracked on projected keypoints (off by default)
     assert config.tracking.projected_max_frames == 2 and Config().tracking.projected_max_frames == 0
@@ -179,6 +181,7 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
         config.tracking,
         stereo_row_search=False,
         keyframe_min_frames=Config().tracking.keyframe_min_frames,
+        keyframe_min_frames_noisy=Config().tracking.keyframe_min_frames_noisy,
         lines_on_demand=Config().tracking.lines_on_demand,
         projected_max_frames=Config().tracking.projected_max_frames,
         projection_cell_px=Config().tracking.projection_cell_px,

@@ -896,3 +896,40 @@ def test_unaligned_matches_weigh_less_only_in_noisy_frames_with_enough_aligned(t
     assert np.array_equal(poses(dark, 3.0, 10**9), plain)
     bright = simulate(1.0)
     assert np.array_equal(poses(bright, 3.0, 0), poses(bright, 1.0, 0))
+
+
+def test_the_noisy_keyframe_gap_applies_to_noisy_frames_only(sim_loop, tmp_path):
+    """tracking.keyframe_min_frames_noisy: on dark frames (smoothed as noisy) the keyframe gap
+    is this instead of keyframe_min_frames, so a shorter one gives more keyframes there, and
+    every gap after a keyframe made while tracking is strong is at least it; on bright frames
+    (never smoothed) the poses and keyframes are those of -1 (off) to the last bit."""
+    frames = 40
+
+    def run(sequence: EurocSequence, noisy_gap: int) -> tuple[np.ndarray, list[int]]:
+        base = config("orb", lines=False)
+        tracking = dataclasses.replace(
+            base.tracking, keyframe_min_frames=8, keyframe_min_frames_noisy=noisy_gap
+        )
+        with Tracker(sequence.camera, dataclasses.replace(base, tracking=tracking)) as tracker:
+            results = []
+            for i in range(frames):
+                f = sequence[i]
+                results.append(tracker.track(f.left, f.right, f.t_ns * 1e-9))
+                assert results[-1].tracked
+            keyframes = [r.index for r in results if r.counts.keyframe]
+            return np.asarray(tracker.trajectory()[1]), keyframes
+
+    out = tmp_path / "dark"
+    Simulator(SimOptions(preset="loop", light=0.15, frames=frames, lidar=False)).write(
+        out, progress=False
+    )
+    dark = EurocSequence(out)
+    _, off = run(dark, -1)
+    _, short = run(dark, 3)
+    assert len(short) > len(off), (short, off)
+    assert min(np.diff(short)) >= 3, short
+    bright = EurocSequence(sim_loop)
+    poses_off, keyframes_off = run(bright, -1)
+    poses_short, keyframes_short = run(bright, 3)
+    assert keyframes_short == keyframes_off
+    assert np.array_equal(poses_short, poses_off)

@@ -376,8 +376,11 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   if (!decide_only && !projected) first_tracked_ = first_tracked;
   reference = std::max(reference, first_tracked);
   // The minimum gap after the last keyframe, in frames and in time.
+  const int min_frames = frame.noisy && options_.keyframe_min_frames_noisy >= 0
+                             ? options_.keyframe_min_frames_noisy
+                             : options_.keyframe_min_frames;
   const bool past_gap =
-      frames_since >= options_.keyframe_min_frames &&
+      frames_since >= min_frames &&
       frame.timestamp - last_keyframe_time_s_ >= options_.keyframe_min_interval_s;
   // c1 of ORB-SLAM3 without the gap (c1a and c1c), then with it (c1b).
   const bool c1_without_gap = frames_since >= options_.keyframe_max_frames ||

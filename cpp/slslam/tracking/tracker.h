@@ -146,6 +146,12 @@ struct TrackerOptions {
   LineDescriptor line_descriptor = LineDescriptor::kOpenCvLbd;
   int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
   int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
+  /// ... in a noisy frame (StereoFrame::noisy: smoothed as dark) instead: keypoints repeat less
+  /// well there and fewer are tracked, so the map needs its keyframes sooner. XFeat + lines,
+  /// 150 frames of the simulated loop at light 0.15, seeds 0-4, mean ATE 0.0100 m with the gap
+  /// of 6 frames, 0.0082 with 5, 0.0079 with 4 (benchmarks/README.md, 2026-11-30 b). -1: the
+  /// same as keyframe_min_frames [frames]
+  int keyframe_min_frames_noisy = -1;
   /// ... nor sooner than this after it, while tracking is strong: a gap in time, the same at any
   /// camera rate. Off by default: 0.075 s (2 frames at 20 Hz, 1 at 10 Hz) with no frame gap was
   /// better on the dark 10 Hz loop and much worse on the bright one (benchmarks/README.md) [s]

@@ -84,6 +84,7 @@ void TrackerOptions::Check() const {
   CheckAboveInRange("tracking.line_max_lbd", line_max_lbd, 0.0f, limits::kLbdBits);
   CheckInRange("tracking.keyframe_max_frames", keyframe_max_frames, 1, kMaxCount);
   CheckInRange("tracking.keyframe_min_frames", keyframe_min_frames, 0, kMaxCount);
+  CheckInRange("tracking.keyframe_min_frames_noisy", keyframe_min_frames_noisy, -1, kMaxCount);
   CheckInRange("tracking.keyframe_min_interval_s", keyframe_min_interval_s, 0.0, 1e6);
   CheckAboveInRange("tracking.keyframe_track_ratio", keyframe_track_ratio, 0.0, 1.0);
   CheckInRange("tracking.keyframe_min_inliers", keyframe_min_inliers, 0, kMaxCount);

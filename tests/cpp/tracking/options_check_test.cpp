@@ -328,6 +328,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(line_max_lbd, "tracking.line_max_lbd", 0, 256, "(]"),
        FIELD(keyframe_max_frames, "tracking.keyframe_max_frames", 1, 1e9, "[]"),
        FIELD(keyframe_min_frames, "tracking.keyframe_min_frames", 0, 1e9, "[]"),
+       FIELD(keyframe_min_frames_noisy, "tracking.keyframe_min_frames_noisy", -1, 1e9, "[]"),
        FIELD(keyframe_min_interval_s, "tracking.keyframe_min_interval_s", 0, 1e6, "[]"),
        FIELD(keyframe_track_ratio, "tracking.keyframe_track_ratio", 0, 1, "(]"),
        FIELD(keyframe_min_inliers, "tracking.keyframe_min_inliers", 0, 1e9, "[]"),
