@@ -333,6 +333,36 @@ TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
   EXPECT_GT(refused, 100);  // (the repeated pattern)
 }
 
+TEST(StereoFrameTest, RowSearchGivesThePlainSearchsColumnsForEveryPatchSize) {
+  // The bounded search (costs only of the column blocks whose lower bounds can matter) for
+  // patches split into equal blocks (15, 21), into unequal ones (5, 7, 11, 23) and too large for
+  // it (47: every cost computed), on the pair with the repeated pattern.
+  const StereoRig rig = Rig();
+  auto [left, right] = ShiftedPair(17.6);
+  for (int v = 120; v < 240; ++v) {
+    for (int u = 0; u < 320; ++u) {
+      left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
+    }
+  }
+  for (int w : {2, 3, 5, 7, 10, 11, 23}) {
+    StereoMatchOptions options;
+    options.row_search = true;
+    options.row_search_window = w;
+    options.max_disparity_px = 70.0f;
+    StereoFrame frame = KeypointGridFrame(9, 312, 11, 8, 232, 17);
+    MatchStereoByRowSearch(left, right, rig, options, &frame);
+    int matched = 0;
+    for (int i = 0; i < frame.NumKeypoints(); ++i) {
+      const int u = static_cast<int>(frame.keypoints.uv(i, 0));
+      const int v = static_cast<int>(frame.keypoints.uv(i, 1));
+      EXPECT_EQ(frame.u_right[i], PlainRowSearch(left, right, options, u, v))
+          << "window " << w << " at " << u << " " << v;
+      matched += frame.u_right[i] >= 0.0;
+    }
+    EXPECT_GT(matched, 20) << "window " << w;
+  }
+}
+
 TEST(StereoFrameTest, RowSearchRefusesFlatAndRepeatedPatchesAndKeepsMatches) {
   const StereoRig rig = Rig();
   StereoMatchOptions options;
