@@ -334,9 +334,8 @@ TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
 }
 
 TEST(StereoFrameTest, RowSearchGivesThePlainSearchsColumnsForEveryPatchSize) {
-  // The bounded search (costs only of the column blocks whose lower bounds can matter) for
-  // patches split into equal blocks (15, 21), into unequal ones (5, 7, 11, 23) and too large for
-  // it (47: every cost computed), on the pair with the repeated pattern.
+  // Patch sizes other than the default 15 x 15 (5 to 47 px: row lengths below, at and above the
+  // cost loop's block of 32 columns), on the pair with the repeated pattern.
   const StereoRig rig = Rig();
   auto [left, right] = ShiftedPair(17.6);
   for (int v = 120; v < 240; ++v) {
