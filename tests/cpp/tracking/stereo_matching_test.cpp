@@ -245,6 +245,18 @@ TEST(StereoFrameTest, RowSearchAndRefinementGiveTheSameColumnsOnOneThreadAsOnSev
   EXPECT_GT(matched, 0);
 }
 
+// ShiftedPair(17.6) whose lower half (rows 120-239) holds the same vertical stripes, 12 px a
+// period, in both images: texture above, repeated structure below.
+std::pair<cv::Mat, cv::Mat> PairWithRepeatedPattern() {
+  auto [left, right] = ShiftedPair(17.6);
+  for (int v = 120; v < 240; ++v) {
+    for (int u = 0; u < 320; ++u) {
+      left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
+    }
+  }
+  return {left, right};
+}
+
 // The row search as its header describes it, one column at a time in double: the integer right
 // column of keypoint (u, v), or -1.
 double PlainRowSearch(const cv::Mat& left, const cv::Mat& right, const StereoMatchOptions& options,
@@ -312,12 +324,7 @@ TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
   StereoMatchOptions options;
   options.row_search = true;
   options.max_disparity_px = 70.0f;
-  auto [left, right] = ShiftedPair(17.6);
-  for (int v = 120; v < 240; ++v) {
-    for (int u = 0; u < 320; ++u) {
-      left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
-    }
-  }
+  const auto [left, right] = PairWithRepeatedPattern();
   StereoFrame frame = KeypointGridFrame(9, 312, 7, 8, 232, 13);
   MatchStereoByRowSearch(left, right, rig, options, &frame);
   int matched = 0, refused = 0;
@@ -334,15 +341,10 @@ TEST(StereoFrameTest, RowSearchGivesTheColumnsOfAPlainSearch) {
 }
 
 TEST(StereoFrameTest, RowSearchGivesThePlainSearchsColumnsForEveryPatchSize) {
-  // Patch sizes other than the default 15 x 15 (5 to 47 px: row lengths below, at and above the
-  // cost loop's block of 32 columns), on the pair with the repeated pattern.
+  // Patch sizes other than the default 15 x 15 (5 to 47 px), keypoints from the left edge on (as
+  // the test above), on the pair with the repeated pattern.
   const StereoRig rig = Rig();
-  auto [left, right] = ShiftedPair(17.6);
-  for (int v = 120; v < 240; ++v) {
-    for (int u = 0; u < 320; ++u) {
-      left.at<uchar>(v, u) = right.at<uchar>(v, u) = static_cast<uchar>(60 + 50 * ((u / 6) % 2));
-    }
-  }
+  const auto [left, right] = PairWithRepeatedPattern();
   for (int w : {2, 3, 5, 7, 10, 11, 23}) {
     StereoMatchOptions options;
     options.row_search = true;
