@@ -11,6 +11,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/core/cpu_dispatch.h"
+#include "slslam/features/gaussian_blur.h"
 
 // (not under a sanitizer, which does not see into the gathers: the scalar loop reads the same
 // pixels)
@@ -262,8 +263,14 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
   if (segments.empty()) return;
   // The gradients OpenCV's compute takes: 5 x 5 Gaussian (sigma 1), 3 x 3 Sobel, int16; here
   // interleaved so that one 32-bit load gives a pixel's (dx, dy).
+  // (GaussianBlur8u: OpenCV's pixels on one thread at a fraction of its CPU; a view goes to
+  // OpenCV, which reads the pixels around it)
   cv::Mat smooth, gradients;
-  cv::GaussianBlur(image, smooth, cv::Size(5, 5), 1);
+  if (image.isSubmatrix()) {
+    cv::GaussianBlur(image, smooth, cv::Size(5, 5), 1);
+  } else {
+    smooth = GaussianBlur8u(image, 1.0, 2);
+  }
   opencv_lbd_detail::InterleavedSobel(smooth, &gradients);
   Require(gradients.isContinuous(), "LBD gradients must be one block");
 

@@ -12,6 +12,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/core/cpu_dispatch.h"
+#include "slslam/features/gaussian_blur.h"
 
 namespace slslam {
 
@@ -285,7 +286,10 @@ cv::Mat SmoothIfNoisy(const cv::Mat& image, double above_noise) {
   const double noise = EstimateNoiseSigma(image);
   if (noise <= above_noise) return image;
   const double sigma = std::clamp(noise / 7.0, 0.5, 2.5);
-  // (a buffer of its own: into a header copy of `image` GaussianBlur would write in place)
+  // GaussianBlur8u: cv::GaussianBlur's pixels on one thread at a fraction of its CPU; a view goes
+  // to OpenCV, which reads the pixels around it (into a buffer of its own: into a header copy of
+  // `image` GaussianBlur would write in place).
+  if (!image.isSubmatrix()) return GaussianBlur8u(image, sigma);
   cv::Mat smoothed;
   cv::GaussianBlur(image, smoothed, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
   return smoothed;
