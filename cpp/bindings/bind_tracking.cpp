@@ -57,6 +57,7 @@ struct PreparedFrame {
   std::shared_ptr<LeftLines> left_lines;
   StereoFrontendTiming timing;
   bool used = false;  // tracked (under the session's lock): a frame is tracked once
+  bool denoised = false;  // the images came through SmoothIfNoisy (StereoFrontend::Build)
 };
 
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
@@ -80,10 +81,10 @@ class TrackerSession {
                     const py::array& right_image, const PixelArray& left_uv,
                     const py::array& left_descriptors, const PixelArray& right_uv,
                     const py::array& right_descriptors,
-                    const std::shared_ptr<LeftLines>& left_lines, bool noisy) {
+                    const std::shared_ptr<LeftLines>& left_lines, bool noisy, bool denoised) {
     return TrackPrepared(*Prepare(index, timestamp, left_image, right_image, left_uv,
                                   left_descriptors, right_uv, right_descriptors, left_lines,
-                                  /*keypoints_pending=*/false, noisy));
+                                  /*keypoints_pending=*/false, noisy, denoised));
   }
 
   // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
@@ -96,7 +97,8 @@ class TrackerSession {
                                          const PixelArray& right_uv,
                                          const py::array& right_descriptors,
                                          const std::shared_ptr<LeftLines>& left_lines,
-                                         bool keypoints_pending, bool noisy) const {
+                                         bool keypoints_pending, bool noisy,
+                                         bool denoised) const {
     const cv::Mat left = WrapGray(left_image, "left image");
     const cv::Mat right = WrapGray(right_image, "right image");
     const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
@@ -104,6 +106,7 @@ class TrackerSession {
     auto p = std::make_shared<PreparedFrame>();
     p->session = this;
     p->left_lines = left_lines;
+    p->denoised = denoised;
     py::gil_scoped_release release;
     p->left = left.clone();
     p->right = right.clone();
@@ -112,7 +115,7 @@ class TrackerSession {
     const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
     p->frame = frontend_.Build(index, timestamp, p->left, p->right, kl, kr, &p->timing,
                                frontend_.options().left_lines_on_demand ? nullptr : ahead,
-                               &p->left_used, &p->right_used);
+                               &p->left_used, &p->right_used, denoised);
     if (keypoints_pending) {
       SLSLAM_CHECK(kl.size() == 0 && kr.size() == 0,
                    "a frame prepared with keypoints_pending has no keypoints (", kl.size(), " / ",
@@ -139,11 +142,11 @@ class TrackerSession {
       p.used = true;
       // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
-        frontend_.CompleteStereoLines(p.right, f);
+        frontend_.CompleteStereoLines(p.right, f, p.denoised);
       };
       // (lines_on_demand: the left image's lines when the tracker needs them)
       const Tracker::StereoLineCompleter complete_left = [&](StereoFrame* f) {
-        frontend_.CompleteLeftLines(p.left, f, ahead);
+        frontend_.CompleteLeftLines(p.left, f, ahead, p.denoised);
       };
       static_cast<TrackResult&>(out) = tracker_.Track(p.frame, complete, p.left_used,
                                                       complete_left, p.right_used);
@@ -155,12 +158,12 @@ class TrackerSession {
 
   // The left image's lines, as Track would extract them, on the calling thread without the
   // session's lock (beside the point front end, or beside Track of the previous frame).
-  std::shared_ptr<LeftLines> ExtractLeftLines(const py::array& left_image) const {
+  std::shared_ptr<LeftLines> ExtractLeftLines(const py::array& left_image, bool denoised) const {
     const cv::Mat left = WrapGray(left_image, "left image");
     auto out = std::make_shared<LeftLines>();
     py::gil_scoped_release release;
     const auto start = std::chrono::steady_clock::now();
-    out->features = frontend_.ExtractLeftLines(left);
+    out->features = frontend_.ExtractLeftLines(left, denoised);
     out->extraction_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
             .count();
@@ -590,27 +593,30 @@ void BindTracking(py::module_& m) {
       .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           py::arg("left_lines") = nullptr, py::arg("noisy") = false,
+           py::arg("left_lines") = nullptr, py::arg("noisy") = false, py::arg("denoised") = false,
            "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
            "image's lines from extract_left_lines on this left image (None: extracted here). "
-           "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor).")
+           "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). "
+           "denoised: both images come from smooth_if_noisy at the options' "
+           "denoise_above_noise (slslam.Tracker's own), so they are not checked again.")
       .def("prepare", &TrackerSession::Prepare, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
            py::arg("left_lines") = nullptr, py::arg("keypoints_pending") = false,
-           py::arg("noisy") = false,
+           py::arg("noisy") = false, py::arg("denoised") = false,
            "track's first part without the session's lock: the frame's stereo matching (and "
            "its lines unless left_lines or lines on demand), for a thread ahead of the core. "
            "track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints "
            "given; tracking.projected_max_frames): the tracker places the map's points in the "
-           "frame, or returns needs_keypoints. noisy: as track's.")
+           "frame, or returns needs_keypoints. noisy, denoised: as track's.")
       .def("track_prepared", &TrackerSession::TrackPrepared, py::arg("frame"),
            "track's second part on a frame from prepare (once, in frame order): the tracker and "
            "local mapping; returns its FrameOutput.")
       .def("extract_left_lines", &TrackerSession::ExtractLeftLines, py::arg("left_image"),
+           py::arg("denoised") = false,
            "The left image's lines as track extracts them (smoothed when noisy), without the "
            "session's lock: for a thread beside the point front end. Needs use_lines and "
-           "right_lines_on_keyframes.")
+           "right_lines_on_keyframes. denoised: as track's.")
       .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
            "IMU samples (body frame) for the bridge through visual outages, before the frames "
            "they precede.")

@@ -1600,9 +1600,9 @@ class TrackerCore:
         """
         IMU samples (body frame) for the bridge through visual outages, before the frames they precede.
         """
-    def extract_left_lines(self, left_image: numpy.ndarray) -> LeftLines:
+    def extract_left_lines(self, left_image: numpy.ndarray, denoised: bool = False) -> LeftLines:
         """
-        The left image's lines as track extracts them (smoothed when noisy), without the session's lock: for a thread beside the point front end. Needs use_lines and right_lines_on_keyframes.
+        The left image's lines as track extracts them (smoothed when noisy), without the session's lock: for a thread beside the point front end. Needs use_lines and right_lines_on_keyframes. denoised: as track's.
         """
     def flush(self) -> None:
         ...
@@ -1614,17 +1614,17 @@ class TrackerCore:
         """
         Points and lines; settle: first waits for local mapping (and applies an overlapped local BA), else the map as it stands.
         """
-    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False, noisy: bool = False) -> PreparedFrame:
+    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False, noisy: bool = False, denoised: bool = False) -> PreparedFrame:
         """
-        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints. noisy: as track's.
+        track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints. noisy, denoised: as track's.
         """
     def save_map(self, path: str, version: str) -> None:
         """
         Writes every live map (versioned binary, checksummed); waits for mapping.
         """
-    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, noisy: bool = False) -> FrameOutput:
+    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, noisy: bool = False, denoised: bool = False) -> FrameOutput:
         """
-        Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here). noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor).
+        Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here). noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). denoised: both images come from smooth_if_noisy at the options' denoise_above_noise (slslam.Tracker's own), so they are not checked again.
         """
     def track_prepared(self, frame: PreparedFrame) -> FrameOutput:
         """

@@ -790,6 +790,77 @@ def test_a_front_end_sees_the_smoothed_pair_unless_it_asks_for_the_raw_one(
         assert smoothed is smoothed_input
 
 
+class _Checking:
+    """A TrackerCore whose stereo matching and lines check the images' noise again (denoised
+    False), recording what the tracker told them."""
+
+    def __init__(self, core, calls: list):
+        self._core, self._calls = core, calls
+
+    def __getattr__(self, name):
+        return getattr(self._core, name)
+
+    def prepare(self, *args, **kwargs):
+        self._calls.append(kwargs.pop("denoised"))
+        return self._core.prepare(*args, **kwargs)
+
+    def extract_left_lines(self, image, denoised=False):
+        self._calls.append(denoised)
+        return self._core.extract_left_lines(image)
+
+
+def test_a_pair_smoothed_once_is_not_checked_again_and_tracks_the_same(sim_loop):
+    """slslam.Tracker smooths each noisy image once and tells ORB, the lines and the core's
+    stereo matching so (``denoised_above_noise``, ``denoised``): they skip their own noise check
+    (0.1 ms an image each) and the frames track exactly as when every step checks again."""
+    sequence = EurocSequence(sim_loop)
+    frames = noisy_frames(sequence, 30, seed=7)
+    cfg = config("orb", lines=True)
+    runs, calls = [], []
+    for told in (True, False):
+        with Tracker(sequence.camera, cfg) as tracker:
+            assert tracker._detect_denoised  # ORB takes the argument
+            if not told:
+                tracker._detect_denoised = False
+                tracker._core = _Checking(tracker._core, calls)
+            for f in frames:
+                tracker.track(*f)
+            runs.append((tracker.trajectory()[1], tracker.map().points))
+    assert calls and all(calls)  # the tracker did tell them
+    assert len(runs[0][0]) == len(frames) and len(runs[0][1]) > 100
+    assert np.array_equal(runs[0][0], runs[1][0])
+    assert np.array_equal(runs[0][1], runs[1][1])
+
+
+def test_orb_skips_its_noise_check_only_for_an_image_smoothed_at_its_threshold_or_below():
+    """``Orb.detect(image, denoised_above_noise=t)``: the image came through smooth_if_noisy at
+    t. At ORB's own threshold (6) or below, ORB does not smooth again: the same keypoints on the
+    smoothed image, and on a raw noisy image (told wrongly) the unsmoothed ones; above it (an
+    image ORB would still smooth) ORB checks as without the argument."""
+    import cv2
+
+    rng = np.random.default_rng(5)
+    base = np.zeros((240, 320), np.uint8)
+    base[::16, :] = 180
+    base[:, ::24] = 90
+    base = cv2.GaussianBlur(base, (0, 0), 2.0)
+    raw = np.clip(base + rng.normal(0, 10, base.shape), 0, 255).astype(np.uint8)
+    smoothed = _core.smooth_if_noisy(raw, 6.0)
+    assert smoothed is not raw
+    orb = Orb()
+
+    def same(a, b) -> bool:
+        return np.array_equal(a.uv, b.uv) and np.array_equal(a.descriptors, b.descriptors)
+
+    assert len(orb.detect(smoothed)) > 50
+    assert same(orb.detect(smoothed, denoised_above_noise=6.0), orb.detect(smoothed))
+    assert same(orb.detect(raw), orb.detect(smoothed))  # ORB smooths a noisy image itself
+    told = orb.detect(raw, denoised_above_noise=6.0)
+    assert same(orb.detect(raw, denoised_above_noise=4.0), told)
+    assert not same(told, orb.detect(raw))  # skipped
+    assert same(orb.detect(raw, denoised_above_noise=8.0), orb.detect(raw))  # checked
+
+
 def test_smooth_if_noisy_returns_a_new_array_only_for_a_noisy_image():
     """The front end's smoothing (tracking.denoise_above_noise): a quiet image is handed back as
     it is; a noisy one is smoothed into a new array, the caller's left unchanged."""

@@ -49,6 +49,20 @@ def test_detector_sees_the_smoothed_image_only_when_the_frame_is_noisy():
     assert np.array_equal(on.detect(quiet).uv, off.detect(quiet).uv)
 
 
+def test_an_image_the_tracker_smoothed_is_not_checked_again():
+    """``denoised_above_noise`` (the tracker's threshold): the image came through the tracker's
+    smoothing, so XFeat's own check is skipped at its threshold or below; the same keypoints."""
+    xfeat = XFeat(XFeatOptions(denoise_above_noise=6.0))
+    noisy = wall(9.0)
+    smoothed = denoise(noisy, 6.0)
+    a, b = xfeat.detect(smoothed), xfeat.detect(smoothed, denoised_above_noise=6.0)
+    assert len(a) > 50 and np.array_equal(a.uv, b.uv)
+    assert np.array_equal(a.descriptors, b.descriptors)
+    # told so of a raw noisy image, XFeat believes it; above its threshold it checks anyway
+    assert not np.array_equal(xfeat.detect(noisy, denoised_above_noise=6.0).uv, a.uv)
+    assert np.array_equal(xfeat.detect(noisy, denoised_above_noise=8.0).uv, a.uv)
+
+
 def test_bad_bound_is_a_config_error_naming_the_key():
     with pytest.raises(ConfigError, match="denoise_above_noise"):
         config_from_dict({"features": {"xfeat": {"denoise_above_noise": -1.0}}})

@@ -39,15 +39,17 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
                                                    StereoFrontendTiming* timing,
                                                    const LineFeatures* given_left_lines,
                                                    cv::Mat* left_used,
-                                                   cv::Mat* right_used) const {
+                                                   cv::Mat* right_used, bool denoised) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
                cam.height);
   Require(right_image.size() == left_image.size(), "left and right images differ in size");
   auto start = std::chrono::steady_clock::now();
-  const cv::Mat left = SmoothIfNoisy(left_image, options_.denoise_above_noise);
-  const cv::Mat right = SmoothIfNoisy(right_image, options_.denoise_above_noise);
+  const cv::Mat left =
+      denoised ? left_image : SmoothIfNoisy(left_image, options_.denoise_above_noise);
+  const cv::Mat right =
+      denoised ? right_image : SmoothIfNoisy(right_image, options_.denoise_above_noise);
   LineFeatures left_lines, right_lines;
   const bool right_now = options_.use_lines && !options_.right_lines_on_keyframes;
   Require(given_left_lines == nullptr || (options_.use_lines && !right_now),
@@ -80,31 +82,35 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
   return frame;
 }
 
-LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image) const {
+LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image, bool denoised) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",
                cam.height);
   Require(options_.use_lines && options_.right_lines_on_keyframes,
           "ExtractLeftLines needs use_lines and right_lines_on_keyframes");
-  return ExtractLines(SmoothIfNoisy(left_image, options_.denoise_above_noise), options_.lines);
+  return ExtractLines(
+      denoised ? left_image : SmoothIfNoisy(left_image, options_.denoise_above_noise),
+      options_.lines);
 }
 
 void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
-                                       const LineFeatures* extracted) const {
+                                       const LineFeatures* extracted, bool denoised) const {
   Require(frame != nullptr, "CompleteLeftLines needs a frame");
   if (!frame->left_lines_pending) return;
-  SetLeftLines(extracted != nullptr ? *extracted : ExtractLeftLines(left), frame);
+  SetLeftLines(extracted != nullptr ? *extracted : ExtractLeftLines(left, denoised), frame);
   frame->left_lines_pending = false;
 }
 
-void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const {
+void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* frame,
+                                         bool denoised) const {
   Require(frame != nullptr, "CompleteStereoLines needs a frame");
   if (!frame->stereo_lines_pending) return;
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(right.cols == cam.width && right.rows == cam.height, "right image is ", right.cols,
                "x", right.rows, ", calibration says ", cam.width, "x", cam.height);
-  const cv::Mat smoothed = SmoothIfNoisy(right, options_.denoise_above_noise);  // as in Build
+  const cv::Mat smoothed =  // as in Build
+      denoised ? right : SmoothIfNoisy(right, options_.denoise_above_noise);
   MatchStereoLinesInto(ExtractLines(smoothed, options_.lines), options_.rig, options_.stereo,
                        frame);
   frame->stereo_lines_pending = false;

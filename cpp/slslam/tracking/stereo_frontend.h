@@ -55,31 +55,36 @@ class StereoFrontend {
   // `left_used`, when given, receives the left image stereo matching used (smoothed when noisy;
   // else `left` itself, sharing its pixels), for Tracker::Track's keypoint refinement;
   // `right_used` the same for the right image (the stereo columns of projected keypoints).
+  // `denoised`: both images come from SmoothIfNoisy at options().denoise_above_noise already
+  // (slslam.Tracker smooths each image once for all its steps), so they are used as they are:
+  // the check would find them quiet (0.1 ms an image).
   std::shared_ptr<StereoFrame> Build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
                                      StereoFrontendTiming* timing = nullptr,
                                      const LineFeatures* left_lines = nullptr,
-                                     cv::Mat* left_used = nullptr,
-                                     cv::Mat* right_used = nullptr) const;
+                                     cv::Mat* left_used = nullptr, cv::Mat* right_used = nullptr,
+                                     bool denoised = false) const;
 
   // The left image's lines exactly as Build extracts them from the same image (smoothed when
   // noisy), for a caller that runs them beside the point front end (slslam.Tracker hands both
   // the copy it already smoothed, which the check then finds quiet). Requires
   // right_lines_on_keyframes (with it off, Build extracts both images' lines side by side) and
-  // use_lines. Thread-safe (const).
-  LineFeatures ExtractLeftLines(const cv::Mat& left) const;
+  // use_lines. Thread-safe (const). `denoised`: as Build's.
+  LineFeatures ExtractLeftLines(const cv::Mat& left, bool denoised = false) const;
 
   // The stereo lines of a frame Build left pending: the right image's segments, matched and
   // triangulated (for Tracker::Track's completer). Does nothing when none are pending.
-  void CompleteStereoLines(const cv::Mat& right, StereoFrame* frame) const;
+  // `denoised`: as Build's.
+  void CompleteStereoLines(const cv::Mat& right, StereoFrame* frame, bool denoised = false) const;
 
   // The left lines of a frame Build left pending (left_lines_on_demand), for Tracker::Track's
   // completer: `extracted` when given (ExtractLeftLines of this image, run ahead on another
   // thread in case the tracker would ask), else ExtractLeftLines on `left`, the image given to
   // Build. The frame's stereo lines stay pending. Does nothing when none are pending.
+  // `denoised`: as Build's.
   void CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
-                         const LineFeatures* extracted = nullptr) const;
+                         const LineFeatures* extracted = nullptr, bool denoised = false) const;
 
   const StereoFrontendOptions& options() const { return options_; }
 

@@ -249,15 +249,22 @@ class XFeat:
         image: np.ndarray,
         threshold: float | None = None,
         select: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+        denoised_above_noise: float | None = None,
     ) -> Keypoints:
         """Keypoints of one uint8 gray image; ``threshold`` overrides the options' detection
         threshold (the tracker's low-texture fallback detects at a lower one). ``select``, given
         the (N, 2) float32 positions and (N,) scores, returns the indices of the keypoints to
         keep (the tracker's grid limit): only those are described, and returned in that order
-        (descriptor sampling is the costliest step after the network)."""
+        (descriptor sampling is the costliest step after the network). ``denoised_above_noise``:
+        the image came through ``_core.smooth_if_noisy`` at this threshold (the tracker's
+        smoothing); the network's own smoothing check is then skipped when its threshold is at
+        least this one (as :meth:`slslam.features.orb.Orb.detect`)."""
         image = check_gray_image(image)
         o = self.options
-        net = self.infer(denoise(image, o.denoise_above_noise))
+        checked = denoised_above_noise is not None and (
+            0.0 < denoised_above_noise <= o.denoise_above_noise
+        )
+        net = self.infer(image if checked else denoise(image, o.denoise_above_noise))
         threshold = o.detection_threshold if threshold is None else threshold
         hc, wc = net["keypoint_logits"].shape[1:]
         input_hw = (hc * CELL, wc * CELL)

@@ -410,6 +410,9 @@ class Tracker:
         parameters = inspect.signature(self.frontend.detect).parameters
         accepts = "threshold" in parameters
         self._detect_selects = "select" in parameters
+        # A front end that takes denoised_above_noise (ORB, XFeat) is told that the image it
+        # sees came through this tracker's smoothing, so that it does not check the noise again.
+        self._detect_denoised = self._detect_smoothed and "denoised_above_noise" in parameters
         if features.low_texture_fallback and threshold is not None and accepts:
             self._weak_threshold = threshold * features.low_texture_ratio
             self._grid.strong_score = threshold
@@ -533,6 +536,8 @@ class Tracker:
         options: dict = {}
         if self._weak_threshold is not None:
             options["threshold"] = self._weak_threshold
+        if self._detect_denoised and self.config.tracking.denoise_above_noise > 0.0:
+            options["denoised_above_noise"] = self.config.tracking.denoise_above_noise
         if self._detect_selects:
             return self.frontend.detect(image, select=limit, **options)
         keypoints = self.frontend.detect(image, **options)
@@ -698,7 +703,7 @@ class Tracker:
         )
         left = self._smooth(left)
         if lines is None and self._lines_side is not None and self._lines_ahead():
-            lines = self._lines_side.submit(self._core.extract_left_lines, left)
+            lines = self._lines_side.submit(self._core.extract_left_lines, left, denoised=True)
         if detect:
             kl = self._detect_either(raw_left, left)
             if self._no_keypoints is None:
@@ -730,6 +735,7 @@ class Tracker:
             left_lines,
             keypoints_pending=not detect,
             noisy=left is not raw_left,  # (smoothed as noisy: tracking.unaligned_sigma_factor)
+            denoised=True,  # (both through self._smooth: the core need not check them again)
         )
         front_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(
