@@ -57,7 +57,7 @@ struct PreparedFrame {
   std::shared_ptr<LeftLines> left_lines;
   StereoFrontendTiming timing;
   bool used = false;  // tracked (under the session's lock): a frame is tracked once
-  bool denoised = false;  // the images came through SmoothIfNoisy (StereoFrontend::Build)
+  bool denoised = false;  // the caller smoothed the images (StereoFrontend::Build's denoised)
 };
 
 // The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).

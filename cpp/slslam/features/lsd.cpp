@@ -268,9 +268,10 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
     const double sigma = options.sigma_scale / options.scale;
     const int half = static_cast<int>(std::ceil(sigma * std::sqrt(2.0 * 3.0 * std::log(10.0))));
     // (GaussianBlur8u: OpenCV's pixels on one thread at a fraction of its CPU; a view goes to
-    // OpenCV, which reads the pixels around it)
+    // OpenCV, which reads the pixels around it, and so does a blur beyond GaussianBlur8u's
+    // limits, sigma 100 px or a radius of 1000)
     cv::Mat blurred;
-    if (gray.isSubmatrix()) {
+    if (gray.isSubmatrix() || sigma > 100.0 || half > 1000) {
       cv::GaussianBlur(gray, blurred, cv::Size(2 * half + 1, 2 * half + 1), sigma);
     } else {
       blurred = GaussianBlur8u(gray, sigma, half);

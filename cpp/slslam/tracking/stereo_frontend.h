@@ -56,8 +56,10 @@ class StereoFrontend {
   // else `left` itself, sharing its pixels), for Tracker::Track's keypoint refinement;
   // `right_used` the same for the right image (the stereo columns of projected keypoints).
   // `denoised`: both images come from SmoothIfNoisy at options().denoise_above_noise already
-  // (slslam.Tracker smooths each image once for all its steps), so they are used as they are:
-  // the check would find them quiet (0.1 ms an image).
+  // (slslam.Tracker smooths each image once for all its steps), so they are used as they are,
+  // without the noise estimate (0.1 ms an image). The same frame as without it whenever one blur
+  // leaves an image quiet (every frame of the simulated sequences; a pattern whose estimate
+  // stays above the threshold after one blur would have been blurred a second time).
   std::shared_ptr<StereoFrame> Build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
@@ -68,7 +70,7 @@ class StereoFrontend {
 
   // The left image's lines exactly as Build extracts them from the same image (smoothed when
   // noisy), for a caller that runs them beside the point front end (slslam.Tracker hands both
-  // the copy it already smoothed, which the check then finds quiet). Requires
+  // the copy it already smoothed, with `denoised`). Requires
   // right_lines_on_keyframes (with it off, Build extracts both images' lines side by side) and
   // use_lines. Thread-safe (const). `denoised`: as Build's.
   LineFeatures ExtractLeftLines(const cv::Mat& left, bool denoised = false) const;

@@ -56,8 +56,9 @@ class Orb:
         ``_core.smooth_if_noisy`` at this threshold (the tracker smooths each image once for all
         its steps); ORB's own check, which smooths an image noisier than its threshold the same
         way, is then skipped when that threshold is at least this one (an image left alone there
-        is quiet enough for it, a smoothed one far below it): the same keypoints, 0.1 ms less a
-        752 x 480 image."""
+        is quiet enough for it): 0.1 ms less a 752 x 480 image, and the same keypoints whenever
+        one blur leaves the image quiet (a pattern whose estimate stays above the threshold after
+        one blur would otherwise be blurred a second time)."""
         options = self._core_options
         if (
             denoised_above_noise is not None

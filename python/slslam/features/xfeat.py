@@ -258,7 +258,7 @@ class XFeat:
         (descriptor sampling is the costliest step after the network). ``denoised_above_noise``:
         the image came through ``_core.smooth_if_noisy`` at this threshold (the tracker's
         smoothing); the network's own smoothing check is then skipped when its threshold is at
-        least this one (as :meth:`slslam.features.orb.Orb.detect`)."""
+        least this one (as :meth:`slslam.features.orb.Orb.detect`, with the same caveat)."""
         image = check_gray_image(image)
         o = self.options
         checked = denoised_above_noise is not None and (

@@ -503,8 +503,9 @@ class Tracker:
     def _smooth(self, image: np.ndarray) -> np.ndarray:
         """A noisy (dark) image smoothed (``tracking.denoise_above_noise``), else the image.
         Done once here, on the front end's threads: the detector (unless its ``smoothed_input``
-        is False), the lines and the stereo matching all see the smoothed pair, and the core's
-        own check (StereoFrontend) then finds it quiet, so no thread blurs it again."""
+        is False), the lines and the stereo matching all see the smoothed pair, and are told so
+        (``denoised_above_noise``, ``denoised``): none of them estimates the noise again or
+        blurs it a second time."""
         above = self.config.tracking.denoise_above_noise
         return _core.smooth_if_noisy(image, above) if above > 0.0 else image
 

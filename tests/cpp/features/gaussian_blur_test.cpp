@@ -51,8 +51,10 @@ TEST(GaussianBlurTest, GivesOpenCvsPixelsForEverySigmaAndSize) {
 
 TEST(GaussianBlurTest, GivesOpenCvsPixelsForAKernelSizeOfItsOwn) {
   const cv::Mat image = Texture(376, 240, 11);
-  // (LBD's 5 x 5 at sigma 1, LSD's 11 x 11 at sigma 1.2 before its half-size image)
-  for (const auto& [sigma, radius] : {std::pair{1.0, 2}, {1.2, 5}, {0.75, 1}, {2.0, 3}, {0.5, 6}}) {
+  // (LBD's 5 x 5 at sigma 1; LSD's 11 x 11 at sigma 1.2 before the tracker's half-size image,
+  // line_detection_scale 0.5, and its 7 x 7 at 0.75 for its own default scale 0.8)
+  for (const auto& [sigma, radius] :
+       {std::pair{1.0, 2}, {1.2, 5}, {0.75, 3}, {0.75, 1}, {2.0, 3}, {0.5, 6}}) {
     cv::Mat expected;
     cv::GaussianBlur(image, expected, cv::Size(2 * radius + 1, 2 * radius + 1), sigma);
     EXPECT_EQ(CountDifferent(GaussianBlur8u(image, sigma, radius), expected), 0)
