@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "slslam/core/check.h"
 #include "slslam/core/cpu_dispatch.h"
 
@@ -144,6 +146,16 @@ cv::Mat GaussianBlur8u(const cv::Mat& image, double sigma_px, int radius_px) {
     VerticalPass(rows.data(), width, taps.data(), radius, high.data(), low.data(),
                  out.ptr<uint8_t>(y));
   }
+  return out;
+}
+
+cv::Mat GaussianBlurAsOpenCv(const cv::Mat& image, double sigma_px, int radius_px) {
+  if (!image.isSubmatrix() && sigma_px <= 100.0 && radius_px <= 1000) {
+    return GaussianBlur8u(image, sigma_px, radius_px);
+  }
+  const cv::Size size = radius_px < 0 ? cv::Size() : cv::Size(2 * radius_px + 1, 2 * radius_px + 1);
+  cv::Mat out;  // (a buffer of its own: into a header copy of `image` OpenCV would write in place)
+  cv::GaussianBlur(image, out, size, sigma_px, sigma_px, cv::BORDER_REFLECT_101);
   return out;
 }
 

@@ -25,4 +25,11 @@ cv::Mat GaussianBlur8u(const cv::Mat& image, double sigma_px, int radius_px = -1
 // rounding (the sampled Gaussian, each tap's rounding error carried inward).
 std::vector<int> GaussianTaps8u(double sigma_px, int radius_px = -1);
 
+// cv::GaussianBlur(image, out, cv::Size(n, n), sigma_px, sigma_px, cv::BORDER_REFLECT_101) for
+// any 8-bit gray image, n as GaussianBlur8u's: GaussianBlur8u where it gives those pixels (an
+// image that owns its pixels, sigma up to 100 px, radius up to 1000), OpenCV itself otherwise
+// (a view, whose surrounding pixels OpenCV reads), into a new image. The one entry point of the
+// library's blurs of 8-bit images (the dark frames' smoothing, LSD, LBD).
+cv::Mat GaussianBlurAsOpenCv(const cv::Mat& image, double sigma_px, int radius_px = -1);
+
 }  // namespace slslam

@@ -267,15 +267,8 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
     // to 10^-3 of its peak (about 3.7 sigma).
     const double sigma = options.sigma_scale / options.scale;
     const int half = static_cast<int>(std::ceil(sigma * std::sqrt(2.0 * 3.0 * std::log(10.0))));
-    // (GaussianBlur8u: OpenCV's pixels on one thread at a fraction of its CPU; a view goes to
-    // OpenCV, which reads the pixels around it, and so does a blur beyond GaussianBlur8u's
-    // limits, sigma 100 px or a radius of 1000)
-    cv::Mat blurred;
-    if (gray.isSubmatrix() || sigma > 100.0 || half > 1000) {
-      cv::GaussianBlur(gray, blurred, cv::Size(2 * half + 1, 2 * half + 1), sigma);
-    } else {
-      blurred = GaussianBlur8u(gray, sigma, half);
-    }
+    // (cv::GaussianBlur's pixels, on one thread at a fraction of its CPU: features/gaussian_blur.h)
+    const cv::Mat blurred = GaussianBlurAsOpenCv(gray, sigma, half);
     cv::resize(blurred, image, cv::Size(), options.scale, options.scale, cv::INTER_LINEAR_EXACT);
   }
   if (image.cols < 2 || image.rows < 2) return segments;

@@ -263,14 +263,9 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
   if (segments.empty()) return;
   // The gradients OpenCV's compute takes: 5 x 5 Gaussian (sigma 1), 3 x 3 Sobel, int16; here
   // interleaved so that one 32-bit load gives a pixel's (dx, dy).
-  // (GaussianBlur8u: OpenCV's pixels on one thread at a fraction of its CPU; a view goes to
-  // OpenCV, which reads the pixels around it)
-  cv::Mat smooth, gradients;
-  if (image.isSubmatrix()) {
-    cv::GaussianBlur(image, smooth, cv::Size(5, 5), 1);
-  } else {
-    smooth = GaussianBlur8u(image, 1.0, 2);
-  }
+  // (cv::GaussianBlur's pixels, on one thread at a fraction of its CPU: features/gaussian_blur.h)
+  const cv::Mat smooth = GaussianBlurAsOpenCv(image, 1.0, 2);
+  cv::Mat gradients;
   opencv_lbd_detail::InterleavedSobel(smooth, &gradients);
   Require(gradients.isContinuous(), "LBD gradients must be one block");
 

@@ -285,14 +285,8 @@ cv::Mat SmoothIfNoisy(const cv::Mat& image, double above_noise) {
   if (above_noise <= 0.0) return image;
   const double noise = EstimateNoiseSigma(image);
   if (noise <= above_noise) return image;
-  const double sigma = std::clamp(noise / 7.0, 0.5, 2.5);
-  // GaussianBlur8u: cv::GaussianBlur's pixels on one thread at a fraction of its CPU; a view goes
-  // to OpenCV, which reads the pixels around it (into a buffer of its own: into a header copy of
-  // `image` GaussianBlur would write in place).
-  if (!image.isSubmatrix()) return GaussianBlur8u(image, sigma);
-  cv::Mat smoothed;
-  cv::GaussianBlur(image, smoothed, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
-  return smoothed;
+  // (cv::GaussianBlur's pixels, on one thread at a fraction of its CPU: features/gaussian_blur.h)
+  return GaussianBlurAsOpenCv(image, std::clamp(noise / 7.0, 0.5, 2.5));
 }
 
 Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {

@@ -40,3 +40,11 @@ def check_gray_image(image: np.ndarray, min_size: int = 16) -> np.ndarray:
     if min(image.shape) < min_size:
         raise ValueError(f"image {image.shape[1]}x{image.shape[0]} is smaller than {min_size} px")
     return np.ascontiguousarray(image)
+
+
+def smoothed_already(denoised_above_noise: float | None, above_noise: float) -> bool:
+    """Whether a front end that smooths images noisier than ``above_noise`` may skip its noise
+    check on an image that came through ``_core.smooth_if_noisy`` at ``denoised_above_noise``
+    (None: it did not; the tracker's smoothing): when that threshold is positive and at most its
+    own, an image left alone there is quiet enough for the front end too."""
+    return denoised_above_noise is not None and 0.0 < denoised_above_noise <= above_noise

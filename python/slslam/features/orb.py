@@ -8,7 +8,7 @@ import numpy as np
 
 from slslam import _core
 from slslam._cpp_defaults import as_written
-from slslam.features.keypoints import Keypoints, check_gray_image
+from slslam.features.keypoints import Keypoints, check_gray_image, smoothed_already
 
 _CORE_ORB = _core.OrbOptions()
 
@@ -60,10 +60,7 @@ class Orb:
         one blur leaves the image quiet (a pattern whose estimate stays above the threshold after
         one blur would otherwise be blurred a second time)."""
         options = self._core_options
-        if (
-            denoised_above_noise is not None
-            and 0.0 < denoised_above_noise <= options.denoise_above_noise
-        ):
+        if smoothed_already(denoised_above_noise, options.denoise_above_noise):
             options = self._checked_options
         uv, score, descriptors = _core.extract_orb(check_gray_image(image), options)
         return Keypoints(uv.astype(np.float32), score.astype(np.float32), descriptors)

@@ -48,7 +48,7 @@ from typing import Literal
 import numpy as np
 
 from slslam import _core
-from slslam.features.keypoints import Keypoints, check_gray_image
+from slslam.features.keypoints import Keypoints, check_gray_image, smoothed_already
 from slslam.features.superpoint import (
     ModelError,
     check_detector_options,
@@ -261,9 +261,7 @@ class XFeat:
         least this one (as :meth:`slslam.features.orb.Orb.detect`, with the same caveat)."""
         image = check_gray_image(image)
         o = self.options
-        checked = denoised_above_noise is not None and (
-            0.0 < denoised_above_noise <= o.denoise_above_noise
-        )
+        checked = smoothed_already(denoised_above_noise, o.denoise_above_noise)
         net = self.infer(image if checked else denoise(image, o.denoise_above_noise))
         threshold = o.detection_threshold if threshold is None else threshold
         hc, wc = net["keypoint_logits"].shape[1:]

@@ -93,6 +93,29 @@ TEST(GaussianBlurTest, BlursAViewAsAnImageOfItsOwn) {
   EXPECT_EQ(CountDifferent(GaussianBlur8u(view, 1.4), expected), 0);
 }
 
+TEST(GaussianBlurTest, AsOpenCvGivesOpenCvsPixelsForAViewAndBeyondTheLimits) {
+  const cv::Mat image = Texture(300, 200, 5);
+  const cv::Mat view = image(cv::Rect(17, 11, 150, 90));
+  struct Case {
+    cv::Mat image;
+    double sigma;
+    int radius;
+  };
+  // (a view: OpenCV reads the pixels around it; sigma and radius beyond GaussianBlur8u's)
+  for (const Case& c : {Case{view, 1.4, -1}, Case{view, 1.0, 2}, Case{image, 1.3, -1},
+                        Case{image, 1.2, 5}, Case{image, 120.0, 3}, Case{image, 1.0, 1200}}) {
+    cv::Mat expected;
+    const cv::Size size =
+        c.radius < 0 ? cv::Size() : cv::Size(2 * c.radius + 1, 2 * c.radius + 1);
+    cv::GaussianBlur(c.image, expected, size, c.sigma, c.sigma, cv::BORDER_REFLECT_101);
+    const cv::Mat blurred = GaussianBlurAsOpenCv(c.image, c.sigma, c.radius);
+    EXPECT_EQ(CountDifferent(blurred, expected), 0) << "sigma " << c.sigma << " r " << c.radius;
+    EXPECT_NE(blurred.data, c.image.data);
+  }
+  // the view's pixels differ from the isolated blur's at its edges: OpenCV's path was taken
+  EXPECT_GT(CountDifferent(GaussianBlurAsOpenCv(view, 1.4), GaussianBlur8u(view, 1.4)), 0);
+}
+
 TEST(GaussianBlurTest, RefusesBadInput) {
   EXPECT_THROW(GaussianBlur8u(cv::Mat(), 1.0), std::invalid_argument);
   EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_32F, cv::Scalar(0)), 1.0), std::invalid_argument);
