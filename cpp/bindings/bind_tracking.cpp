@@ -480,6 +480,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("keyframe_min_inliers", &TrackerOptions::keyframe_min_inliers)
       .def_readwrite("point_sigma_px", &TrackerOptions::point_sigma_px)
       .def_readwrite("track_refine_window_px", &TrackerOptions::track_refine_window_px)
+      .def_readwrite("triangulated_point_patches", &TrackerOptions::triangulated_point_patches)
       .def_readwrite("track_refine_max_px", &TrackerOptions::track_refine_max_px)
       .def_readwrite("projected_max_frames", &TrackerOptions::projected_max_frames)
       .def_readwrite("projection_min_inliers", &TrackerOptions::projection_min_inliers)

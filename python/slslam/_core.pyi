@@ -1263,6 +1263,7 @@ class TrackerOptions:
     right_lines_on_keyframes: bool
     sequential: bool
     stereo: StereoMatchOptions
+    triangulated_point_patches: bool
     use_imu: bool
     use_lines: bool
     vocabulary_path: str

@@ -144,6 +144,7 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "close_depth_baselines",
         "point_sigma_px",
         "track_refine_window_px",
+        "triangulated_point_patches",
         "track_refine_max_px",
         "unaligned_sigma_factor",
         "unaligned_min_aligned",
@@ -500,6 +501,9 @@ class TrackingConfig:
     # are aligned to it (scaled by the point's change of depth) instead of taking the detected
     # keypoint position as it is [px]; 0: off
     track_refine_window_px: int = _tracking("track_refine_window_px", "[0, 50]")
+    # points triangulated by local mapping keep such a patch too, of the new keyframe's left
+    # image (false: only the points made from stereo in the tracker's keyframes have one)
+    triangulated_point_patches: bool = _tracking("triangulated_point_patches")
     # an alignment that moves the keypoint further than this is not taken [px]
     track_refine_max_px: float = _tracking("track_refine_max_px", "[0.1, 10000]")
     # in a frame smoothed as noisy with at least unaligned_min_aligned matches aligned to their

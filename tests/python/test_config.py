@@ -148,7 +148,8 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
     """XFeat is the default point front end, with its preset (presets/xfeat.yaml) under the
     config's keys: the filter's width following the frame's residuals, the 8-bit network on the
     left image with the row search, keyframes at most every 6 frames (5 in noisy frames), every
-    frame's lines, projected frames; every other key at its default."""
+    frame's lines, projected frames, triangulated points with patches; every other key at its
+    default."""
     from slslam.datasets.euroc import RectifiedStereoCamera
     from slslam.tracking.tracker import _core_options
 
@@ -177,6 +178,10 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
     # and frames between detections tracked on projected keypoints (off by default)
     assert config.tracking.projected_max_frames == 2 and Config().tracking.projected_max_frames == 0
     assert config.tracking.projection_cell_px == 16
+    # and triangulated points with patches of their keyframe's image (off by default)
+    assert config.tracking.triangulated_point_patches
+    assert not Config().tracking.triangulated_point_patches
+    assert _core_options(camera, config).triangulated_point_patches
     tracking = dataclasses.replace(
         config.tracking,
         stereo_row_search=False,
@@ -185,6 +190,7 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
         lines_on_demand=Config().tracking.lines_on_demand,
         projected_max_frames=Config().tracking.projected_max_frames,
         projection_cell_px=Config().tracking.projection_cell_px,
+        triangulated_point_patches=False,
     )
     assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
 

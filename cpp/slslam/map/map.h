@@ -58,6 +58,10 @@ struct KeyFrame {
   int parent = -1;                  ///< spanning tree parent (-1: root)
   BowVector bow;                    ///< bag of words of the left keypoints (with a vocabulary)
   FeatureVector bow_features;       ///< vocabulary node -> keypoint indices (direct index)
+  /// The left image as stereo matching saw it (8-bit), kept from the keyframe's making until
+  /// local mapping has triangulated its new points, which sample their patches from it
+  /// (TriangulationOptions::patch_window_px); released then. Empty otherwise; not in map files.
+  cv::Mat left_image;
   bool bad = false;
 
   Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]

@@ -149,6 +149,7 @@ bool LocalMapper::Prepare(Window* window) {
       window->triangulated = CreateNewLandmarks(map, keyframe_id, rig_, options_.triangulation);
       if (window->triangulated.points > 0) map->UpdateConnections(keyframe_id);
     }
+    current->left_image.release();  // (its new points have their patches now)
     ba = MapBundleAdjustment(map->correction_epoch());
     std::vector<int> local = {keyframe_id};
     for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {

@@ -14,6 +14,7 @@ void TriangulationOptions::Check() const {
                     limits::kMaxDescriptorDistance);
   CheckAboveInRange("triangulation.ratio", ratio, 0.0f, 1.0f);
   CheckInRange("triangulation.min_parallax_deg", min_parallax_deg, 0.0, 180.0);
+  CheckInRange("triangulation.patch_window_px", patch_window_px, 0, 50);
   CheckAboveInRange("triangulation.max_depth_baselines", max_depth_baselines, 0.0, 1e6);
   CheckAboveInRange("triangulation.chi2", chi2, 0.0, 1e6);
   CheckAboveInRange("triangulation.sigma_px", sigma_px, 0.0, 1e4);

@@ -9,6 +9,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/features/descriptor_matcher.h"
+#include "slslam/features/image_patch.h"
 
 namespace slslam {
 
@@ -204,6 +205,13 @@ int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& r
     auto point = map->AddPoint(p, a.frame->keypoints.descriptors.row(i), a.keyframe->id);
     map->AddPointObservation(point->id, a.keyframe->id, i);
     map->AddPointObservation(point->id, b.keyframe->id, j);
+    if (options.patch_window_px > 0 && !a.keyframe->left_image.empty()) {
+      // (the new keyframe's image around its keypoint: matches in later frames are aligned to
+      // it, Tracker::RefineTracks; empty where the patch leaves the image)
+      point->patch = SamplePatch(a.keyframe->left_image, uv_a.x(), uv_a.y(),
+                                 options.patch_window_px);
+      if (!point->patch.empty()) point->patch_depth_m = za;
+    }
     ++made;
   }
   return made;

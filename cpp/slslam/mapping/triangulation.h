@@ -48,6 +48,12 @@ struct TriangulationOptions {
   /// 1.6x as much on the 150- and 300-frame dark loops; min_parallax_deg 3 keeps both
   /// (benchmarks/README.md, 2026-11-29 g) [-]
   bool points = true;
+  /// Half size of the patch a triangulated point keeps of the new keyframe's left image around
+  /// its keypoint (KeyFrame::left_image), as the points the tracker makes from stereo keep one
+  /// (MapPoint::patch, TrackerOptions::track_refine_window_px): later matches are aligned to it
+  /// instead of taken at their detected positions. The tracker sets it
+  /// (TrackerOptions::triangulated_point_patches) [px]; 0: no patch
+  int patch_window_px = 0;
   bool lines = true;                 ///< also triangulate lines
   float line_max_lbd = 60.0f;        ///< LBD bound for line pairs [bits]
   float line_ratio = 0.8f;           ///< best / second best LBD distance [-]

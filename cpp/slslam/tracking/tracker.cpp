@@ -65,6 +65,8 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   mapping.triangulation.line_sigma_px = options_.line_sigma_px;
   mapping.triangulation.max_depth_baselines = options_.stereo.max_depth_baselines;
   mapping.triangulation.lines = options_.use_lines;
+  mapping.triangulation.patch_window_px =
+      options_.triangulated_point_patches ? options_.track_refine_window_px : 0;
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
   mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential,
@@ -267,6 +269,12 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     }
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
+    if (options_.triangulated_point_patches && options_.track_refine_window_px > 0 &&
+        options_.mapping.triangulate && current_left_ != nullptr) {
+      // (for local mapping's triangulated points, which sample their patches from it; a copy:
+      // the caller's image is not the tracker's to keep. Released after local mapping.)
+      kf->left_image = current_left_->clone();
+    }
     kf->bow = bow;
     kf->bow_features = std::move(bow_features);
     const Rigid3d world_from_cam = cam_from_world.Inverse();

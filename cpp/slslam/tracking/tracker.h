@@ -174,6 +174,13 @@ struct TrackerOptions {
   /// 600-frame bright loop, ORB + lines 0.163 -> 0.089 m on the hard junction. Points that local
   /// mapping triangulates and points loaded from a map file have no patch. 0: off
   int track_refine_window_px = 5;
+  /// Points that local mapping triangulates from keyframe pairs keep a patch too, of the new
+  /// keyframe's left image (TriangulationOptions::patch_window_px, the keyframe holding its image
+  /// until then): their later matches are aligned as the stereo points' are, instead of taken at
+  /// the detected position, which follows a small image motion only in part (XFeat's keypoints a
+  /// 0.5 % scale change by 0.84 of it, benchmarks/README.md 2026-11-29 h). Needs
+  /// track_refine_window_px > 0. false: triangulated points have no patch, as before [-]
+  bool triangulated_point_patches = false;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
   /// In a noisy frame (StereoFrame::noisy: smoothed as dark) with at least
   /// unaligned_min_aligned matches aligned to their map points' patches (track_refine_window_px),

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "slslam/core/pinhole_camera.h"
+#include "slslam/features/image_patch.h"
 #include "slslam/features/stereo_frame.h"
 
 namespace slslam::tracker_detail {
@@ -40,14 +41,9 @@ inline Eigen::Vector3d ObservedPixel(const StereoFrame& frame, int k,
   return {refined.x(), refined.y(), u_right >= 0.0 ? u_right + (refined.x() - u) : u_right};
 }
 
-// Bilinear samples of an 8-bit image on the (2w+1) x (2w+1) grid centred on (x, y), `scale`
-// image pixels apart, row-major into `out`; the grid must lie inside [0, cols - 1] x
-// [0, rows - 1]. Returns the samples' sum.
-double SampleGrid(const cv::Mat& image, double x, double y, int w, double scale, float* out);
-
-// The (2w+1) x (2w+1) float patch of an 8-bit image centred on (u, v), bilinear; empty when it
-// (with one pixel more around it) does not fit inside the image.
-cv::Mat SamplePatch(const cv::Mat& image, double u, double v, int w);
+// (features/image_patch.h: the patches are sampled by local mapping too)
+using ::slslam::SampleGrid;
+using ::slslam::SamplePatch;
 
 // Aligns `patch` (SamplePatch's, w from its size) to `image` around (u, v), the patch spanning
 // `scale` image pixels per patch pixel: Gauss-Newton on the zero-mean difference (a brightness

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
+#include "slslam/features/image_patch.h"
 #include "slslam/mapping/triangulation.h"
 #include "slslam/optimization/bundle_adjustment.h"
 #include "slslam/place/vocabulary.h"
@@ -764,6 +765,88 @@ TEST(TriangulationTest, KeyframePairsAddPointsWithoutStereoAndHorizontalLines) {
       EXPECT_LT(std::min(std::abs(std::abs(x.x()) - 2.2), std::abs(x.y() + 1.6)), 1e-3) << id;
     }
   }
+}
+
+// TriangulationOptions::patch_window_px: each triangulated point keeps the new keyframe's image
+// around its keypoint there (what the tracker aligns later matches to) and its depth there;
+// without the keyframe's image, or with 0, no patch. Local mapping releases the image after.
+TEST(TriangulationTest, TriangulatedPointsKeepTheNewKeyframesPatch) {
+  const Scene scene;
+  const StereoRig rig = Rig();
+  auto mono = [&](int k) {
+    auto f = Render(scene, k, 0.0);
+    f->u_right.assign(f->u_right.size(), -1.0);
+    f->depth.assign(f->depth.size(), -1.0);
+    return f;
+  };
+  const auto frame0 = mono(0), frame20 = mono(20);
+  cv::Mat image(rig.camera.height, rig.camera.width, CV_8UC1);
+  cv::randu(image, 0, 256);
+  // Keyframes 0 and 20 linked by one shared point; the second (the new one) with `with_image`.
+  auto make = [&](Map& m, bool with_image) {
+    MutexLock lock(m.mutex());
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    TruePose(0, &R, &t);
+    auto ka = m.AddKeyFrame(Rigid3d(R, t), frame0);
+    TruePose(20, &R, &t);
+    auto kb = m.AddKeyFrame(Rigid3d(R, t), frame20);
+    if (with_image) kb->left_image = image.clone();
+    auto shared = m.AddPoint(Eigen::Vector3d::Zero(), cv::Mat::zeros(1, 32, CV_32F), ka->id);
+    m.AddPointObservation(shared->id, ka->id, 0);
+    m.AddPointObservation(shared->id, kb->id, 0);
+    m.UpdateConnections(kb->id);
+    return std::make_pair(kb->id, shared->id);
+  };
+  TriangulationOptions options;
+  options.patch_window_px = 5;
+  Map map;
+  const auto [b_id, shared_id] = make(map, true);
+  {
+    MutexLock lock(map.mutex());
+    ASSERT_GT(CreateNewLandmarks(&map, b_id, rig, options).points, 200);
+    const KeyFrame& kb = *map.keyframe(b_id);
+    int with_patch = 0;
+    for (const auto& [id, p] : map.points()) {
+      if (id == shared_id) continue;
+      const int i = p->observations.at(b_id);
+      const cv::Mat expected =
+          SamplePatch(image, frame20->keypoints.uv(i, 0), frame20->keypoints.uv(i, 1), 5);
+      ASSERT_EQ(p->patch.empty(), expected.empty()) << id;
+      if (expected.empty()) continue;
+      ++with_patch;
+      EXPECT_EQ(cv::norm(p->patch, expected, cv::NORM_INF), 0.0) << id;
+      const double depth = (kb.cam_from_world.rotation * p->position +
+                            kb.cam_from_world.translation).z();
+      EXPECT_NEAR(p->patch_depth_m, depth, 1e-9) << id;
+    }
+    EXPECT_GT(with_patch, 200);
+  }
+  for (const bool with_image : {false, true}) {
+    for (const int window : {0, 5}) {
+      if (with_image && window == 5) continue;  // (above)
+      TriangulationOptions o;
+      o.patch_window_px = window;
+      Map m;
+      const auto [id, shared] = make(m, with_image);
+      MutexLock lock(m.mutex());
+      ASSERT_GT(CreateNewLandmarks(&m, id, rig, o).points, 200);
+      for (const auto& [pid, p] : m.points()) EXPECT_TRUE(p->patch.empty()) << pid;
+    }
+  }
+  // Local mapping (sequential) triangulates with the patches and releases the image.
+  LocalMapperOptions mapping;
+  mapping.triangulation.patch_window_px = 5;
+  LocalMapper mapper(rig, mapping, /*sequential=*/true);
+  Map mapped;
+  const auto [mapped_b, mapped_shared] = make(mapped, true);
+  mapper.Insert(&mapped, mapped_b);
+  MutexLock lock(mapped.mutex());
+  EXPECT_TRUE(mapped.keyframe(mapped_b)->left_image.empty());
+  int patched = 0;
+  for (const auto& [pid, p] : mapped.points()) patched += !p->patch.empty();
+  EXPECT_GT(patched, 100);
+  (void)mapped_shared;
 }
 
 // Four stereo keyframes (the first fixed, the others perturbed) of the scene's first 400 points
