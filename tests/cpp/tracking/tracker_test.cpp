@@ -834,19 +834,22 @@ TEST(TriangulationTest, TriangulatedPointsKeepTheNewKeyframesPatch) {
       for (const auto& [pid, p] : m.points()) EXPECT_TRUE(p->patch.empty()) << pid;
     }
   }
-  // Local mapping (sequential) triangulates with the patches and releases the image.
+  // Local mapping triangulates with the patches and releases the image: inline, on its own
+  // thread and with the solve overlapped (every layout the tracker runs).
   LocalMapperOptions mapping;
   mapping.triangulation.patch_window_px = 5;
-  LocalMapper mapper(rig, mapping, /*sequential=*/true);
-  Map mapped;
-  const auto [mapped_b, mapped_shared] = make(mapped, true);
-  mapper.Insert(&mapped, mapped_b);
-  MutexLock lock(mapped.mutex());
-  EXPECT_TRUE(mapped.keyframe(mapped_b)->left_image.empty());
-  int patched = 0;
-  for (const auto& [pid, p] : mapped.points()) patched += !p->patch.empty();
-  EXPECT_GT(patched, 100);
-  (void)mapped_shared;
+  for (const auto& [sequential, overlap] : {std::pair{true, false}, {false, false}, {true, true}}) {
+    LocalMapper mapper(rig, mapping, sequential, overlap);
+    Map mapped;
+    const int mapped_b = make(mapped, true).first;
+    mapper.Insert(&mapped, mapped_b);
+    mapper.Flush();
+    MutexLock lock(mapped.mutex());
+    EXPECT_TRUE(mapped.keyframe(mapped_b)->left_image.empty()) << sequential << overlap;
+    int patched = 0;
+    for (const auto& [pid, p] : mapped.points()) patched += !p->patch.empty();
+    EXPECT_GT(patched, 100) << sequential << overlap;
+  }
 }
 
 // Four stereo keyframes (the first fixed, the others perturbed) of the scene's first 400 points
