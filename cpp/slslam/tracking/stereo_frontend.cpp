@@ -46,10 +46,8 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
                cam.height);
   Require(right_image.size() == left_image.size(), "left and right images differ in size");
   auto start = std::chrono::steady_clock::now();
-  const cv::Mat left =
-      denoised ? left_image : SmoothIfNoisy(left_image, options_.denoise_above_noise);
-  const cv::Mat right =
-      denoised ? right_image : SmoothIfNoisy(right_image, options_.denoise_above_noise);
+  const cv::Mat left = Smoothed(left_image, denoised);
+  const cv::Mat right = Smoothed(right_image, denoised);
   LineFeatures left_lines, right_lines;
   const bool right_now = options_.use_lines && !options_.right_lines_on_keyframes;
   Require(given_left_lines == nullptr || (options_.use_lines && !right_now),
@@ -82,6 +80,10 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
   return frame;
 }
 
+cv::Mat StereoFrontend::Smoothed(const cv::Mat& image, bool denoised) const {
+  return denoised ? image : SmoothIfNoisy(image, options_.denoise_above_noise);
+}
+
 LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image, bool denoised) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
@@ -89,9 +91,7 @@ LineFeatures StereoFrontend::ExtractLeftLines(const cv::Mat& left_image, bool de
                cam.height);
   Require(options_.use_lines && options_.right_lines_on_keyframes,
           "ExtractLeftLines needs use_lines and right_lines_on_keyframes");
-  return ExtractLines(
-      denoised ? left_image : SmoothIfNoisy(left_image, options_.denoise_above_noise),
-      options_.lines);
+  return ExtractLines(Smoothed(left_image, denoised), options_.lines);
 }
 
 void StereoFrontend::CompleteLeftLines(const cv::Mat& left, StereoFrame* frame,
@@ -109,8 +109,7 @@ void StereoFrontend::CompleteStereoLines(const cv::Mat& right, StereoFrame* fram
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(right.cols == cam.width && right.rows == cam.height, "right image is ", right.cols,
                "x", right.rows, ", calibration says ", cam.width, "x", cam.height);
-  const cv::Mat smoothed =  // as in Build
-      denoised ? right : SmoothIfNoisy(right, options_.denoise_above_noise);
+  const cv::Mat smoothed = Smoothed(right, denoised);  // as in Build
   MatchStereoLinesInto(ExtractLines(smoothed, options_.lines), options_.rig, options_.stereo,
                        frame);
   frame->stereo_lines_pending = false;

@@ -91,6 +91,10 @@ class StereoFrontend {
   const StereoFrontendOptions& options() const { return options_; }
 
  private:
+  // The image as the front end's steps see it: smoothed when noisy (denoise_above_noise), or as
+  // it is when the caller smoothed it already (`denoised`).
+  cv::Mat Smoothed(const cv::Mat& image, bool denoised) const;
+
   StereoFrontendOptions options_;
 };
 

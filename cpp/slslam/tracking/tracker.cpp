@@ -69,6 +69,9 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
       options_.triangulated_point_patches ? options_.track_refine_window_px : 0;
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
   mapping.triangulation.Check();
+  // (a keyframe's image is of use only to local mapping's triangulated points' patches)
+  keyframe_images_ = mapping.triangulate && mapping.triangulation.points &&
+                     mapping.triangulation.patch_window_px > 0;
   mapper_ = std::make_unique<LocalMapper>(options_.rig, mapping, options_.sequential,
                                           options_.mapping_overlap);
   if (options_.dynamic_cells) {
@@ -269,8 +272,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     }
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
-    if (options_.triangulated_point_patches && options_.track_refine_window_px > 0 &&
-        options_.mapping.triangulate && current_left_ != nullptr) {
+    if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)
       kf->left_image = current_left_->clone();

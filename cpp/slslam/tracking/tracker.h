@@ -492,6 +492,7 @@ class Tracker {
   Atlas atlas_;
   std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
+  bool keyframe_images_ = false;  // keyframes keep their left image for local mapping (patches)
   std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
   std::unique_ptr<InertialBridge> bridge_;  ///< from the first IMU sample on (use_imu)
   int bridge_map_ = -1;                     ///< the map whose world the bridge's poses are in
