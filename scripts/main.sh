@@ -4,8 +4,8 @@
 #
 #   bash scripts/main.sh [OUT_DIR] [FRAMES]      # defaults: slslam_main, 300 frames (15 s)
 #
-# Uses slslam's default front end, the learned XFeat (weights ship with slslam; its preset
-# python/slslam/presets/xfeat.yaml), and says so in one line. Writes OUT_DIR/sequence (EuRoC ASL layout) and OUT_DIR/run (trajectory.tum,
+# Uses slslam's default front end, ORB + lines (its preset python/slslam/presets/orb.yaml), and
+# says so in one line. Writes OUT_DIR/sequence (EuRoC ASL layout) and OUT_DIR/run (trajectory.tum,
 # frames.csv, map.ply, metrics.json with the ATE, ape.png, config.yaml).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -29,7 +29,8 @@ then
 else
   "$PYTHON" -m slslam sim --preset loop --light 0.15 --frames "$frames" --no-lidar --out "$out/sequence"
 fi
-# The default front end: XFeat, learned, weights shipped with slslam; on this job it drifted half
-# as much as ORB + lines (benchmarks/README.md, 2026-11-29 g). `slslam run --orb` runs ORB.
-echo "[slslam] front end: XFeat (learned keypoints, weights shipped with slslam; the default) + lines"
+# The default front end: ORB + lines, with ORB's preset (the left image's keypoints searched along
+# their rows of the right image); README.md says which front end to use when.
+# `slslam run --xfeat` runs the learned XFeat instead.
+echo "[slslam] front end: ORB + lines (the default; ORB's preset, python/slslam/presets/orb.yaml)"
 "$PYTHON" -m slslam run "$out/sequence" --out "$out/run"

@@ -136,8 +136,8 @@ def info_command(
     dataset: Annotated[
         Path,
         typer.Argument(
-            help="EuRoC ASL folder (holding mav0/, or mav0), or a ROS bag (ROS1 .bag, ROS2 "
-            "folder, .db3 or .mcap)."
+            help="EuRoC ASL folder (holding mav0/, or mav0), a KITTI odometry sequence or raw "
+            "drive, or a ROS bag (ROS1 .bag, ROS2 folder, .db3 or .mcap)."
         ),
     ],
 ) -> None:
@@ -154,11 +154,14 @@ def info_command(
             table.add_row(escape(topic.topic), topic.msgtype, str(topic.count))
         Console(width=120).print(table)
         return
-    seq = EurocSequence(dataset)
+    from slslam.datasets.kitti import KittiSequence, is_kitti
+
+    seq = KittiSequence(dataset) if is_kitti(dataset) else EurocSequence(dataset)
     cam = seq.camera
     duration = (seq.timestamps_ns[-1] - seq.timestamps_ns[0]) * 1e-9
     out = Console()
-    out.print(f"EuRoC ASL sequence at {seq.root}")
+    kind = f"KITTI {seq.layout}" if isinstance(seq, KittiSequence) else "EuRoC ASL"
+    out.print(f"{kind} sequence at {seq.root}")
     out.print(f"  stereo pairs     {len(seq)} over {duration:.2f} s")
     out.print(f"  image size       {cam.width} x {cam.height}")
     out.print(f"  rectified camera fx={cam.fx:.3f} fy={cam.fy:.3f} cx={cam.cx:.3f} cy={cam.cy:.3f}")
@@ -318,14 +321,22 @@ def sim_command(
     )
 
 
+def _frontend_flag(orb: bool, xfeat: bool) -> str | None:
+    """The point front end --orb / --xfeat ask for (None: the config's); both: an error."""
+    if orb and xfeat:
+        raise InputError("--orb / --xfeat", "choose one point front end, not both")
+    return "orb" if orb else "xfeat" if xfeat else None
+
+
 @app.command("run")
 def run_command(
     dataset: Annotated[
         Path,
         typer.Argument(
             help="Sequence folder: EuRoC ASL (the folder holding mav0/, or mav0 itself), e.g. "
-            "what `slslam sim` writes; or a ROS bag (ROS1 .bag, ROS2 folder / .db3 / .mcap) "
-            "with --left, --right and --calib."
+            "what `slslam sim` writes; a KITTI odometry sequence (sequences/NN) or raw drive "
+            "(..._sync); or a ROS bag (ROS1 .bag, ROS2 folder / .db3 / .mcap) with --left, "
+            "--right and --calib."
         ),
     ],
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("slslam_run"),
@@ -348,7 +359,7 @@ def run_command(
         Path | None,
         typer.Option(
             help="YAML config with the keys it changes (all keys: configs/default.yaml); "
-            "without it the defaults: XFeat with its preset."
+            "without it the defaults: ORB with its preset."
         ),
     ] = None,
     max_frames: Annotated[
@@ -364,7 +375,17 @@ def run_command(
     orb: Annotated[
         bool,
         typer.Option(
-            "--orb", help="Use the ORB point front end with its settings (overrides the config)."
+            "--orb",
+            help="Use the ORB point front end with its settings (overrides the config; ORB is "
+            "the default without a config).",
+        ),
+    ] = False,
+    xfeat: Annotated[
+        bool,
+        typer.Option(
+            "--xfeat",
+            help="Use the learned XFeat point front end (weights shipped) with its settings "
+            "(overrides the config).",
         ),
     ] = False,
     no_lines: Annotated[
@@ -424,10 +445,10 @@ def run_command(
     Writes trajectory.tum (every frame; flushed as it goes), frames.csv (state, counts and stage
     times per frame), map.ply (points and lines), metrics.json and ape.png (ATE against ground
     truth when the sequence has it), config.yaml (the values the run used). The point front end
-    is XFeat (learned, weights shipped) with the settings it tracks best with
-    (python/slslam/presets/xfeat.yaml, under the config's own keys); SuperPoint with
+    is ORB with the settings it tracks best with (python/slslam/presets/orb.yaml, under the
+    config's own keys); the learned XFeat (weights shipped) with --xfeat; SuperPoint with
     features.point_frontend: superpoint and its weights ($SLSLAM_SUPERPOINT_MODEL or
-    features.superpoint.model_path; ORB without them); ORB with --orb.
+    features.superpoint.model_path; ORB without them).
     """
     import dataclasses
 
@@ -441,8 +462,8 @@ def run_command(
 
         set_quiet(True)
         logging.getLogger().setLevel(logging.WARNING)
-    # --orb before the front end's preset is chosen: ORB runs with ORB's settings
-    cfg = load_config(config, point_frontend="orb" if orb else None)
+    # --orb / --xfeat before the front end's preset is chosen: each runs with its own settings
+    cfg = load_config(config, point_frontend=_frontend_flag(orb, xfeat))
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
     sequence = _open_bag(dataset, left, right, imu, calib)
@@ -715,6 +736,9 @@ def config_command(
     orb: Annotated[
         bool, typer.Option("--orb", help="ORB with its preset (as `slslam run --orb`).")
     ] = False,
+    xfeat: Annotated[
+        bool, typer.Option("--xfeat", help="XFeat with its preset (as `slslam run --xfeat`).")
+    ] = False,
     out: Annotated[
         Path | None, typer.Option(help="Write the YAML to this file instead of printing it.")
     ] = None,
@@ -724,8 +748,12 @@ def config_command(
     --config as it is."""
     from slslam.config import config_to_yaml, dump_config, load_config
 
-    cfg = load_config(config, point_frontend="orb" if orb else None)
-    options = (f" --config {config}" if config is not None else "") + (" --orb" if orb else "")
+    cfg = load_config(config, point_frontend=_frontend_flag(orb, xfeat))
+    options = (
+        (f" --config {config}" if config is not None else "")
+        + (" --orb" if orb else "")
+        + (" --xfeat" if xfeat else "")
+    )
     header = f"slslam {__version__}: the configuration of `slslam run{options}`"
     if out is not None:
         dump_config(cfg, out, header=header)

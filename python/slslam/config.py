@@ -5,12 +5,12 @@ A config file holds only the keys it changes; everything else keeps the default 
 errors that name the file and the key, so a typo never passes silently.
 
     features:
-      point_frontend: superpoint      # xfeat (the default) | superpoint | orb
+      point_frontend: superpoint      # orb (the default) | xfeat | superpoint
       superpoint:
         model_path: /models/superpoint_v1.onnx   # overrides $SLSLAM_SUPERPOINT_MODEL
 
 Front-end presets: a point front end may come with the settings it tracks best with
-(``python/slslam/presets/<front end>.yaml``: XFeat, the default, and ORB have one).
+(``python/slslam/presets/<front end>.yaml``: ORB, the default, and XFeat have one).
 ``config_from_dict``, ``load_config`` and ``default_config`` apply the preset of the config's
 front end under the config's own keys, so a key the config sets wins. ``Config()`` itself holds
 the base defaults without any preset (the values ``configs/default.yaml`` documents).
@@ -34,6 +34,7 @@ import yaml
 from slslam import _core
 from slslam._cpp_defaults import as_written, core_attribute
 from slslam.errors import InputError
+from slslam.features.low_light import LowLightOptions
 from slslam.features.orb import OrbOptions
 from slslam.features.superpoint import ENV_MODEL, SuperPointOptions
 from slslam.features.xfeat import XFeatOptions
@@ -307,11 +308,15 @@ class DynamicCellConfig:
 class FeaturesConfig:
     """The point front end."""
 
-    # the learned front end whose weights ship with slslam; its preset (presets/xfeat.yaml) is
-    # applied by config_from_dict / load_config / default_config, not by FeaturesConfig()
-    point_frontend: Literal["superpoint", "xfeat", "orb"] = "xfeat"
+    # ORB: the front end that is at least as accurate as the learned ones on every sequence
+    # benchmarks/kitti.py and benchmarks/tracking_recovery.py run (real KITTI among them); its
+    # preset (presets/orb.yaml) is applied by config_from_dict / load_config / default_config,
+    # not by FeaturesConfig()
+    point_frontend: Literal["superpoint", "xfeat", "orb"] = "orb"
     superpoint: SuperPointOptions = field(default_factory=SuperPointOptions)
     xfeat: XFeatOptions = field(default_factory=XFeatOptions)  # weights shipped (Apache-2.0)
+    # dark frames enhanced before the front end (gamma curve or CLAHE; off by default)
+    low_light: LowLightOptions = field(default_factory=LowLightOptions)
     orb: OrbOptions = field(default_factory=OrbOptions)
     grid: GridConfig = field(default_factory=GridConfig)
     dynamic_cells: DynamicCellConfig = field(default_factory=DynamicCellConfig)
@@ -794,11 +799,15 @@ def config_from_dict(
         config.features.xfeat.check()
     except ValueError as exc:
         raise ConfigError(source, f"features.xfeat: {exc}") from None
+    try:
+        config.features.low_light.check()
+    except ValueError as exc:
+        raise ConfigError(source, f"features.low_light: {exc}") from None
     return config
 
 
 def default_config(point_frontend: str | None = None) -> Config:
-    """The defaults with the front end's preset: XFeat tuned as ``presets/xfeat.yaml`` says,
+    """The defaults with the front end's preset: ORB tuned as ``presets/orb.yaml`` says,
     unless ``point_frontend`` names another front end. What ``slslam run`` uses without
     ``--config``, and ``slslam.Tracker`` without a config."""
     return config_from_dict({}, point_frontend=point_frontend)

@@ -61,7 +61,7 @@ def test_config_prints_what_run_uses_and_loads_back(tmp_path, capsys):
 
     assert main(["config"]) == 0
     text = capsys.readouterr().out
-    assert text.startswith("# slslam ") and "point_frontend: xfeat" in text
+    assert text.startswith("# slslam ") and "point_frontend: orb" in text
     printed = tmp_path / "printed.yaml"
     printed.write_text(text)
     assert load_config(printed) == default_config()
@@ -74,4 +74,7 @@ def test_config_prints_what_run_uses_and_loads_back(tmp_path, capsys):
     assert effective.tracking.keyframe_min_frames == 4  # the file's key
     assert effective.tracking.stereo_row_search  # ORB's preset
     assert effective == load_config(mine, point_frontend="orb")
+    assert main(["config", "--xfeat", "--out", str(out)]) == 0
+    assert load_config(out) == default_config("xfeat")
+    assert main(["config", "--orb", "--xfeat"]) == 2  # one front end, not both
     assert main(["config", "--config", str(tmp_path / "missing.yaml")]) == 2

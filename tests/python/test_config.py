@@ -103,8 +103,9 @@ def test_frontend_choice_and_model_path_precedence(tmp_path, monkeypatch, caplog
     from slslam.features.xfeat import XFeat
 
     monkeypatch.delenv(ENV_MODEL, raising=False)
-    # the default: XFeat, whose weights ship with slslam (no SuperPoint weights needed)
-    assert isinstance(make_point_frontend(Config().features), XFeat)
+    # the default: ORB; XFeat's weights ship with slslam (no SuperPoint weights needed)
+    assert isinstance(make_point_frontend(Config().features), Orb)
+    assert isinstance(make_point_frontend(default_config("xfeat").features), XFeat)
     assert "using the ORB front end" not in caplog.text
     superpoint = default_config("superpoint").features
     assert isinstance(make_point_frontend(superpoint), Orb)
@@ -144,17 +145,35 @@ def test_dynamic_cell_settings_reach_the_tracker():
     assert (options.dynamic.sigma_px, options.dynamic.threshold) == (5.0, 0.3)
 
 
-def test_xfeat_is_the_default_front_end_with_its_preset():
-    """XFeat is the default point front end, with its preset (presets/xfeat.yaml) under the
-    config's keys: the filter's width following the frame's residuals, the 8-bit network on the
-    left image with the row search, keyframes at most every 6 frames (5 in noisy frames), every
-    frame's lines, projected frames, triangulated points with patches; every other key at its
-    default."""
+def test_orb_is_the_default_front_end_with_its_preset():
+    """ORB is the default point front end (benchmarks/kitti.py: XFeat loses the scale on real
+    KITTI), with its preset (presets/orb.yaml) under the config's keys: ORB on the left image
+    only with the row search on the right; every other key at its default."""
     from slslam.datasets.euroc import RectifiedStereoCamera
     from slslam.tracking.tracker import _core_options
 
     config = default_config()
-    assert config.features.point_frontend == "xfeat" == Config().features.point_frontend
+    assert config.features.point_frontend == "orb" == Config().features.point_frontend
+    camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
+    assert config.tracking.stereo_row_search and not Config().tracking.stereo_row_search
+    assert _core_options(camera, config).stereo.row_search
+    tracking = dataclasses.replace(config.tracking, stereo_row_search=False)
+    assert dataclasses.replace(config, tracking=tracking) == Config()
+
+
+def test_xfeat_preset():
+    """XFeat with its preset (presets/xfeat.yaml) under the config's keys: the filter's width
+    following the frame's residuals, the 8-bit network on the left image with the row search,
+    keyframes at most every 6 frames (5 in noisy frames), every frame's lines, projected frames,
+    triangulated points with patches; every other key at its default."""
+    from slslam.datasets.euroc import RectifiedStereoCamera
+    from slslam.tracking.tracker import _core_options
+
+    config = default_config("xfeat")
+    assert config.features.point_frontend == "xfeat"
+    base = dataclasses.replace(
+        Config(), features=dataclasses.replace(Config().features, point_frontend="xfeat")
+    )
     assert config.features.dynamic_cells.sigma_median_ratio == 2.0
     assert config.features.xfeat.precision == "int8"
     assert config.features.xfeat.intra_op_threads == 2
@@ -192,7 +211,7 @@ def test_xfeat_is_the_default_front_end_with_its_preset():
         projection_cell_px=Config().tracking.projection_cell_px,
         triangulated_point_patches=False,
     )
-    assert dataclasses.replace(config, features=rest, tracking=tracking) == Config()
+    assert dataclasses.replace(config, features=rest, tracking=tracking) == base
 
 
 def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
@@ -209,7 +228,8 @@ def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
     assert config.tracking.stereo_row_search  # the rest of the preset still applies
     assert load_config(path, preset=False).tracking.keyframe_min_frames == 3
     assert not load_config(path, preset=False).tracking.stereo_row_search
-    assert config_from_dict({"features": {"point_frontend": "xfeat"}}) == default_config()
+    assert config_from_dict({"features": {"point_frontend": "orb"}}) == default_config()
+    assert config_from_dict({"features": {"point_frontend": "xfeat"}}) == default_config("xfeat")
     assert frontend_preset("superpoint") == {}
     superpoint = config_from_dict({"features": {"point_frontend": "superpoint"}})
     assert superpoint == dataclasses.replace(

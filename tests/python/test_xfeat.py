@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from slslam import _core
-from slslam.config import ConfigError, FeaturesConfig, config_from_dict, make_point_frontend
+from slslam.config import ConfigError, config_from_dict, make_point_frontend
 from slslam.features.superpoint import ModelError
 from slslam.features.xfeat import (
     CELL,
@@ -274,7 +274,6 @@ def test_bad_model_files_are_named(tmp_path):
 def test_config_selects_xfeat_and_checks_its_ranges():
     config = config_from_dict({"features": {"point_frontend": "xfeat"}})
     assert isinstance(make_point_frontend(config.features), XFeat)
-    assert FeaturesConfig().point_frontend == "xfeat"  # the default (benchmarks/README.md)
     with pytest.raises(ConfigError, match="detection_threshold"):
         config_from_dict({"features": {"xfeat": {"detection_threshold": 1.5}}})
     with pytest.raises(ConfigError, match="max_keypoints"):

@@ -50,6 +50,7 @@ from scipy.spatial.transform import Rotation
 
 from slslam.config import Config, check_config, default_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
+from slslam.datasets.kitti import KittiSequence, is_kitti
 from slslam.datasets.rosbag import is_rosbag
 from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
@@ -171,13 +172,16 @@ def _current_signals() -> _Signals:
     return getattr(_SIGNALS, "current", None) or _Signals()
 
 
-def open_dataset(path: str | Path) -> EurocSequence:
-    """The sequence at ``path``, recognised by its layout (EuRoC ASL: a folder holding mav0/)."""
+def open_dataset(path: str | Path) -> EurocSequence | KittiSequence:
+    """The sequence at ``path``, recognised by its layout: EuRoC ASL (a folder holding mav0/),
+    a KITTI odometry sequence (``sequences/NN``) or a KITTI raw drive (``..._sync``)."""
     path = Path(path)
     if not path.exists():
         raise DatasetError(path, "dataset folder not found")
     if is_euroc(path):
         return EurocSequence(path)
+    if is_kitti(path):
+        return KittiSequence(path)
     if is_rosbag(path):
         raise DatasetError(
             path,
@@ -187,15 +191,38 @@ def open_dataset(path: str | Path) -> EurocSequence:
     raise DatasetError(
         path,
         "unknown dataset layout: slslam run reads EuRoC ASL folders (the folder holding mav0/, "
-        "or mav0 itself); `slslam sim --out DIR` makes one",
+        "or mav0 itself), KITTI odometry sequences (sequences/NN with calib.txt, image_0/, "
+        "image_1/, times.txt) and KITTI raw drives (image_00/data/, image_01/data/, "
+        "calib_cam_to_cam.txt); `slslam sim --out DIR` makes one",
     )
 
 
-def _tum_line(result: TrackResult) -> str:
+def tum_time(t_ns: int) -> str:
+    """Nanoseconds as exact fixed-point seconds (``1317042145.967790592``), as TUM files hold
+    them; a float's ``%.9f`` of a Unix time is off by up to a few hundred ns."""
+    sign, t_ns = ("-", -t_ns) if t_ns < 0 else ("", t_ns)
+    return f"{sign}{t_ns // 1_000_000_000}.{t_ns % 1_000_000_000:09d}"
+
+
+def _frame_stamps_ns(sequence, n: int) -> list[int] | None:
+    """The exact timestamps [ns] of the first n frames, when the sequence lists them."""
+    stamps = getattr(sequence, "timestamps_ns", None)
+    if stamps is None or len(stamps) < n:
+        return None
+    return [int(t) for t in stamps[:n]]
+
+
+def _stamp(stamps_ns: list[int] | None, index: int, timestamp_s: float) -> str:
+    if stamps_ns is not None and 0 <= index < len(stamps_ns):
+        return tum_time(stamps_ns[index])
+    return f"{timestamp_s:.9f}"
+
+
+def _tum_line(result: TrackResult, stamps_ns: list[int] | None = None) -> str:
     q = Rotation.from_matrix(result.T_world_cam[:3, :3]).as_quat()  # x y z w
     t = result.T_world_cam[:3, 3]
     return (
-        f"{result.timestamp:.9f} {t[0]:.9f} {t[1]:.9f} {t[2]:.9f} "
+        f"{_stamp(stamps_ns, result.index, result.timestamp)} {t[0]:.9f} {t[1]:.9f} {t[2]:.9f} "
         f"{q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n"
     )
 
@@ -247,7 +274,9 @@ def tracked_trajectory(results: list[TrackResult]) -> PoseTrajectory3D | None:
     )
 
 
-def _write_final_trajectory(tracker: Tracker, out: Path) -> PoseTrajectory3D | None:
+def _write_final_trajectory(
+    tracker: Tracker, out: Path, stamps_ns: list[int] | None = None
+) -> PoseTrajectory3D | None:
     """trajectory.tum replaced by the final-map poses (the online file kept as
     trajectory_online.tum); both renames are atomic. None when fewer than 2 poses."""
     final = tracker.final_trajectory()
@@ -257,8 +286,10 @@ def _write_final_trajectory(tracker: Tracker, out: Path) -> PoseTrajectory3D | N
     try:
         with tmp.open("w", encoding="ascii") as f:
             quats = Rotation.from_matrix(final.T_world_cam[:, :3, :3]).as_quat()  # x y z w
-            rows = np.column_stack([final.timestamp, final.T_world_cam[:, :3, 3], quats])
-            np.savetxt(f, rows, fmt="%.9f")
+            rows = np.column_stack([final.T_world_cam[:, :3, 3], quats])
+            for index, timestamp, row in zip(final.index, final.timestamp, rows, strict=True):
+                values = " ".join(f"{v:.9f}" for v in row)
+                f.write(f"{_stamp(stamps_ns, int(index), float(timestamp))} {values}\n")
         online = out / "trajectory.tum"
         if online.exists():
             online.replace(out / "trajectory_online.tum")
@@ -443,6 +474,7 @@ def run_sequence(
         {"dataset": str(dataset), "completed": False, "stopped_in": "tracking"},
     )
     n = len(sequence) if max_frames is None else min(max_frames, len(sequence))
+    stamps_ns = _frame_stamps_ns(sequence, n)
     results: list[TrackResult] = []
     error: BaseException | None = None
     with Tracker(
@@ -478,12 +510,12 @@ def run_sequence(
                 for result in bar:
                     results.append(result)
                     pose_file = traj_file if result.state in TRACKED_STATES else lost_file
-                    pose_file.write(_tum_line(result))
+                    pose_file.write(_tum_line(result, stamps_ns))
                     pose_file.flush()
                     writer.writerow(
                         [
                             result.index,
-                            f"{result.timestamp:.9f}",
+                            _stamp(stamps_ns, result.index, result.timestamp),
                             result.state,
                             *(getattr(result.counts, c) for c in COUNTS),
                             *(f"{getattr(result.timings_ms, s):.3f}" for s in STAGES),
@@ -515,7 +547,7 @@ def run_sequence(
         nonlocal map_data, final
         map_data = tracker.map()
         write_ply(out / "map.ply", map_data.points, map_data.lines)
-        final = _write_final_trajectory(tracker, out)
+        final = _write_final_trajectory(tracker, out, stamps_ns)
         if save_map is not None:
             tracker.save_map(save_map)
 

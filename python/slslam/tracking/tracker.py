@@ -53,6 +53,7 @@ from slslam.datasets.euroc import RectifiedStereoCamera
 from slslam.datasets.images import GrayImageReader
 from slslam.errors import InputError, SlslamError
 from slslam.features.keypoints import Keypoints, check_gray_image
+from slslam.features.low_light import LowLightEnhancer
 
 log = logging.getLogger(__name__)
 
@@ -375,7 +376,7 @@ class Tracker:
 
     Args:
         camera: rectified stereo intrinsics and baseline (``EurocSequence.camera``).
-        config: configuration (``slslam.load_config``); ``slslam.default_config()`` (XFeat
+        config: configuration (``slslam.load_config``); ``slslam.default_config()`` (ORB
             with its preset) when None.
         frontend: a point front end with ``detect(image) -> Keypoints``; by default the one the
             config names (SuperPoint, or ORB when no SuperPoint weights are configured).
@@ -398,6 +399,7 @@ class Tracker:
         # Whether the point front end sees the pair smoothed for the core (a front end without
         # the attribute does, as ORB and XFeat).
         self._detect_smoothed = bool(getattr(self.frontend, "smoothed_input", True))
+        self._low_light = LowLightEnhancer(self.config.features.low_light)
         grid = self.config.features.grid
         self._grid = _core.GridLimitOptions()
         self._grid.cell_size_px = grid.cell_size_px
@@ -693,6 +695,7 @@ class Tracker:
         stereo matching."""
         where = f"frame {index}"
         start = time.perf_counter()
+        left, right = self._low_light.pair(left, right)  # features.low_light (none: unchanged)
         raw_left, raw_right = left, right
         # The right image and the left image's lines on helper threads meanwhile (LSD, ORB,
         # onnxruntime and the smoothing release the GIL). The left image is smoothed first, once,
