@@ -430,9 +430,10 @@ class Tracker:
         # detected, expected keyframe).
         self._ahead_choices: dict[int, tuple[bool, bool]] = {}
         if load_map is not None:
-            path = Path(load_map).expanduser()
-            if not path.is_file():
-                raise InputError(path, "map file not found")
+            from slslam.files import require_regular_file
+
+            # a FIFO, device or folder is refused before the core opens it
+            path = require_regular_file(Path(load_map).expanduser(), InputError, "map file")
             try:
                 self._core.load_map(str(path))
             except (ValueError, RuntimeError) as exc:
