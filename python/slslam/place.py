@@ -156,10 +156,14 @@ class Vocabulary:
     @classmethod
     def load(cls, path: str | Path) -> Vocabulary:
         """Read a ``.slvoc`` file; :class:`VocabularyError` names the file and the defect."""
-        from slslam.files import require_regular_file
+        from slslam.files import special_file_kind
 
-        path = require_regular_file(path, VocabularyError, "vocabulary file")
-        check_vocabulary_records(path)
+        path = Path(path)
+        kind = special_file_kind(path)  # a FIFO or device is refused before it is opened
+        if kind is not None and kind != "missing":
+            raise VocabularyError(path, f"is {kind}, not a vocabulary file")
+        if kind is None:
+            check_vocabulary_records(path)
         try:
             return cls(_core.Vocabulary.load(str(path)))
         except ValueError as exc:

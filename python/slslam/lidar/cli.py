@@ -104,9 +104,18 @@ def lidar_run_command(
             json.dumps({"sequence": str(dataset), "completed": False, "stopped_in": "lidar"})
             + "\n",
         )
-        result = LidarSlam(options).run(
-            sequence, progress=progress, between_sweeps=signals.raise_if_requested
-        )
+        try:
+            result = LidarSlam(options).run(
+                sequence, progress=progress, between_sweeps=signals.raise_if_requested
+            )
+        except RunInterrupted as stop:  # before the first sweep: no result to write
+            Console(stderr=True).print(
+                f"[bold red]stopped:[/] {stop} before the first sweep; {escape(str(out))} "
+                "holds only metrics.json (completed: false)",
+                highlight=False,
+                soft_wrap=True,
+            )
+            raise typer.Exit(128 + stop.signum) from None
         extra = {}
         if preset is not None:
             extra["map_measurement"] = measure_roadway(
@@ -133,6 +142,8 @@ def lidar_run_command(
             f"(odometry {metrics['odometry']['ape_m']['rmse']:.3f} m)"
         )
     console.print(line)
+    if "evaluation_error" in metrics:
+        console.print(f"no ATE: {escape(metrics['evaluation_error'])}", highlight=False)
     console.print(f"results in {out}")
 
 

@@ -78,6 +78,9 @@ def loop_errors(sequence: LidarSequence, result: LidarSlamResult) -> list[dict]:
     return out
 
 
+MIN_EVALUATED_SWEEPS = 3  # fewest poses evo's SE3 alignment takes
+
+
 def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
     """APE / RPE (SE3-aligned; RPE of the translation over 1 m of travel) of the odometry and of
     the loop-closed result."""
@@ -85,6 +88,12 @@ def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
     gt = groundtruth_trajectory(sequence, frame)
     if gt is None:
         return {}
+    if len(result.t_ns) < MIN_EVALUATED_SWEEPS:
+        raise InputError(
+            None,
+            f"APE needs at least {MIN_EVALUATED_SWEEPS} sweeps (SE3 alignment of 3 poses); "
+            f"the run has {len(result.t_ns)}",
+        )
     out = {}
     for name, T in (("odometry", result.T_world_body_odometry), ("slam", result.T_world_body)):
         est = to_trajectory(result.t_ns, T)
