@@ -6,7 +6,10 @@ Run ``slslam --help`` or ``slslam COMMAND --help`` for the options.
 from __future__ import annotations
 
 import logging
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -739,10 +742,10 @@ def vocab_train_command(
 
 def _in_worker(work, poll, interval_s: float = 0.1):
     """``work()`` on a worker thread while this (the main) thread runs ``poll()`` every
-    ``interval_s``, so a signal is acted on while a long C++ call runs; ``work``'s result or
-    exception. When ``poll`` raises, the worker is left to finish on its own (daemon)."""
-    import threading
-
+    ``interval_s``, so a signal is noticed while a long C++ call runs; ``work``'s result or
+    exception. When ``poll`` raises, the worker's C++ call is let finish first (the core has no
+    cancellation point, and a process that exits under it aborts), then ``poll``'s exception is
+    raised."""
     outcome: dict = {}
 
     def target() -> None:
@@ -755,7 +758,13 @@ def _in_worker(work, poll, interval_s: float = 0.1):
     worker.start()
     while worker.is_alive():
         worker.join(interval_s)
-        poll()
+        try:
+            poll()
+        except BaseException:
+            if worker.is_alive():
+                console.print("stopping: the training step in progress finishes first")
+                worker.join()  # signals meanwhile are only counted (see _Signals)
+            raise
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]
@@ -856,18 +865,54 @@ def main(argv: list[str] | None = None) -> int:
     Usage errors (unknown option, missing argument) are reported by typer itself, also with
     exit code 2.
     """
-    try:
-        app(args=argv, prog_name="slslam")
-    except SystemExit as exc:
-        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    except KeyboardInterrupt:  # SIGINT where no command handles it: one line, no traceback
-        console.print("[bold red]stopped:[/] interrupted", highlight=False)
-        return 130
-    except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
-        # soft_wrap: one line whatever the width, so logs and scripts see one line per error
-        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
-        return 2
+    with _signals_outside_commands() as received:
+        try:
+            app(args=argv, prog_name="slslam")
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            return _stopped(received[-1]) if received else code
+        except KeyboardInterrupt:
+            return _stopped(received[-1] if received else signal.SIGINT)
+        except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
+            # soft_wrap: one line whatever the width, so logs and scripts see one line per error
+            console.print(
+                f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
+            )
+            return 2
     return 0
+
+
+@contextmanager
+def _signals_outside_commands():
+    """SIGINT and SIGTERM where no command handles them (while options are parsed, modules
+    load, or in a command that writes nothing to keep): the command stops at once and ``main``
+    prints one line instead of a traceback (or a silent exit). Commands that keep their outputs
+    valid (run, lidar run, vocab train) install their own handlers meanwhile. Yields the
+    signals received here."""
+    received: list[int] = []
+
+    def stop(signum, frame) -> None:
+        received.append(signum)
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s in previous:
+        signal.signal(s, stop)
+    try:
+        yield received
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _stopped(signum: int) -> int:
+    console.print(
+        f"[bold red]stopped:[/] interrupted by {signal.Signals(signum).name}", highlight=False
+    )
+    return 128 + signum
 
 
 if __name__ == "__main__":
