@@ -40,6 +40,8 @@ SETTINGS = settings(
     database=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
+#: fewer examples where one case writes and reads a whole bag (the suite stays near 2 minutes)
+FEWER = settings(SETTINGS, max_examples=45)
 HANG_S = 20  # a case that takes longer than this counts as a hang
 
 
@@ -307,7 +309,7 @@ def test_bag_images_truncated_or_garbage(stereo_calib, tmp_path, defect, side, i
     )
 
 
-@SETTINGS
+@FEWER
 @given(
     defect=st.sampled_from(("empty", "garbage", "truncated_png")),
     index=st.integers(0, FRAMES - 1),
@@ -336,7 +338,7 @@ def test_bag_compressed_images(stereo_calib, tmp_path, defect, index, noise, fra
     )
 
 
-@SETTINGS
+@FEWER
 @given(
     defect=st.sampled_from(("truncate", "garbage", "nan", "huge", "repeat_stamp")),
     index=st.integers(1, 19),
@@ -396,7 +398,7 @@ def test_bag_topics_and_stamps(stereo_calib, tmp_path, defect, index, side):
     )
 
 
-@SETTINGS
+@FEWER
 @given(
     offset=st.floats(0.3, 0.7),
     flips=st.lists(st.integers(0, 2000), min_size=1, max_size=8),
@@ -424,7 +426,7 @@ def test_bag_with_bytes_flipped_in_the_middle(stereo_calib, tmp_path, offset, fl
     assert outcome in ("error", "accepted"), outcome
 
 
-@SETTINGS
+@FEWER
 @given(
     kind=st.sampled_from(("mono8", "mono16", "bgr8", "rgb8", "png")),
     seed=st.integers(0, 2**32 - 1),
@@ -587,7 +589,7 @@ def test_lidar_T_BS_that_is_no_rigid_transform(tmp_path, defect, seed, amount):
     classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path), "T_BS"))
 
 
-@SETTINGS
+@FEWER
 @given(seed=st.integers(0, 2**32 - 1), lever=st.floats(0.0, 5.0))
 def test_lidar_proper_T_BS_is_accepted(tmp_path, seed, lever):
     rng = np.random.default_rng(seed)
@@ -633,7 +635,7 @@ def test_lidar_sensor_numbers(tmp_path, key, bad, noise_key):
              if key != "imu_noise" else noise_key))  # fmt: skip
 
 
-@SETTINGS
+@FEWER
 @given(
     sweep=st.integers(0, SWEEPS - 1),
     point=st.integers(0, POINTS - 1),
@@ -654,7 +656,7 @@ def test_lidar_point_times_beyond_the_scan_period(tmp_path, sweep, point, value)
         classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path), f"point {point}"))
 
 
-@SETTINGS
+@FEWER
 @given(
     row=st.integers(0, 79),
     column=st.integers(0, 7),
@@ -708,7 +710,7 @@ def test_lidar_data_csv_rows(tmp_path, defect, garbage):
     classify("lidar folders", lambda: read_lidar_folder(root), False, must)
 
 
-@SETTINGS
+@FEWER
 @given(data=st.binary(min_size=1, max_size=200))
 def test_lidar_binary_garbage_index_and_yaml(tmp_path, data):
     root = new_folder(tmp_path)
@@ -769,7 +771,7 @@ def test_lidar_scan_files(tmp_path, defect, sweep, cut):
     classify("lidar folders", lambda: read_lidar_folder(root), False, must)
 
 
-@SETTINGS
+@FEWER
 @given(
     defect=st.sampled_from(("overflow", "nan", "backwards", "short_row", "text")),
     row=st.integers(1, 79),
@@ -794,7 +796,7 @@ def test_lidar_imu_csv(tmp_path, defect, row):
     classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path),))
 
 
-@SETTINGS
+@FEWER
 @given(seed=st.integers(0, 2**32 - 1), period=st.floats(0.07, 1.0))
 def test_lidar_valid_folders_are_accepted(tmp_path, seed, period):
     root = new_folder(tmp_path, seed)
@@ -866,7 +868,7 @@ CLOUD_DEFECTS = ("truncate", "garbage", "short_data", "offset_past_step", "int_x
                  "zero_points", "nan_all", "far_point", "repeat_stamp")  # fmt: skip
 
 
-@SETTINGS
+@FEWER
 @given(
     defect=st.sampled_from(CLOUD_DEFECTS),
     index=st.integers(0, SWEEPS - 1),
@@ -916,7 +918,7 @@ def test_lidar_bag_clouds(tmp_path, defect, index, fraction, noise):
              (str(bag), CLOUD_TOPIC, f"message {index}"))  # fmt: skip
 
 
-@SETTINGS
+@FEWER
 @given(
     defect=st.sampled_from(("truncate", "garbage", "nan")),
     index=st.integers(1, 19),
@@ -1112,7 +1114,7 @@ def test_integer_options_out_of_range(tmp_path, capsys, which, below, distance):
     assert not (tmp_path / "out").exists()
 
 
-@SETTINGS
+@FEWER
 @given(which=st.integers(0, len(INT_OPTIONS) - 1), fraction=st.floats(0.0, 1.0))
 def test_integer_options_in_range_pass_the_parser(tmp_path, capsys, which, fraction):
     """An in-range value passes to the command, which then fails on its missing input (a
