@@ -256,7 +256,7 @@ def sim_command(
             max=20,
             help="Loop preset: laps the path goes round (--frames decides how far the robot "
             "gets; one lap of the default loop is 143 m). Two laps revisit every place: loop "
-            "closing."
+            "closing.",
         ),
     ] = 1,
     loop_length: Annotated[
@@ -539,8 +539,8 @@ def _open_bag(dataset: Path, left, right, imu, calib):
         found = imu_topics(dataset)
         if len(found) > 1:
             raise InputError(
-                dataset, f"{len(found)} sensor_msgs/Imu topics ({', '.join(found)}): name one "
-                "with --imu",
+                dataset,
+                f"{len(found)} sensor_msgs/Imu topics ({', '.join(found)}): name one with --imu",
             )
         imu = found[0] if found else None
         log.info("IMU: %s", f"topic {imu}" if imu else "none in the bag, camera only")
@@ -657,14 +657,13 @@ def vocab_train_command(
             help="Descriptors, 1000 per image: orb (binary), xfeat or superpoint (float)."
         ),
     ] = "orb",
-    branching: Annotated[
-        int, typer.Option(min=2, max=10**8, help="k of the k-means tree.")
-    ] = 10,
+    branching: Annotated[int, typer.Option(min=2, max=10**8, help="k of the k-means tree.")] = 10,
     levels: Annotated[
         int, typer.Option(min=1, max=64, help="Depth L of the tree (at most k^L words).")
     ] = 4,
     max_images: Annotated[
-        int, typer.Option(min=0, max=2**31 - 1, help="Use at most N images, evenly spread (0 = all).")
+        int,
+        typer.Option(min=0, max=2**31 - 1, help="Use at most N images, evenly spread (0 = all)."),
     ] = 0,
     seed: Annotated[
         int,

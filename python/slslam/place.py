@@ -108,7 +108,8 @@ class VocabularyOptions:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
                 raise InputError(
-                    None, f"vocabulary option {name} must be an integer in [{low}, {high}], got "
+                    None,
+                    f"vocabulary option {name} must be an integer in [{low}, {high}], got "
                     f"{value!r:.40}",
                 )
         core = _core.VocabularyOptions()

@@ -60,8 +60,7 @@ class Tally:
             failures = {k: c[k] for k in ("traceback", "hang", "silent", "vague", "refused")}
             rows.append(
                 f"{surface}: {sum(c.values())} cases, {c['error']} clear errors, "
-                f"{c['accepted']} accepted, "
-                + ", ".join(f"{v} {k}" for k, v in failures.items())
+                f"{c['accepted']} accepted, " + ", ".join(f"{v} {k}" for k, v in failures.items())
             )
         return "\n".join(rows)
 
@@ -196,8 +195,8 @@ class BagSpec:
 
     def replace(self, topic: str, i: int, msg=None, raw: bytes | None = None) -> None:
         k = self.index_of(topic, i)
-        self.messages[k][3] = raw if raw is not None else self.ts.serialize_ros1(
-            msg, self.messages[k][1]
+        self.messages[k][3] = (
+            raw if raw is not None else self.ts.serialize_ros1(msg, self.messages[k][1])
         )
 
     def write(self, path: Path) -> Path:
@@ -228,7 +227,9 @@ def read_whole_bag(bag: Path, calib: list[Path], left: str = LEFT, right: str = 
     """What a run reads: every stereo pair and the IMU."""
     from slslam.datasets.rosbag import RosbagSequence
 
-    with RosbagSequence(bag, left, right, calib, imu_topic=IMU if IMU in _topics(bag) else None) as seq:
+    with RosbagSequence(
+        bag, left, right, calib, imu_topic=IMU if IMU in _topics(bag) else None
+    ) as seq:
         for frame in seq:
             assert frame.left.shape == (H, W) and frame.left.dtype == np.uint8
         if seq.imu_topic:
@@ -270,7 +271,9 @@ IMAGE_DEFECTS = (
     fraction=st.floats(0.0, 0.999),
     noise=st.binary(min_size=0, max_size=600),
 )
-def test_bag_images_truncated_or_garbage(stereo_calib, tmp_path, defect, side, index, fraction, noise):
+def test_bag_images_truncated_or_garbage(
+    stereo_calib, tmp_path, defect, side, index, fraction, noise
+):
     """One image message damaged: the error names the bag, the topic and the message index."""
     spec = BagSpec()
     ts = spec.ts
@@ -287,11 +290,15 @@ def test_bag_images_truncated_or_garbage(stereo_calib, tmp_path, defect, side, i
         step = W + 1 + int(fraction * 10_000)
         spec.replace(side, index, image_message(ts, t, gray, step=step))
     elif defect == "short_data":
-        spec.replace(side, index, image_message(ts, t, gray[: max(0, int(H * fraction) - 1)],
-                                                height=H))  # fmt: skip
+        spec.replace(
+            side, index, image_message(ts, t, gray[: max(0, int(H * fraction) - 1)], height=H)
+        )
     elif defect == "long_data":
-        spec.replace(side, index, image_message(ts, t, np.zeros((H + 1 + len(noise) % 5, W),
-                                                np.uint8), height=H))  # fmt: skip
+        spec.replace(
+            side,
+            index,
+            image_message(ts, t, np.zeros((H + 1 + len(noise) % 5, W), np.uint8), height=H),
+        )
     elif defect == "zero_width":
         spec.replace(side, index, image_message(ts, t, gray, width=0, step=0))
     elif defect == "huge_size":
@@ -582,8 +589,9 @@ def test_lidar_T_BS_that_is_no_rigid_transform(tmp_path, defect, seed, amount):
         values[int(rng.integers(0, 12))] = math.nan
     elif defect == "far":
         values[3] = 100.0 + 1e3 * amount
-    path = set_sensor(root, [v if not isinstance(v, float) or math.isfinite(v) else None
-                             for v in values])  # fmt: skip
+    path = set_sensor(
+        root, [v if not isinstance(v, float) or math.isfinite(v) else None for v in values]
+    )
     if defect == "nan":  # JSON has no NaN: YAML spells it .nan
         path.write_text(path.read_text().replace("null", ".nan"))
     classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path), "T_BS"))
@@ -601,8 +609,22 @@ def test_lidar_proper_T_BS_is_accepted(tmp_path, seed, lever):
     classify("lidar folders", lambda: read_lidar_folder(root), valid=True)
 
 
-BAD_NUMBERS = ("true", "false", "0", "-0.1", "0.0001", "2", "1e400", "'0.1'", "[0.1]", "{}",
-               ".nan", ".inf", "null", "ten")  # fmt: skip
+BAD_NUMBERS = (
+    "true",
+    "false",
+    "0",
+    "-0.1",
+    "0.0001",
+    "2",
+    "1e400",
+    "'0.1'",
+    "[0.1]",
+    "{}",
+    ".nan",
+    ".inf",
+    "null",
+    "ten",
+)
 
 
 @SETTINGS
@@ -610,8 +632,12 @@ BAD_NUMBERS = ("true", "false", "0", "-0.1", "0.0001", "2", "1e400", "'0.1'", "[
     key=st.sampled_from(("scan_period_s", "rate_hz", "imu_noise")),
     bad=st.sampled_from(BAD_NUMBERS),
     noise_key=st.sampled_from(
-        ("gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
-         "accelerometer_random_walk")  # fmt: skip
+        (
+            "gyroscope_noise_density",
+            "gyroscope_random_walk",
+            "accelerometer_noise_density",
+            "accelerometer_random_walk",
+        )
     ),
 )
 def test_lidar_sensor_numbers(tmp_path, key, bad, noise_key):
@@ -631,8 +657,12 @@ def test_lidar_sensor_numbers(tmp_path, key, bad, noise_key):
         path = root / "mav0" / "imu0" / "sensor.yaml"
         path.write_text(IMU_YAML.replace(noise_key + ":", f"{noise_key}: {bad}\n#"))
         valid = bad in ("0", "0.0001", "2")  # in [0, 10]
-    classify("lidar folders", lambda: read_lidar_folder(root), valid, (str(path), key.split("_")[0]
-             if key != "imu_noise" else noise_key))  # fmt: skip
+    classify(
+        "lidar folders",
+        lambda: read_lidar_folder(root),
+        valid,
+        (str(path), key.split("_")[0] if key != "imu_noise" else noise_key),
+    )
 
 
 @FEWER
@@ -653,7 +683,9 @@ def test_lidar_point_times_beyond_the_scan_period(tmp_path, sweep, point, value)
     times[point] = value
     if not (np.isfinite(times[point]) and 0 <= times[point] <= 1.5 * PERIOD_S):
         times.tofile(path)
-        classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path), f"point {point}"))
+        classify(
+            "lidar folders", lambda: read_lidar_folder(root), False, (str(path), f"point {point}")
+        )
 
 
 @FEWER
@@ -714,8 +746,12 @@ def test_lidar_data_csv_rows(tmp_path, defect, garbage):
 @given(data=st.binary(min_size=1, max_size=200))
 def test_lidar_binary_garbage_index_and_yaml(tmp_path, data):
     root = new_folder(tmp_path)
-    which = ["mav0/lidar0/data.csv", "mav0/lidar0/sensor.yaml", "mav0/imu0/data.csv",
-             "mav0/imu0/sensor.yaml"][len(data) % 4]  # fmt: skip
+    which = [
+        "mav0/lidar0/data.csv",
+        "mav0/lidar0/sensor.yaml",
+        "mav0/imu0/data.csv",
+        "mav0/imu0/sensor.yaml",
+    ][len(data) % 4]
     path = root / which
     path.write_bytes(b"\xff\xfe" + data)
     classify("lidar folders", lambda: read_lidar_folder(root), False, (str(path),))
@@ -851,8 +887,9 @@ class LidarBagSpec(BagSpec):
             self.add(IMU, "sensor_msgs/msg/Imu", t, ros_imu_message(ts, t, [0, 0, 0], [0, 0, 9.8]))
         for k in range(SWEEPS):
             t = LIDAR_T0 + 100_000_000 * k
-            self.add(CLOUD_TOPIC, "sensor_msgs/msg/PointCloud2", t + 1000,
-                     cloud_message(ts, t, self.rng))  # fmt: skip
+            self.add(
+                CLOUD_TOPIC, "sensor_msgs/msg/PointCloud2", t + 1000, cloud_message(ts, t, self.rng)
+            )
 
 
 def read_lidar_bag(bag: Path) -> None:
@@ -864,8 +901,18 @@ def read_lidar_bag(bag: Path) -> None:
         assert np.isfinite(sweep.points).all()
 
 
-CLOUD_DEFECTS = ("truncate", "garbage", "short_data", "offset_past_step", "int_x", "time_far",
-                 "zero_points", "nan_all", "far_point", "repeat_stamp")  # fmt: skip
+CLOUD_DEFECTS = (
+    "truncate",
+    "garbage",
+    "short_data",
+    "offset_past_step",
+    "int_x",
+    "time_far",
+    "zero_points",
+    "nan_all",
+    "far_point",
+    "repeat_stamp",
+)
 
 
 @FEWER
@@ -886,15 +933,20 @@ def test_lidar_bag_clouds(tmp_path, defect, index, fraction, noise):
     elif defect == "garbage":
         spec.replace(CLOUD_TOPIC, index, raw=noise)
     elif defect == "short_data":
-        spec.replace(CLOUD_TOPIC, index, cloud_message(ts, t, rng, width=CLOUD_POINTS + 1
-                                                       + int(fraction * 1000)))  # fmt: skip
+        spec.replace(
+            CLOUD_TOPIC,
+            index,
+            cloud_message(ts, t, rng, width=CLOUD_POINTS + 1 + int(fraction * 1000)),
+        )
     elif defect == "offset_past_step":
         fields = [Field(name=n, offset=4 * i, datatype=7, count=1) for i, n in enumerate("xyz")]
         fields[2] = Field(name="z", offset=17 + int(fraction * 100), datatype=7, count=1)
         spec.replace(CLOUD_TOPIC, index, cloud_message(ts, t, rng, fields=fields))
     elif defect == "int_x":
-        fields = [Field(name=n, offset=4 * i, datatype=7 if n != "x" else 5, count=1)
-                  for i, n in enumerate("xyz")]  # fmt: skip
+        fields = [
+            Field(name=n, offset=4 * i, datatype=7 if n != "x" else 5, count=1)
+            for i, n in enumerate("xyz")
+        ]
         spec.replace(CLOUD_TOPIC, index, cloud_message(ts, t, rng, fields=fields))
     elif defect in ("time_far", "nan_all", "far_point"):
         msg = cloud_message(ts, t, rng)
@@ -911,11 +963,16 @@ def test_lidar_bag_clouds(tmp_path, defect, index, fraction, noise):
         spec.replace(CLOUD_TOPIC, index, cloud_message(ts, t, rng, width=0))
     elif defect == "repeat_stamp":
         index = max(index, 1)
-        spec.replace(CLOUD_TOPIC, index, cloud_message(ts, LIDAR_T0 + 100_000_000 * (index - 1),
-                                                       rng))  # fmt: skip
+        spec.replace(
+            CLOUD_TOPIC, index, cloud_message(ts, LIDAR_T0 + 100_000_000 * (index - 1), rng)
+        )
     bag = spec.write(new_bag(tmp_path))
-    classify("lidar bags", lambda: read_lidar_bag(bag), False,
-             (str(bag), CLOUD_TOPIC, f"message {index}"))  # fmt: skip
+    classify(
+        "lidar bags",
+        lambda: read_lidar_bag(bag),
+        False,
+        (str(bag), CLOUD_TOPIC, f"message {index}"),
+    )
 
 
 @FEWER
@@ -1089,8 +1146,11 @@ INT_OPTIONS = [
 
 
 def command(template: list[str], tmp: Path) -> list[str]:
-    names = {"IMAGES": str(tmp / "no_images"), "OUT": str(tmp / "out"),
-             "DATASET": str(tmp / "no_dataset")}  # fmt: skip
+    names = {
+        "IMAGES": str(tmp / "no_images"),
+        "OUT": str(tmp / "out"),
+        "DATASET": str(tmp / "no_dataset"),
+    }
     return [names.get(a, a) for a in template]
 
 
@@ -1180,8 +1240,9 @@ def test_config_key_given_twice(tmp_path, which, same):
     name = key.split(".")[-1]
     second = default if same else (not default if isinstance(default, bool) else default)
     path = tmp_path / f"twice{which}.yaml"
-    path.write_text(nested_text(key, [f"{name}: {yaml_value(default)}",
-                                      f"{name}: {yaml_value(second)}"]))  # fmt: skip
+    path.write_text(
+        nested_text(key, [f"{name}: {yaml_value(default)}", f"{name}: {yaml_value(second)}"])
+    )
     classify("configs", lambda: load_config(path), False, (str(path), name, "twice"))
 
 
@@ -1207,11 +1268,13 @@ def test_config_distinct_keys_are_accepted(tmp_path, picks):
 @pytest.mark.parametrize(
     "text, names",
     [
-        ("tracking:\n  local_ba_dogleg: true\n  local_ba_line_prior_weight: 0\n",
-         ("local_ba_dogleg", "local_ba_line_prior_weight")),
+        (
+            "tracking:\n  local_ba_dogleg: true\n  local_ba_line_prior_weight: 0\n",
+            ("local_ba_dogleg", "local_ba_line_prior_weight"),
+        ),
         ("features:\n  xfeat:\n    providers: []\n", ("providers", "empty")),
         ("features:\n  superpoint:\n    providers: []\n", ("providers", "empty")),
-    ],  # fmt: skip
+    ],
 )
 def test_config_options_that_need_another(tmp_path, text, names):
     from slslam.config import load_config
@@ -1238,8 +1301,7 @@ def test_rerun_and_save_map_outputs_checked_before_the_run(tmp_path, capsys, tar
         (tmp_path / "locked").chmod(0o500)
         path = tmp_path / "locked" / "rec.rrd"
     for option in ("--rerun", "--save-map"):
-        code = main(["run", str(tmp_path / "seq"), "--out", str(tmp_path / "o"), option,
-                     str(path)])  # fmt: skip
+        code = main(["run", str(tmp_path / "seq"), "--out", str(tmp_path / "o"), option, str(path)])
         err = capsys.readouterr().err
         if target == "unwritable_folder" and os.geteuid() == 0:
             continue  # root writes anywhere: nothing to refuse
@@ -1280,8 +1342,18 @@ def check_lidar_outputs(out: Path, completed: bool) -> dict:
 
 def start_lidar_run(dataset: Path, out: Path) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", "slslam", "lidar", "run", str(dataset), "--out", str(out),
-         "--no-progress", "--no-loops"],  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "slslam",
+            "lidar",
+            "run",
+            str(dataset),
+            "--out",
+            str(out),
+            "--no-progress",
+            "--no-loops",
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -1344,8 +1416,7 @@ def test_lidar_run_meeting_a_corrupt_sweep_keeps_the_sweeps_before(lidar_sim, tm
     metrics = check_lidar_outputs(out, completed=False)
     assert metrics["sweeps"] == 20 and "16-byte points" in metrics["stopped"]["reason"]
     # a new run into the same folder: the stale files of the stopped one are gone
-    code = main(["lidar", "run", str(seq), "--out", str(out), "--max-sweeps", "3",
-                 "--no-progress"])  # fmt: skip
+    code = main(["lidar", "run", str(seq), "--out", str(out), "--max-sweeps", "3", "--no-progress"])
     assert code == 0
     assert check_lidar_outputs(out, completed=True)["sweeps"] == 3
 
@@ -1391,8 +1462,19 @@ def test_vocab_train_stopped_by_a_signal_writes_nothing_or_all(
 
     out = tmp_path / "v.slvoc"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "slslam", "vocab", "train", str(vocab_images), "--out", str(out),
-         "--no-progress", "--levels", "5"],  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "slslam",
+            "vocab",
+            "train",
+            str(vocab_images),
+            "--out",
+            str(out),
+            "--no-progress",
+            "--levels",
+            "5",
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -1436,8 +1518,12 @@ def test_bag_run_meeting_a_corrupt_frame_keeps_the_frames_before(camera_sim, tmp
         spec.add(IMU, "sensor_msgs/msg/Imu", int(t), ros_imu_message(ts, int(t), w, a))
     for frame in seq:
         for topic, image in ((LEFT, frame.left), (RIGHT, frame.right)):
-            spec.add(topic, "sensor_msgs/msg/Image", frame.t_ns + 1000,
-                     image_message(ts, frame.t_ns, image))  # fmt: skip
+            spec.add(
+                topic,
+                "sensor_msgs/msg/Image",
+                frame.t_ns + 1000,
+                image_message(ts, frame.t_ns, image),
+            )
     # decodes as a message (so the bag opens), but its pixels are 100 bytes short
     frame = seq[10]
     short = image_message(ts, frame.t_ns, frame.left)
@@ -1446,8 +1532,23 @@ def test_bag_run_meeting_a_corrupt_frame_keeps_the_frames_before(camera_sim, tmp
     bag = spec.write(tmp_path / "corrupt.bag")
     out = tmp_path / "out"
     calib = camera_sim / "mav0"
-    code = main(["run", str(bag), "--left", LEFT, "--right", RIGHT, "--calib", str(calib),
-                 "--out", str(out), "--orb", "--no-lines", "--no-progress"])  # fmt: skip
+    code = main(
+        [
+            "run",
+            str(bag),
+            "--left",
+            LEFT,
+            "--right",
+            RIGHT,
+            "--calib",
+            str(calib),
+            "--out",
+            str(out),
+            "--orb",
+            "--no-lines",
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "Traceback" not in err, err
     assert str(bag) in err and f"{LEFT} message 10" in err, err
@@ -1462,11 +1563,19 @@ def test_case_counts_per_surface(capsys):
     """Last in the module: prints the counts per surface (visible without -s)."""
     with capsys.disabled():
         print("\n" + TALLY.line())
-    failures = {s: {k: c[k] for k in ("traceback", "hang", "silent", "vague", "refused") if c[k]}
-                for s, c in TALLY.counts.items()}  # fmt: skip
+    failures = {
+        s: {k: c[k] for k in ("traceback", "hang", "silent", "vague", "refused") if c[k]}
+        for s, c in TALLY.counts.items()
+    }
     assert not any(failures.values()), failures
     if len(TALLY.counts) < 6:
         pytest.skip("only part of the module ran")
-    for surface in ("ros camera bags", "lidar folders", "lidar bags", "vocabularies",
-                    "cli integers", "configs"):  # fmt: skip
+    for surface in (
+        "ros camera bags",
+        "lidar folders",
+        "lidar bags",
+        "vocabularies",
+        "cli integers",
+        "configs",
+    ):
         assert sum(TALLY.counts[surface].values()) >= 100, (surface, TALLY.counts[surface])

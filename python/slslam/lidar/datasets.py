@@ -82,12 +82,15 @@ def check_points(points: np.ndarray, where: str | Path) -> None:
     xyz = points[:, :3]
     bad = ~np.isfinite(xyz).all(axis=1)
     if bad.any():
-        raise DatasetError(where, f"point {int(np.flatnonzero(bad)[0])}: NaN or infinite coordinates")
+        raise DatasetError(
+            where, f"point {int(np.flatnonzero(bad)[0])}: NaN or infinite coordinates"
+        )
     far = np.abs(xyz).max(axis=1) > MAX_RANGE_M
     if far.any():
         i = int(np.flatnonzero(far)[0])
         raise DatasetError(
-            where, f"point {i} lies {float(np.abs(xyz[i]).max()):.3g} m out (at most {MAX_RANGE_M:g})"
+            where,
+            f"point {i} lies {float(np.abs(xyz[i]).max()):.3g} m out (at most {MAX_RANGE_M:g})",
         )
 
 
@@ -250,7 +253,8 @@ def _T_BS(path: Path, data: dict) -> np.ndarray:
         raise DatasetError(path, "'T_BS' rotation has determinant -1: a reflection, not a rotation")
     if np.linalg.norm(T[:3, 3]) > MAX_LEVER_ARM_M:
         raise DatasetError(
-            path, f"'T_BS' translation is {np.linalg.norm(T[:3, 3]):.3g} m (at most {MAX_LEVER_ARM_M:g})"
+            path,
+            f"'T_BS' translation is {np.linalg.norm(T[:3, 3]):.3g} m (at most {MAX_LEVER_ARM_M:g})",
         )
     return T
 
@@ -332,7 +336,8 @@ def open_asl(path: Path) -> LidarSequence:
             raise DatasetError(index, f"line {number}: rows must be '<t_ns>,<file name>'")
         if not row[0].strip().isdigit() or int(row[0]) > MAX_T_NS:
             raise DatasetError(
-                index, f"line {number}: timestamp {short_repr(row[0].strip(), 30)} is not an "
+                index,
+                f"line {number}: timestamp {short_repr(row[0].strip(), 30)} is not an "
                 "integer in [0, 2^63) ns",
             )
     t_ns = np.array([int(r[0]) for _, r in rows], dtype=np.int64)

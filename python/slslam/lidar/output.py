@@ -13,8 +13,8 @@ from scipy.spatial.transform import Rotation
 from slslam._version import __version__
 from slslam.datasets.trajectory_io import write_trajectory
 from slslam.errors import InputError
-from slslam.files import atomic_output, write_text_atomic
 from slslam.eval.metrics import compute_ape, compute_rpe
+from slslam.files import atomic_output, write_text_atomic
 from slslam.lidar.datasets import LidarSequence
 from slslam.lidar.slam import LidarSlamResult, _rigid_inverse
 
@@ -170,8 +170,7 @@ def write_outputs(
     if result.stopped is not None:
         metrics["stopped"] = {
             "after_sweeps": n,
-            "reason": " ".join(str(result.stopped).split())[:300]
-            or type(result.stopped).__name__,
+            "reason": " ".join(str(result.stopped).split())[:300] or type(result.stopped).__name__,
         }
     if extra:
         metrics.update(extra)
