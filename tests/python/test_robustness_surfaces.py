@@ -444,6 +444,26 @@ def test_valid_bags_are_accepted(stereo_calib, tmp_path, kind, seed, imu):
     classify("ros camera bags", lambda: read_whole_bag(bag, stereo_calib), valid=True)
 
 
+@FEWER
+@given(fraction=st.floats(0.0, 0.98), garbage=st.binary(max_size=64))
+def test_bag_info_on_truncated_or_garbage_files(tmp_path, capsys, fraction, garbage):
+    """`slslam info BAG` on a bag cut short or starting with garbage: one line naming the bag,
+    or (a cut after the last record a reader needs) the topics it still holds."""
+    bag = BagSpec().write(new_bag(tmp_path))
+    data = bag.read_bytes()
+    bag.write_bytes(
+        garbage + data[len(garbage) :] if len(garbage) % 2 else data[: int(len(data) * fraction)]
+    )
+    with hang_guard():
+        code = main(["info", str(bag)])
+    out = capsys.readouterr()
+    lines = [line for line in out.err.splitlines() if line.strip()]
+    clear = code == 2 and len(lines) == 1 and str(bag) in lines[0] and "Traceback" not in out.err
+    outcome = "accepted" if code == 0 else ("error" if clear else "vague")
+    TALLY.counts["ros camera bags"][outcome] += 1
+    assert outcome in ("error", "accepted"), out.err
+
+
 def test_bag_run_finds_its_imu_or_runs_camera_only(stereo_calib, tmp_path):
     """`slslam run BAG` without --imu: the bag's only Imu topic, none (camera only), or a clear
     error when there are several."""

@@ -113,7 +113,9 @@ def _open_reader(path: Path):
         reader = AnyReader(paths)
         reader.open()
     except (AnyReaderError, OSError, ValueError, KeyError) as exc:
-        raise DatasetError(path, f"cannot read the bag ({exc})") from None
+        raise DatasetError(path, f"cannot read the bag ({_one_line(exc)})") from None
+    except Exception as exc:  # a damaged index or header: rosbags raises many other types
+        raise DatasetError(path, f"cannot read the bag ({_one_line(exc)})") from None
     return reader
 
 
