@@ -349,9 +349,16 @@ def _vocabulary_for(config: Config, frontend) -> Path | None:
     if not t.relocalisation:
         return None
     if t.vocabulary_path:
+        from slslam.files import special_file_kind
+        from slslam.place import check_vocabulary_records
+
         path = Path(t.vocabulary_path).expanduser()
-        if not path.is_file():
+        kind = special_file_kind(path)
+        if kind == "missing":
             raise InputError(path, "tracking.vocabulary_path: vocabulary file not found")
+        if kind is not None:  # a FIFO or device would block or never end the core's read
+            raise InputError(path, f"tracking.vocabulary_path: is {kind}, not a vocabulary file")
+        check_vocabulary_records(path)  # word weights in range, before the core loads it
         return path
     from slslam.place import default_vocabulary_path
 
