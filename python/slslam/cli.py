@@ -201,8 +201,16 @@ def rectify_command(
         (out / side).mkdir(parents=True, exist_ok=True)
     for i in progress_bar(range(count), desc="rectify", unit="pair"):
         frame = seq[i]
-        _core.write_image(str(out / "left" / f"{frame.t_ns}.png"), frame.left)
-        _core.write_image(str(out / "right" / f"{frame.t_ns}.png"), frame.right)
+        for side, image in (("left", frame.left), ("right", frame.right)):
+            # each PNG under a temporary name (still .png: the encoder goes by the suffix),
+            # renamed when whole: a signal or error never leaves a truncated image
+            path = out / side / f"{frame.t_ns}.png"
+            tmp = path.with_name(f".{path.stem}.partial.png")
+            try:
+                _core.write_image(str(tmp), image)
+                tmp.replace(path)
+            finally:
+                tmp.unlink(missing_ok=True)
     Console().print(f"wrote {count} rectified pairs to {out}")
 
 

@@ -1579,6 +1579,28 @@ def test_bag_run_meeting_a_corrupt_frame_keeps_the_frames_before(camera_sim, tmp
     assert not list(out.glob("*.partial"))
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_rectify_stopped_by_a_signal_leaves_only_whole_images(camera_sim, tmp_path, signum):
+    import cv2
+
+    out = tmp_path / "rect"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "slslam", "rectify", str(camera_sim), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    wait_until(lambda: (out / "left").is_dir() or proc.poll() is not None)
+    time.sleep(0.2)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    assert "Traceback" not in err, err
+    assert proc.returncode in (0, 128 + signum, -signum), err
+    assert not list(out.rglob("*partial*"))
+    for png in out.rglob("*.png"):
+        assert cv2.imread(str(png), cv2.IMREAD_UNCHANGED) is not None, png
+
+
 def test_case_counts_per_surface(capsys):
     """Last in the module: prints the counts per surface (visible without -s)."""
     with capsys.disabled():
