@@ -1416,10 +1416,11 @@ def test_lidar_run_stopped_by_a_signal_keeps_valid_outputs(lidar_sim, tmp_path, 
     if proc.returncode == 0:  # finished before the signal came: complete outputs
         check_lidar_outputs(out, completed=True)
         pytest.skip("the run ended before the signal arrived")
-    assert proc.returncode == 128 + signals[0], err
+    # both signals may come before the next sweep: the run stops on the last one received
+    assert proc.returncode in [128 + s for s in signals], err
     metrics = check_lidar_outputs(out, completed=False)
     assert 0 < metrics["sweeps"] < 60
-    assert signal.Signals(signals[0]).name in metrics["stopped"]["reason"]
+    assert signal.Signals(proc.returncode - 128).name in metrics["stopped"]["reason"]
 
 
 def test_lidar_run_meeting_a_corrupt_sweep_keeps_the_sweeps_before(lidar_sim, tmp_path, capsys):
