@@ -2,6 +2,10 @@
 
 import sys
 
-from slslam.cli import main
+try:
+    from slslam.cli import main
+except KeyboardInterrupt:  # SIGINT while the modules load: one line, not a traceback
+    sys.stderr.write("stopped: interrupted by SIGINT\n")
+    sys.exit(130)
 
 sys.exit(main())

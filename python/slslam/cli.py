@@ -6,7 +6,10 @@ Run ``slslam --help`` or ``slslam COMMAND --help`` for the options.
 from __future__ import annotations
 
 import logging
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -185,7 +188,9 @@ def _groundtruth_status(seq) -> str:
 def rectify_command(
     dataset: Annotated[Path, typer.Argument(help="EuRoC ASL folder (holding mav0/, or mav0).")],
     out: Annotated[Path, typer.Option(help="Folder for left/ and right/ PNGs.")],
-    frames: Annotated[int, typer.Option(min=0, help="Number of pairs to write (0 = all).")] = 0,
+    frames: Annotated[
+        int, typer.Option(min=0, max=2**63 - 1, help="Number of pairs to write (0 = all).")
+    ] = 0,
 ) -> None:
     """Write rectified stereo pairs as PNG, to check a calibration by eye."""
     from slslam import _core
@@ -199,8 +204,16 @@ def rectify_command(
         (out / side).mkdir(parents=True, exist_ok=True)
     for i in progress_bar(range(count), desc="rectify", unit="pair"):
         frame = seq[i]
-        _core.write_image(str(out / "left" / f"{frame.t_ns}.png"), frame.left)
-        _core.write_image(str(out / "right" / f"{frame.t_ns}.png"), frame.right)
+        for side, image in (("left", frame.left), ("right", frame.right)):
+            # each PNG under a temporary name (still .png: the encoder goes by the suffix),
+            # renamed when whole: a signal or error never leaves a truncated image
+            path = out / side / f"{frame.t_ns}.png"
+            tmp = path.with_name(f".{path.stem}.partial.png")
+            try:
+                _core.write_image(str(tmp), image)
+                tmp.replace(path)
+            finally:
+                tmp.unlink(missing_ok=True)
     Console().print(f"wrote {count} rectified pairs to {out}")
 
 
@@ -228,7 +241,7 @@ def sim_command(
         str,
         typer.Option(help="Roadway: straight (long corridor), loop (shaft-bottom yard), junction."),
     ] = "loop",
-    frames: Annotated[int, typer.Option(help="Stereo frames to render.")] = 400,
+    frames: Annotated[int, typer.Option(min=1, max=10**7, help="Stereo frames to render.")] = 400,
     light: Annotated[
         float,
         typer.Option(
@@ -250,9 +263,11 @@ def sim_command(
     laps: Annotated[
         int,
         typer.Option(
+            min=1,
+            max=20,
             help="Loop preset: laps the path goes round (--frames decides how far the robot "
             "gets; one lap of the default loop is 143 m). Two laps revisit every place: loop "
-            "closing."
+            "closing.",
         ),
     ] = 1,
     loop_length: Annotated[
@@ -284,7 +299,9 @@ def sim_command(
     no_noise: Annotated[
         bool, typer.Option("--no-noise", help="Exact measurements (no image, IMU or range noise).")
     ] = False,
-    seed: Annotated[int, typer.Option(help="Random seed; same seed, same bytes.")] = 0,
+    seed: Annotated[
+        int, typer.Option(min=0, max=2**64 - 1, help="Random seed; same seed, same bytes.")
+    ] = 0,
 ) -> None:
     """Simulate a coal-mine roadway sequence: stereo images, 16-beam LiDAR, IMU, ground truth.
 
@@ -345,7 +362,12 @@ def run_command(
         typer.Option(help="Bag: left camera topic (sensor_msgs/Image or CompressedImage)."),
     ] = None,
     right: Annotated[str | None, typer.Option(help="Bag: right camera topic.")] = None,
-    imu: Annotated[str | None, typer.Option(help="Bag: sensor_msgs/Imu topic (optional).")] = None,
+    imu: Annotated[
+        str | None,
+        typer.Option(
+            help="Bag: sensor_msgs/Imu topic (default: the bag's only one; none: camera only)."
+        ),
+    ] = None,
     calib: Annotated[
         list[Path] | None,
         typer.Option(
@@ -363,7 +385,7 @@ def run_command(
         ),
     ] = None,
     max_frames: Annotated[
-        int, typer.Option(min=0, help="Track only the first N frames (0 = all).")
+        int, typer.Option(min=0, max=2**63 - 1, help="Track only the first N frames (0 = all).")
     ] = 0,
     groundtruth: Annotated[
         Path | None,
@@ -457,6 +479,11 @@ def run_command(
     from slslam.tracking.run import RunInterrupted
 
     _check_output_folder(out)
+    from slslam.files import check_output_file
+
+    for option, named in (("--rerun", rerun), ("--save-map", save_map)):
+        if named is not None:  # checked now, not when the run ends
+            check_output_file(named, option)
     if quiet:
         from slslam.progress import set_quiet
 
@@ -535,6 +562,17 @@ def _open_bag(dataset: Path, left, right, imu, calib):
             dataset,
             "a ROS bag needs --left and --right image topics (`slslam info BAG` lists them)",
         )
+    if imu is None:  # the bag's only Imu topic; none: camera only; several: ask which
+        from slslam.datasets.rosbag import imu_topics
+
+        found = imu_topics(dataset)
+        if len(found) > 1:
+            raise InputError(
+                dataset,
+                f"{len(found)} sensor_msgs/Imu topics ({', '.join(found)}): name one with --imu",
+            )
+        imu = found[0] if found else None
+        log.info("IMU: %s", f"topic {imu}" if imu else "none in the bag, camera only")
     return RosbagSequence(dataset, left, right, calib or None, imu_topic=imu)
 
 
@@ -648,19 +686,31 @@ def vocab_train_command(
             help="Descriptors, 1000 per image: orb (binary), xfeat or superpoint (float)."
         ),
     ] = "orb",
-    branching: Annotated[int, typer.Option(help="k of the k-means tree.")] = 10,
-    levels: Annotated[int, typer.Option(help="Depth L of the tree (at most k^L words).")] = 4,
+    branching: Annotated[int, typer.Option(min=2, max=10**8, help="k of the k-means tree.")] = 10,
+    levels: Annotated[
+        int, typer.Option(min=1, max=64, help="Depth L of the tree (at most k^L words).")
+    ] = 4,
     max_images: Annotated[
-        int, typer.Option(help="Use at most N images, evenly spread (0 = all).")
+        int,
+        typer.Option(min=0, max=2**31 - 1, help="Use at most N images, evenly spread (0 = all)."),
     ] = 0,
-    seed: Annotated[int, typer.Option(help="k-means++ seed; same seed, same vocabulary.")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option(min=0, max=2**64 - 1, help="k-means++ seed; same seed, same vocabulary."),
+    ] = 0,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
-    """Train a vocabulary (hierarchical k-means, TF-IDF) on the descriptors of a set of images."""
+    """Train a vocabulary (hierarchical k-means, TF-IDF) on the descriptors of a set of images.
+
+    The file is written under a temporary name and renamed when complete: SIGINT or SIGTERM
+    stops the command with nothing written (an existing --out file is left as it was)."""
+    from slslam.files import check_output_file
     from slslam.place import VocabularyOptions, evenly_spaced, find_images, train_from_images
+    from slslam.tracking.run import RunInterrupted, _Signals
 
     options = VocabularyOptions(branching=branching, levels=levels, seed=seed)
     options.to_core()  # bad k / L: one line naming the option, before any image is read
+    check_output_file(out, "--out")
     if frontend == "orb":
         from slslam.features.orb import Orb, OrbOptions
 
@@ -688,8 +738,27 @@ def vocab_train_command(
     else:
         raise typer.BadParameter(f"--frontend must be orb, xfeat or superpoint, got {frontend!r}")
     images = evenly_spaced(find_images(inputs), max_images)
-    summary = train_from_images(images, detect, options, progress=progress)
-    path = summary.vocabulary.save(out)
+    signals = _Signals()
+    path: Path | None = None
+    try:
+        with signals.installed():
+            summary = _in_worker(
+                lambda: train_from_images(
+                    images, detect, options, progress, between_images=signals.raise_if_requested
+                ),
+                signals.raise_if_requested,
+            )
+            signals.raise_if_requested()  # stopped while training: nothing is written
+            path = summary.vocabulary.save(out)  # a signal now waits for the rename
+            signals.raise_if_requested()
+    except RunInterrupted as stop:
+        outcome = "was written whole" if path is not None else "was not written"
+        Console(stderr=True).print(
+            f"[bold red]stopped:[/] {stop}; {escape(str(out))} {outcome}",
+            highlight=False,
+            soft_wrap=True,
+        )
+        raise typer.Exit(128 + stop.signum) from None
     out_console = Console()
     out_console.print(
         f"{summary.descriptors} {frontend} descriptors from {summary.images} images "
@@ -697,6 +766,36 @@ def vocab_train_command(
     )
     out_console.print(f"{summary.vocabulary!r}")
     out_console.print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB)")
+
+
+def _in_worker(work, poll, interval_s: float = 0.1):
+    """``work()`` on a worker thread while this (the main) thread runs ``poll()`` every
+    ``interval_s``, so a signal is noticed while a long C++ call runs; ``work``'s result or
+    exception. When ``poll`` raises, the worker's C++ call is let finish first (the core has no
+    cancellation point, and a process that exits under it aborts), then ``poll``'s exception is
+    raised."""
+    outcome: dict = {}
+
+    def target() -> None:
+        try:
+            outcome["value"] = work()
+        except BaseException as exc:  # handed to the main thread
+            outcome["error"] = exc
+
+    worker = threading.Thread(target=target, name="slslam-worker", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(interval_s)
+        try:
+            poll()
+        except BaseException:
+            if worker.is_alive():
+                console.print("stopping: the training step in progress finishes first")
+                worker.join()  # signals meanwhile are only counted (see _Signals)
+            raise
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
 
 
 @vocab_app.command("info")
@@ -708,7 +807,7 @@ def vocab_info_command(
 
     from slslam.place import Vocabulary
 
-    vocabulary = Vocabulary.load(path)
+    vocabulary = Vocabulary.load(path)  # a FIFO, device or folder is refused before reading
     weights = np.array([vocabulary.word_weight(w) for w in range(vocabulary.num_words)])
     out = Console()
     out.print(f"vocabulary {path} ({path.stat().st_size / 1024:.0f} KiB)")
@@ -756,7 +855,9 @@ def config_command(
     )
     header = f"slslam {__version__}: the configuration of `slslam run{options}`"
     if out is not None:
-        dump_config(cfg, out, header=header)
+        from slslam.files import check_output_file
+
+        dump_config(cfg, check_output_file(out, "--out"), header=header)
         Console().print(f"wrote {out}")
     else:
         sys.stdout.write(config_to_yaml(cfg, header))
@@ -799,15 +900,54 @@ def main(argv: list[str] | None = None) -> int:
     Usage errors (unknown option, missing argument) are reported by typer itself, also with
     exit code 2.
     """
-    try:
-        app(args=argv, prog_name="slslam")
-    except SystemExit as exc:
-        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
-        # soft_wrap: one line whatever the width, so logs and scripts see one line per error
-        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
-        return 2
+    with _signals_outside_commands() as received:
+        try:
+            app(args=argv, prog_name="slslam")
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            return _stopped(received[-1]) if received else code
+        except KeyboardInterrupt:
+            return _stopped(received[-1] if received else signal.SIGINT)
+        except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
+            # soft_wrap: one line whatever the width, so logs and scripts see one line per error
+            console.print(
+                f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
+            )
+            return 2
     return 0
+
+
+@contextmanager
+def _signals_outside_commands():
+    """SIGINT and SIGTERM where no command handles them (while options are parsed, modules
+    load, or in a command that writes nothing to keep): the command stops at once and ``main``
+    prints one line instead of a traceback (or a silent exit). Commands that keep their outputs
+    valid (run, lidar run, vocab train) install their own handlers meanwhile. Yields the
+    signals received here."""
+    received: list[int] = []
+
+    def stop(signum, frame) -> None:
+        received.append(signum)
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s in previous:
+        signal.signal(s, stop)
+    try:
+        yield received
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _stopped(signum: int) -> int:
+    console.print(
+        f"[bold red]stopped:[/] interrupted by {signal.Signals(signum).name}", highlight=False
+    )
+    return 128 + signum
 
 
 if __name__ == "__main__":

@@ -588,6 +588,16 @@ class TrackingConfig:
     loop_closing: LoopClosingConfig = field(default_factory=LoopClosingConfig)
     imu: ImuConfig = field(default_factory=ImuConfig)
 
+    def relations_error(self, where: str) -> str | None:
+        """Options that need another one set (the C++ solvers take them silently), as a
+        message naming both, or None."""
+        if self.local_ba_dogleg and self.local_ba_line_prior_weight <= 0:
+            return (
+                f"'{where}.local_ba_dogleg' needs '{where}.local_ba_line_prior_weight' > 0 "
+                f"(got {self.local_ba_line_prior_weight}): without the pull its steps fail"
+            )
+        return None
+
 
 @dataclass(frozen=True)
 class Config:
@@ -696,6 +706,10 @@ def check_config(config: Any, source: Path | None = None, where: str = "config")
         if dataclasses.is_dataclass(value):
             check_config(value, source, key)
             continue
+        if f.name == "providers" and isinstance(value, tuple) and not value:
+            raise ConfigError(
+                source, f"'{key}' is an empty list: name at least one onnxruntime provider, or auto"
+            )
         kind = _numeric_kind(hints[f.name])
         if kind is None or value is None:
             continue
@@ -831,10 +845,11 @@ def load_config(
 def dump_config(config: Config, path: str | Path, header: str | None = None) -> Path:
     """Write the complete configuration (every key) as YAML, e.g. next to a run's results;
     ``header`` lines go first as YAML comments (the file still loads with ``load_config``)."""
+    from slslam.files import write_text_atomic
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(config_to_yaml(config, header), encoding="utf-8")
-    return path
+    return write_text_atomic(path, config_to_yaml(config, header))  # never half a config
 
 
 def config_to_yaml(config: Config, header: str | None = None) -> str:

@@ -45,6 +45,48 @@ class VocabularyError(InputError):
     """A vocabulary file is missing, corrupt or of another format version."""
 
 
+#: Largest IDF weight a word may have. Training gives log(N / n_w) over N images, and
+#: log(2^64) = 44.4 bounds that for any image count a machine can hold: a larger weight is a
+#: corrupt or forged file (it would let one word outweigh every other in each score).
+MAX_IDF_WEIGHT = 64.0
+#: The .slvoc layout (cpp/slslam/place/vocabulary_io.cpp): a 32-byte header (magic, version,
+#: kind, cols, k, L, node count; uint32 little-endian), nodes of parent int32, word int32,
+#: weight float64 and the descriptor, then an 8-byte checksum.
+_HEADER_BYTES, _CHECKSUM_BYTES = 32, 8
+_MAGIC = b"SLSVOCAB"
+
+
+def check_vocabulary_records(path: Path) -> None:
+    """The word weights of the ``.slvoc`` file at ``path`` are within [0, MAX_IDF_WEIGHT];
+    VocabularyError naming the file and the word otherwise. A file whose header or size does
+    not fit the layout is left to the C++ loader, which names that defect itself."""
+    with path.open("rb") as f:
+        header = f.read(_HEADER_BYTES)
+        if len(header) < _HEADER_BYTES or header[:8] != _MAGIC:
+            return
+        _, kind, cols, _, _, nodes = np.frombuffer(header[8:], "<u4").tolist()
+        descriptor = {1: ("u1", 1), 2: ("<f4", 4)}.get(kind)
+        size = path.stat().st_size
+        if descriptor is None or not 0 < cols <= 1 << 16:
+            return
+        record = np.dtype(
+            [("parent", "<i4"), ("word", "<i4"), ("weight", "<f8"), ("d", descriptor[0], cols)]
+        )
+        if size != _HEADER_BYTES + nodes * record.itemsize + _CHECKSUM_BYTES:
+            return
+        table = np.fromfile(f, dtype=record, count=nodes)
+    words = table["word"] >= 0
+    weights = table["weight"][words]
+    bad = ~(np.isfinite(weights) & (weights >= 0) & (weights <= MAX_IDF_WEIGHT))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise VocabularyError(
+            path,
+            f"word {int(table['word'][words][i])} has IDF weight {float(weights[i]):.6g}: "
+            f"weights must be finite and in [0, {MAX_IDF_WEIGHT:g}]",
+        )
+
+
 @dataclass(frozen=True)
 class VocabularyOptions:
     """Hierarchical k-means settings (the C++ ``VocabularyOptions``)."""
@@ -55,6 +97,21 @@ class VocabularyOptions:
     seed: int = 0  # k-means++ seed; same seed and data, same vocabulary
 
     def to_core(self) -> _core.VocabularyOptions:
+        """The C++ options, checked (InputError naming the option): integers in range before
+        they reach C++, where an out-of-range value would not fit its type."""
+        for name, low, high in (
+            ("branching", 2, 2**31 - 1),
+            ("levels", 1, 2**31 - 1),
+            ("kmeans_iterations", 1, 2**31 - 1),
+            ("seed", 0, 2**64 - 1),
+        ):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise InputError(
+                    None,
+                    f"vocabulary option {name} must be an integer in [{low}, {high}], got "
+                    f"{value!r:.40}",
+                )
         core = _core.VocabularyOptions()
         core.branching = self.branching
         core.levels = self.levels
@@ -100,7 +157,14 @@ class Vocabulary:
     @classmethod
     def load(cls, path: str | Path) -> Vocabulary:
         """Read a ``.slvoc`` file; :class:`VocabularyError` names the file and the defect."""
+        from slslam.files import special_file_kind
+
         path = Path(path)
+        kind = special_file_kind(path)  # a FIFO or device is refused before it is opened
+        if kind is not None and kind != "missing":
+            raise VocabularyError(path, f"is {kind}, not a vocabulary file")
+        if kind is None:
+            check_vocabulary_records(path)
         try:
             return cls(_core.Vocabulary.load(str(path)))
         except ValueError as exc:
@@ -248,8 +312,10 @@ def train_from_images(
     detect: Callable[[np.ndarray], np.ndarray],
     options: VocabularyOptions = VocabularyOptions(),
     progress: bool = False,
+    between_images: Callable[[], None] | None = None,
 ) -> TrainingSummary:
-    """Extract descriptors with ``detect(gray uint8 image) -> (N, D) array`` and train on them."""
+    """Extract descriptors with ``detect(gray uint8 image) -> (N, D) array`` and train on them.
+    ``between_images`` is called after each image (it may raise to stop, e.g. on a signal)."""
     from tqdm import tqdm
 
     start = time.perf_counter()
@@ -259,6 +325,8 @@ def train_from_images(
         found = detect(image)
         if len(found):
             descriptors.append(found)
+        if between_images is not None:
+            between_images()
     if not descriptors:
         raise InputError(None, f"no descriptors found in {len(images)} images")
     extracted = time.perf_counter()

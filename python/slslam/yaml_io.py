@@ -4,6 +4,9 @@
   refused before it is read, so a mistaken or hostile file cannot stall the run;
 - aliases (``*name``) are refused: nothing in slslam's files needs them, and a few lines of nested
   aliases ("billion laughs") expand to gigabytes. Nesting depth and node count are bounded too;
+- a key given twice in one mapping is refused (PyYAML keeps the last one silently, so a typo'd
+  copy-paste would change a value without a word);
+- a FIFO, device or folder is refused before it is opened (a FIFO would block the read);
 - the C loader (``yaml.CSafeLoader``, libyaml) is used when PyYAML has it: ~10x faster than the
   pure-Python loader, and only safe tags either way;
 - messages name the file and the line, and never print a value whole (see :func:`short_repr`).
@@ -17,6 +20,7 @@ from typing import Any
 import yaml
 
 from slslam.errors import InputError
+from slslam.files import special_file_kind
 
 MAX_YAML_BYTES = 1 << 20  # 1 MiB
 MAX_DEPTH = 64  # nested mappings / lists
@@ -45,8 +49,18 @@ def _describe(exc: yaml.YAMLError) -> str:
 
 
 def _check_structure(text: str, source: Path, error: type[InputError]) -> None:
-    """Scan the event stream (no construction, no expansion) for aliases, depth and size."""
+    """Scan the event stream (no construction, no expansion) for aliases, depth, size and keys
+    given twice in one mapping."""
     depth = nodes = 0
+    # one entry per open collection: (keys seen so far, [next node is a key]) for a mapping,
+    # None for a sequence
+    open_collections: list[tuple[set[str], list[bool]] | None] = []
+
+    def node_done() -> None:
+        top = open_collections[-1] if open_collections else None
+        if top is not None:
+            top[1][0] = not top[1][0]
+
     for event in yaml.parse(text, Loader=SafeLoader):
         if isinstance(event, yaml.AliasEvent):
             line = event.start_mark.line + 1 if event.start_mark else "?"
@@ -66,6 +80,25 @@ def _check_structure(text: str, source: Path, error: type[InputError]) -> None:
                 raise error(source, f"YAML nested deeper than {MAX_DEPTH} levels at line {line}")
         elif isinstance(event, yaml.CollectionEndEvent):
             depth -= 1
+        if isinstance(event, yaml.ScalarEvent):
+            top = open_collections[-1] if open_collections else None
+            if top is not None and top[1][0]:
+                if event.value in top[0]:
+                    line = event.start_mark.line + 1 if event.start_mark else "?"
+                    raise error(
+                        source,
+                        f"key {short_repr(event.value, 40)} given twice in one mapping (again at "
+                        f"line {line}): remove one",
+                    )
+                top[0].add(event.value)
+            node_done()
+        elif isinstance(event, yaml.MappingStartEvent):
+            open_collections.append((set(), [True]))
+        elif isinstance(event, yaml.SequenceStartEvent):
+            open_collections.append(None)
+        elif isinstance(event, yaml.CollectionEndEvent):
+            open_collections.pop()
+            node_done()
 
 
 def read_yaml(
@@ -79,8 +112,11 @@ def read_yaml(
     ``strip_opencv_header`` drops OpenCV's ``%YAML:1.0`` first line, which PyYAML rejects.
     """
     path = Path(path)
-    if not path.is_file():
+    kind = special_file_kind(path)
+    if kind == "missing":
         raise error(path, "file not found")
+    if kind is not None:
+        raise error(path, f"is {kind}, not a YAML file")
     size = path.stat().st_size
     if size > max_bytes:
         raise error(path, f"file is {size} bytes; YAML inputs are limited to {max_bytes} bytes")

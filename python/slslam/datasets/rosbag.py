@@ -113,7 +113,9 @@ def _open_reader(path: Path):
         reader = AnyReader(paths)
         reader.open()
     except (AnyReaderError, OSError, ValueError, KeyError) as exc:
-        raise DatasetError(path, f"cannot read the bag ({exc})") from None
+        raise DatasetError(path, f"cannot read the bag ({_one_line(exc)})") from None
+    except Exception as exc:  # a damaged index or header: rosbags raises many other types
+        raise DatasetError(path, f"cannot read the bag ({_one_line(exc)})") from None
     return reader
 
 
@@ -274,8 +276,10 @@ def camera_info_calibration(
                     f"no {CAMERA_INFO_TYPE} {topic!r} beside {image_topic!r}: give the "
                     "calibration as YAML (--calib)",
                 )
-            _, _, raw = next(iter(reader.messages(connections=[infos[topic]])))
-            messages.append((where, reader.deserialize(raw, CAMERA_INFO_TYPE)))
+            first = next(_messages(reader, [infos[topic]], bag), None)
+            if first is None:
+                raise DatasetError(where, "the CameraInfo topic holds no message")
+            messages.append((where, deserialize(reader, first[2], CAMERA_INFO_TYPE, where)))
     finally:
         reader.close()
     cameras = []
@@ -328,51 +332,170 @@ def camera_info_calibration(
 
 
 # -- messages ---------------------------------------------------------------------------------
-def _stamp_ns(msg) -> int:
-    return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+#: largest image side accepted from a message [px]: far beyond any camera, and it bounds the
+#: width * height arithmetic of a garbage header
+MAX_IMAGE_SIDE_PX = 1 << 15
+#: largest |angular velocity| [rad/s] and |acceleration| [m/s^2] accepted from an Imu message:
+#: beyond any IMU's range (tens of rad/s, a few hundred m/s^2), so a larger value is a corrupt one
+MAX_GYRO_RADPS = 1e3
+MAX_ACC_MPS2 = 1e4
 
 
-def read_imu(reader, topic: str) -> dict[str, np.ndarray]:
+class _Where:
+    """Names one message in errors: ``BAG: TOPIC message I (of the topic, from 0)``."""
+
+    def __init__(self, bag: Path, topic: str) -> None:
+        self.bag, self.topic = bag, topic
+
+    def __call__(self, index: int) -> str:
+        return f"{self.bag}: {self.topic} message {index}"
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())[:160]
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _messages(reader, connections, bag: Path, **window):
+    """``reader.messages(...)`` with the reader's own failures (a corrupt chunk or record, bytes
+    flipped on disk) as one DatasetError naming the bag."""
+    iterator = iter(reader.messages(connections=connections, **window))
+    count = 0
+    while True:
+        try:
+            item = next(iterator)
+        except StopIteration:
+            return
+        except Exception as exc:  # rosbags raises many types for a damaged file
+            topics = ", ".join(sorted({c.topic for c in connections}))
+            raise DatasetError(
+                bag, f"cannot read the bag after {count} messages of {topics} ({_one_line(exc)})"
+            ) from None
+        count += 1
+        yield item
+
+
+def deserialize(reader, raw: bytes, msgtype: str, where: str):
+    """One message decoded in a guarded step: a truncated or garbage message is a DatasetError
+    naming ``where`` (bag, topic and message index), never the deserializer's own exception."""
+    try:
+        return reader.deserialize(raw, msgtype)
+    except Exception as exc:  # struct.error, IndexError, UnicodeDecodeError, ... from rosbags
+        raise DatasetError(
+            where, f"{msgtype} message cannot be decoded ({len(raw)} bytes; {_one_line(exc)})"
+        ) from None
+
+
+def _stamp_ns(msg, where: str = "message") -> int:
+    """``header.stamp`` [ns]; a stamp with nanoseconds outside [0, 1e9) or before 1970 is a
+    DatasetError naming ``where``."""
+    try:
+        sec, nanosec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
+    except (AttributeError, TypeError, ValueError):
+        raise DatasetError(where, "message has no header.stamp") from None
+    if not 0 <= nanosec < 1_000_000_000 or sec < 0:
+        raise DatasetError(where, f"header.stamp {sec} s {nanosec} ns is not a valid time")
+    return sec * 1_000_000_000 + nanosec
+
+
+def imu_topics(path: str | Path) -> list[str]:
+    """The bag's ``sensor_msgs/Imu`` topics, sorted."""
+    return sorted(t.topic for t in bag_topics(path) if t.msgtype == IMU_TYPE)
+
+
+def read_imu(reader, topic: str, bag: str | Path = "bag") -> dict[str, np.ndarray]:
     """Every ``sensor_msgs/Imu`` message of ``topic`` in an open reader, sorted by header stamp:
-    ``t_ns`` (int64, N), ``gyro`` [rad/s] and ``acc`` [m/s^2] (N, 3)."""
+    ``t_ns`` (int64, N), ``gyro`` [rad/s] and ``acc`` [m/s^2] (N, 3). Each message is decoded in
+    a guarded step; non-finite or implausible values (beyond MAX_GYRO_RADPS / MAX_ACC_MPS2) and
+    header stamps that are all zero or repeat are DatasetErrors naming the bag, topic and message
+    index."""
+    bag = Path(bag)
+    where = _Where(bag, topic)
     connections = [c for c in reader.connections if c.topic == topic]
     rows = []
-    for connection, _, raw in reader.messages(connections=connections):
-        msg = reader.deserialize(raw, connection.msgtype)
-        w, a = msg.angular_velocity, msg.linear_acceleration
-        rows.append((_stamp_ns(msg), w.x, w.y, w.z, a.x, a.y, a.z))
-    rows.sort(key=lambda r: r[0])
-    table = np.array([r[1:] for r in rows], dtype=np.float64).reshape(-1, 6)
-    return {
-        "t_ns": np.array([r[0] for r in rows], dtype=np.int64),
-        "gyro": table[:, :3],
-        "acc": table[:, 3:],
-    }
+    for i, (connection, _, raw) in enumerate(_messages(reader, connections, bag)):
+        msg = deserialize(reader, raw, connection.msgtype, where(i))
+        try:
+            w, a = msg.angular_velocity, msg.linear_acceleration
+            values = (float(w.x), float(w.y), float(w.z), float(a.x), float(a.y), float(a.z))
+        except (AttributeError, TypeError, ValueError):
+            raise DatasetError(where(i), "not an Imu message (no angular_velocity)") from None
+        rows.append((_stamp_ns(msg, where(i)), *values))
+    table = np.array(rows, dtype=np.float64).reshape(-1, 7)
+    t_ns = np.array([r[0] for r in rows], dtype=np.int64)
+    bad = ~np.isfinite(table[:, 1:]).all(axis=1)
+    bad |= np.abs(table[:, 1:4]).max(axis=1, initial=0) > MAX_GYRO_RADPS
+    bad |= np.abs(table[:, 4:7]).max(axis=1, initial=0) > MAX_ACC_MPS2
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise DatasetError(
+            where(i),
+            f"angular velocity or acceleration non-finite or beyond {MAX_GYRO_RADPS:g} rad/s / "
+            f"{MAX_ACC_MPS2:g} m/s^2",
+        )
+    _check_stamps(t_ns, where)
+    order = np.argsort(t_ns, kind="stable")
+    return {"t_ns": t_ns[order], "gyro": table[order, 1:4], "acc": table[order, 4:7]}
+
+
+def _check_stamps(t_ns: np.ndarray, where: _Where) -> None:
+    """A topic's header stamps, in bag order: not all zero, each later than the one before."""
+    if len(t_ns) > 1 and not t_ns.any():
+        raise DatasetError(
+            f"{where.bag}: {where.topic}", "every header stamp is zero: the messages carry no time"
+        )
+    back = np.flatnonzero(np.diff(t_ns) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise DatasetError(
+            where(i),
+            f"header stamp {int(t_ns[i])} ns is not after message {i - 1}'s ({int(t_ns[i - 1])} "
+            "ns): stamps must increase",
+        )
 
 
 def decode_image(msg, msgtype: str, where: str) -> np.ndarray:
-    """The pixels of an Image or CompressedImage message: uint8 / uint16, gray or BGR(A)."""
+    """The pixels of an Image or CompressedImage message: uint8 / uint16, gray or BGR(A).
+    Encodings, sizes and the data length are checked; problems are DatasetErrors naming
+    ``where``."""
     if msgtype.endswith("CompressedImage"):
         import cv2  # opencv-python-headless
 
-        image = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise DatasetError(where, f"cannot decode the compressed image (format {msg.format!r})")
+        data = np.frombuffer(bytes(msg.data), np.uint8)
+        if data.size == 0:
+            raise DatasetError(where, "CompressedImage with no bytes")
+        try:
+            image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+        except cv2.error:
+            image = None
+        if image is None or image.size == 0:
+            raise DatasetError(
+                where,
+                f"cannot decode the compressed image ({data.size} bytes, format "
+                f"{str(msg.format)[:40]!r})",
+            )
         return image
-    encoding = msg.encoding.lower()
+    encoding = str(msg.encoding).lower()
     if encoding not in ENCODINGS:
         raise DatasetError(
-            where, f"image encoding {msg.encoding!r} is not supported ({', '.join(ENCODINGS)})"
+            where,
+            f"image encoding {str(msg.encoding)[:40]!r} is not supported ({', '.join(ENCODINGS)})",
         )
     dtype, channels, reversed_order = ENCODINGS[encoding]
     width, height, step = int(msg.width), int(msg.height), int(msg.step)
-    row_bytes = width * channels * np.dtype(dtype).itemsize
-    data = np.frombuffer(msg.data, np.uint8)
-    if step < row_bytes or data.size < step * height:
+    if not (0 < width <= MAX_IMAGE_SIDE_PX and 0 < height <= MAX_IMAGE_SIDE_PX):
         raise DatasetError(
-            where, f"image data ({data.size} bytes, step {step}) too short for {width}x{height}"
+            where, f"image size {width}x{height} outside 1..{MAX_IMAGE_SIDE_PX} pixels a side"
         )
-    rows = data[: step * height].reshape(height, step)[:, :row_bytes]
+    row_bytes = width * channels * np.dtype(dtype).itemsize
+    data = np.frombuffer(bytes(msg.data), np.uint8)
+    if step < row_bytes or step > row_bytes + 4096 or data.size != step * height:
+        raise DatasetError(
+            where,
+            f"image data ({data.size} bytes, step {step}) does not match {width}x{height} "
+            f"{encoding} ({height} rows of at least {row_bytes} bytes)",
+        )
+    rows = data.reshape(height, step)[:, :row_bytes]
     order = ">" if msg.is_bigendian else "<"
     pixels = np.ascontiguousarray(rows).view(np.dtype(dtype).newbyteorder(order))
     pixels = pixels.astype(dtype, copy=False).reshape(height, width, channels)
@@ -383,9 +506,11 @@ def decode_image(msg, msgtype: str, where: str) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Message:
-    """Where one image message lies in the bag: topic, receive time and header stamp [ns]."""
+    """Where one image message lies in the bag: topic, index in the topic, receive time and
+    header stamp [ns]."""
 
     topic: str
+    index: int
     bag_time_ns: int
     stamp_ns: int
 
@@ -417,6 +542,13 @@ class RosbagSequence:
         self.rectify = rectify
         self.imu_topic = imu_topic
         self._local = threading.local()
+        if left_topic == right_topic:
+            raise DatasetError(
+                self.path,
+                f"the left and right camera topics are both {left_topic!r}: give two topics",
+            )
+        if not (isinstance(stereo_tolerance_ns, int) and 0 <= stereo_tolerance_ns <= 10**9):
+            raise DatasetError(self.path, "stereo_tolerance_ns must be an integer in [0, 1e9]")
         reader = self._reader()
         self._topics = {c.topic: c.msgtype for c in reader.connections}
         for flag, topic in (("left", left_topic), ("right", right_topic)):
@@ -431,6 +563,8 @@ class RosbagSequence:
                     self.path,
                     f"topic {topic!r} holds {self._topics[topic]}, not {' or '.join(IMAGE_TYPES)}",
                 )
+        if imu_topic is not None and imu_topic in (left_topic, right_topic):
+            raise DatasetError(self.path, f"--imu {imu_topic!r} is also a camera topic")
         if imu_topic is not None and self._topics.get(imu_topic) != IMU_TYPE:
             raise DatasetError(
                 self.path, f"no {IMU_TYPE} topic {imu_topic!r} ({', '.join(sorted(self._topics))})"
@@ -455,11 +589,17 @@ class RosbagSequence:
 
     def _index(self, reader, tolerance_ns: int):
         stamps: dict[str, list[tuple[int, _Message]]] = {self.left_topic: [], self.right_topic: []}
+        wheres = {topic: _Where(self.path, topic) for topic in stamps}
         connections = [c for c in reader.connections if c.topic in stamps]
-        for connection, bag_time, raw in reader.messages(connections=connections):
-            msg = reader.deserialize(raw, connection.msgtype)
-            stamp = _stamp_ns(msg)
-            stamps[connection.topic].append((stamp, _Message(connection.topic, bag_time, stamp)))
+        for connection, bag_time, raw in _messages(reader, connections, self.path):
+            topic = connection.topic
+            where = wheres[topic](len(stamps[topic]))
+            msg = deserialize(reader, raw, connection.msgtype, where)
+            stamp = _stamp_ns(msg, where)
+            index = len(stamps[topic])
+            stamps[topic].append((stamp, _Message(topic, index, int(bag_time), stamp)))
+        for topic, items in stamps.items():
+            _check_stamps(np.array([t for t, _ in items], dtype=np.int64), wheres[topic])
         left = sorted(stamps[self.left_topic], key=lambda item: item[0])
         right = sorted(stamps[self.right_topic], key=lambda item: item[0])
         if not left or not right:
@@ -492,17 +632,26 @@ class RosbagSequence:
 
     def _image(self, message: _Message, which: str) -> np.ndarray:
         reader = self._reader()
-        where = f"{self.path}: {which} image {message.topic} at t = {message.stamp_ns} ns"
+        where = (
+            f"{self.path}: {which} image, {message.topic} message {message.index} "
+            f"(t = {message.stamp_ns} ns)"
+        )
         connections = [c for c in reader.connections if c.topic == message.topic]
-        for connection, _, raw in reader.messages(
-            connections=connections, start=message.bag_time_ns, stop=message.bag_time_ns + 1
+        for connection, _, raw in _messages(
+            reader,
+            connections,
+            self.path,
+            start=message.bag_time_ns,
+            stop=message.bag_time_ns + 1,
         ):
-            msg = reader.deserialize(raw, connection.msgtype)
-            if _stamp_ns(msg) != message.stamp_ns:
+            msg = deserialize(reader, raw, connection.msgtype, where)
+            if _stamp_ns(msg, where) != message.stamp_ns:
                 continue
             try:
                 image = self._gray.convert(decode_image(msg, connection.msgtype, where), where)
             except ValueError as exc:
+                if isinstance(exc, DatasetError):
+                    raise
                 raise DatasetError(where, str(exc)) from None
             expected = (self.left_calibration.height, self.left_calibration.width)
             if image.shape != expected:
@@ -547,11 +696,16 @@ class RosbagSequence:
     def __str__(self) -> str:
         return str(self.path)
 
+    @property
+    def has_imu(self) -> bool:
+        """False when no IMU topic was chosen: the run is camera-only."""
+        return self.imu_topic is not None
+
     def imu(self) -> dict[str, np.ndarray]:
         """IMU samples of ``imu_topic``: ``t_ns`` (int64, N), ``gyro`` [rad/s], ``acc`` [m/s^2]."""
         if self.imu_topic is None:
             raise DatasetError(self.path, "no IMU topic given")
-        return read_imu(self._reader(), self.imu_topic)
+        return read_imu(self._reader(), self.imu_topic, self.path)
 
     def close(self) -> None:
         """Closes this thread's reader."""

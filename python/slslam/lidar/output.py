@@ -14,6 +14,7 @@ from slslam._version import __version__
 from slslam.datasets.trajectory_io import write_trajectory
 from slslam.errors import InputError
 from slslam.eval.metrics import compute_ape, compute_rpe
+from slslam.files import atomic_output, write_text_atomic
 from slslam.lidar.datasets import LidarSequence
 from slslam.lidar.slam import LidarSlamResult, _rigid_inverse
 
@@ -35,11 +36,9 @@ def write_ply(path: Path, points: np.ndarray) -> Path:
         f"element vertex {len(pts)}\nproperty float x\nproperty float y\nproperty float z\n"
         "end_header\n"
     )
-    tmp = path.with_name(path.name + ".partial")
-    with tmp.open("wb") as f:
+    with atomic_output(path) as tmp, tmp.open("wb") as f:
         f.write(header.encode("ascii"))
         f.write(pts.tobytes())
-    tmp.replace(path)
     return path
 
 
@@ -79,6 +78,9 @@ def loop_errors(sequence: LidarSequence, result: LidarSlamResult) -> list[dict]:
     return out
 
 
+MIN_EVALUATED_SWEEPS = 3  # fewest poses evo's SE3 alignment takes
+
+
 def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
     """APE / RPE (SE3-aligned; RPE of the translation over 1 m of travel) of the odometry and of
     the loop-closed result."""
@@ -86,6 +88,12 @@ def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
     gt = groundtruth_trajectory(sequence, frame)
     if gt is None:
         return {}
+    if len(result.t_ns) < MIN_EVALUATED_SWEEPS:
+        raise InputError(
+            None,
+            f"APE needs at least {MIN_EVALUATED_SWEEPS} sweeps (SE3 alignment of 3 poses); "
+            f"the run has {len(result.t_ns)}",
+        )
     out = {}
     for name, T in (("odometry", result.T_world_body_odometry), ("slam", result.T_world_body)):
         est = to_trajectory(result.t_ns, T)
@@ -106,14 +114,21 @@ def write_outputs(
     extra: dict | None = None,
     plot: bool = True,
 ) -> dict:
-    """Writes every file of the run; returns the metrics dictionary written to metrics.json."""
+    """Writes every file of the run (each under a temporary name, renamed when complete);
+    returns the metrics dictionary written to metrics.json. A run that stopped early
+    (``result.stopped``) is written for the sweeps it processed, with ``completed: false`` and
+    the reason in metrics.json; a scoring failure is recorded as ``evaluation_error``."""
     out.mkdir(parents=True, exist_ok=True)
     write_trajectory(out / "trajectory.tum", to_trajectory(result.t_ns, result.T_world_body))
     write_trajectory(
         out / "trajectory_odometry.tum", to_trajectory(result.t_ns, result.T_world_body_odometry)
     )
     write_ply(out / "map.ply", result.map_points)
-    errors = evaluate_run(sequence, result)
+    evaluation_error = None
+    try:
+        errors = evaluate_run(sequence, result)
+    except Exception as exc:  # evo / numpy on a short or degenerate run: the files come first
+        errors, evaluation_error = {}, " ".join(str(exc).split())[:300] or type(exc).__name__
     loops = loop_errors(sequence, result)
     n = len(result.t_ns)
     metrics: dict = {
@@ -123,8 +138,11 @@ def write_outputs(
         "keyframes": len(result.keyframes),
         "seconds": result.seconds,
         "sweeps_per_second": n / max(result.seconds, 1e-9),
+        "completed": result.stopped is None,
         "imu": sequence.imu is not None,
-        "deskewed": sequence.time_paths[0] is not None,
+        # motion-compensated: deskew on and every sweep with per-point times
+        "deskewed": n > 0 and result.deskewed_sweeps == n,
+        "deskewed_sweeps": result.deskewed_sweeps,
         "loops": {
             "candidates": result.candidates,
             "accepted": len(result.loops),
@@ -147,13 +165,19 @@ def write_outputs(
     }
     for name, stats in errors.items():
         metrics[name] = {k: v for k, v in stats.items() if not k.startswith("_")}
+    if evaluation_error is not None:
+        metrics["evaluation_error"] = evaluation_error
+    if result.stopped is not None:
+        metrics["stopped"] = {
+            "after_sweeps": n,
+            "reason": " ".join(str(result.stopped).split())[:300] or type(result.stopped).__name__,
+        }
     if extra:
         metrics.update(extra)
-    tmp = out / "metrics.json.partial"
-    tmp.write_text(json.dumps(metrics, indent=2) + "\n")
-    tmp.replace(out / "metrics.json")
     if plot:
-        _plot(out / "trajectory.png", result, errors)
+        with atomic_output(out / "trajectory.png") as tmp:
+            _plot(tmp, result, errors)
+    write_text_atomic(out / "metrics.json", json.dumps(metrics, indent=2) + "\n")
     return metrics
 
 
@@ -188,5 +212,5 @@ def _plot(path: Path, result: LidarSlamResult, errors: dict) -> None:
         ax.set_ylabel("y [m]")
         ax.legend(loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")  # the name may be a temporary one
     plt.close(fig)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -96,6 +97,11 @@ class LidarSlamResult:
     timing_ms: dict[str, dict[str, float]]
     seconds: float
     per_sweep: dict[str, np.ndarray]
+    #: sweeps motion-compensated (deskew on and per-point times given)
+    deskewed_sweeps: int = 0
+    #: what ended the run before its last sweep (bad data, a signal), or None; the fields above
+    #: then hold the sweeps before it, every one complete
+    stopped: BaseException | None = None
 
 
 def _rigid_inverse(T: np.ndarray) -> np.ndarray:
@@ -176,7 +182,16 @@ class LidarSlam:
         T, fitness, rmse, _ = _core.match_scan_to_points(source, submap, T, match, 0.5)
         return np.asarray(T), float(fitness), float(rmse)
 
-    def run(self, sequence: LidarSequence, progress: bool = True) -> LidarSlamResult:
+    def run(
+        self,
+        sequence: LidarSequence,
+        progress: bool = True,
+        between_sweeps: Callable[[], None] | None = None,
+    ) -> LidarSlamResult:
+        """Processes every sweep. ``between_sweeps`` is called before each (it may raise to stop,
+        e.g. on a signal). A sweep that fails to read or register (a DatasetError, a
+        SlslamError) or a stop ends the run there: the result holds the sweeps before it, with
+        ``stopped`` set (nothing processed at all: the exception is raised)."""
         o = self.options
         odometry = self._odometry(sequence)
         T_bs = sequence.T_body_sensor
@@ -193,13 +208,27 @@ class LidarSlam:
         loops: list[Loop] = []
         rejected = candidates = 0
         start = time.perf_counter()
+        stopped: BaseException | None = None
+        done = 0  # sweeps processed completely
+        deskewed = 0
         for k in progress_bar(range(n), desc="lidar", unit="sweep", enabled=progress, total=n):
-            sweep = sequence.sweep(k)
-            times = [] if sweep.point_time_s is None else sweep.point_time_s
+            done = k
             try:
-                r = odometry.process_scan(sweep.t_ns, sweep.points, times)
-            except RuntimeError as exc:
-                raise SlslamError(f"{sequence.name}: {exc}") from None
+                if between_sweeps is not None:
+                    between_sweeps()
+                sweep = sequence.sweep(k)
+                times = [] if sweep.point_time_s is None else sweep.point_time_s
+                try:
+                    r = odometry.process_scan(sweep.t_ns, sweep.points, times)
+                except RuntimeError as exc:
+                    raise SlslamError(f"{sequence.name}: sweep {k}: {exc}") from None
+            except (SlslamError, KeyboardInterrupt) as exc:  # DatasetError is a SlslamError
+                if k == 0:
+                    raise
+                stopped = exc
+                break
+            done = k + 1
+            deskewed += int(bool(o.odometry.deskew) and len(times) > 0)
             poses[k] = r.T_world_body
             for key in stages:
                 per_sweep[key][k] = getattr(r, key)
@@ -231,6 +260,10 @@ class LidarSlam:
                     else:
                         loops.append(loop)
             per_sweep["loop_ms"][k] = 1e3 * (time.perf_counter() - loop_start)
+        if stopped is not None:  # keep the sweeps before the one that stopped the run
+            n = done
+            poses = poses[:n]
+            per_sweep = {key: values[:n] for key, values in per_sweep.items()}
         graph_start = time.perf_counter()
         corrected = self._close_loops(kf_T, loops)
         graph_ms = 1e3 * (time.perf_counter() - graph_start)
@@ -258,7 +291,7 @@ class LidarSlam:
         timing["pose_graph_ms"] = {"total": graph_ms}
         del T_bs
         return LidarSlamResult(
-            t_ns=sequence.t_ns.copy(),
+            t_ns=sequence.t_ns[:n].copy(),
             T_world_body_odometry=poses,
             T_world_body=T_world_body,
             keyframes=keyframes,
@@ -269,6 +302,8 @@ class LidarSlam:
             timing_ms=timing,
             seconds=seconds,
             per_sweep=per_sweep,
+            deskewed_sweeps=deskewed,
+            stopped=stopped,
         )
 
     def _check_loop(self, kf_scans, kf_T, kf_path_m, q: int, match) -> Loop | None:

@@ -607,6 +607,9 @@ def _give_imu(sequence, config: Config, tracker: Tracker) -> None:
     """The sequence's IMU samples to the tracker's bridge (``tracking.imu``), when it has any."""
     if not config.tracking.imu.enabled or not callable(getattr(sequence, "imu", None)):
         return
+    if getattr(sequence, "has_imu", True) is False:  # a bag run without an IMU topic
+        log.info("no IMU topic in %s: camera only", sequence)
+        return
     imu_csv = getattr(sequence, "root", Path(".")) / "imu0" / "data.csv"
     if isinstance(sequence, EurocSequence) and not imu_csv.is_file():
         log.info("no IMU samples (%s): camera only", imu_csv)

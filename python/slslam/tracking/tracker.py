@@ -350,9 +350,16 @@ def _vocabulary_for(config: Config, frontend) -> Path | None:
     if not t.relocalisation:
         return None
     if t.vocabulary_path:
+        from slslam.files import special_file_kind
+        from slslam.place import check_vocabulary_records
+
         path = Path(t.vocabulary_path).expanduser()
-        if not path.is_file():
+        kind = special_file_kind(path)
+        if kind == "missing":
             raise InputError(path, "tracking.vocabulary_path: vocabulary file not found")
+        if kind is not None:  # a FIFO or device would block or never end the core's read
+            raise InputError(path, f"tracking.vocabulary_path: is {kind}, not a vocabulary file")
+        check_vocabulary_records(path)  # word weights in range, before the core loads it
         return path
     from slslam.place import default_vocabulary_path
 
@@ -432,9 +439,10 @@ class Tracker:
         # detected, expected keyframe).
         self._ahead_choices: dict[int, tuple[bool, bool]] = {}
         if load_map is not None:
-            path = Path(load_map).expanduser()
-            if not path.is_file():
-                raise InputError(path, "map file not found")
+            from slslam.files import require_regular_file
+
+            # a FIFO, device or folder is refused before the core opens it
+            path = require_regular_file(Path(load_map).expanduser(), InputError, "map file")
             try:
                 self._core.load_map(str(path))
             except (ValueError, RuntimeError) as exc:
