@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from slslam import _core
+from slslam.datasets.trajectory_io import tum_time
 
 if not hasattr(_core, "LidarOdometry"):
     pytest.skip("slslam._core built without the LiDAR module", allow_module_level=True)
@@ -61,6 +62,8 @@ def test_files_are_written_and_readable(run):
     sequence, result, _, out = run
     rows = [r for r in (out / "trajectory.tum").read_text().splitlines() if not r.startswith("#")]
     assert len(rows) == len(sequence) == 60
+    # times as exact fixed-point seconds of the sweeps' nanoseconds (no float noise)
+    assert [r.split()[0] for r in rows] == [tum_time(int(t)) for t in result.t_ns]
     header = (out / "map.ply").read_bytes()[:300].split(b"end_header\n")[0].decode()
     count = int(header.split("element vertex ")[1].split()[0])
     assert count == len(result.map_points) > 1000

@@ -161,3 +161,34 @@ def write_trajectory(path: str | Path, traj: PosePath3D, fmt: str = "tum") -> Pa
         raise TrajectoryFileError(path, f"cannot write format '{fmt}' (use tum or kitti)")
     tmp.replace(path)
     return path
+
+
+def tum_time(t_ns: int) -> str:
+    """Nanoseconds as exact fixed-point seconds (``1317042145.967790592``), as TUM files hold
+    them; a float's ``%.9f`` of a Unix time is off by up to a few hundred ns."""
+    sign, t_ns = ("-", -t_ns) if t_ns < 0 else ("", t_ns)
+    return f"{sign}{t_ns // 1_000_000_000}.{t_ns % 1_000_000_000:09d}"
+
+
+def write_tum_ns(path: str | Path, t_ns: np.ndarray, T_world_frame: np.ndarray) -> Path:
+    """A TUM file of poses ``T_world_frame`` (N, 4, 4) at integer times ``t_ns`` (N,), the times
+    written exactly (:func:`tum_time`); written to a temporary name and renamed."""
+    from scipy.spatial.transform import Rotation
+
+    path = Path(path)
+    t_ns = np.asarray(t_ns, dtype=np.int64).reshape(-1)
+    T = np.asarray(T_world_frame, dtype=np.float64).reshape(-1, 4, 4)
+    if len(t_ns) != len(T):
+        raise TrajectoryFileError(path, f"{len(t_ns)} timestamps for {len(T)} poses")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    quats = Rotation.from_matrix(T[:, :3, :3]).as_quat() if len(T) else np.zeros((0, 4))
+    rows = np.column_stack([T[:, :3, 3], quats]) if len(T) else np.zeros((0, 7))
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        with tmp.open("w", encoding="ascii") as f:
+            for t, row in zip(t_ns.tolist(), rows, strict=True):
+                f.write(tum_time(t) + " " + " ".join(f"{v:.9f}" for v in row) + "\n")
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path

@@ -11,7 +11,7 @@ from evo.core.trajectory import PoseTrajectory3D
 from scipy.spatial.transform import Rotation
 
 from slslam._version import __version__
-from slslam.datasets.trajectory_io import write_trajectory
+from slslam.datasets.trajectory_io import write_tum_ns
 from slslam.errors import InputError
 from slslam.eval.metrics import compute_ape, compute_rpe
 from slslam.files import atomic_output, write_text_atomic
@@ -119,10 +119,9 @@ def write_outputs(
     (``result.stopped``) is written for the sweeps it processed, with ``completed: false`` and
     the reason in metrics.json; a scoring failure is recorded as ``evaluation_error``."""
     out.mkdir(parents=True, exist_ok=True)
-    write_trajectory(out / "trajectory.tum", to_trajectory(result.t_ns, result.T_world_body))
-    write_trajectory(
-        out / "trajectory_odometry.tum", to_trajectory(result.t_ns, result.T_world_body_odometry)
-    )
+    # exact fixed-point times from the sweeps' integer nanoseconds
+    write_tum_ns(out / "trajectory.tum", result.t_ns, result.T_world_body)
+    write_tum_ns(out / "trajectory_odometry.tum", result.t_ns, result.T_world_body_odometry)
     write_ply(out / "map.ply", result.map_points)
     evaluation_error = None
     try:

@@ -52,6 +52,7 @@ from slslam.config import Config, check_config, default_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
 from slslam.datasets.kitti import KittiSequence, is_kitti
 from slslam.datasets.rosbag import is_rosbag
+from slslam.datasets.trajectory_io import tum_time
 from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
@@ -195,13 +196,6 @@ def open_dataset(path: str | Path) -> EurocSequence | KittiSequence:
         "image_1/, times.txt) and KITTI raw drives (image_00/data/, image_01/data/, "
         "calib_cam_to_cam.txt); `slslam sim --out DIR` makes one",
     )
-
-
-def tum_time(t_ns: int) -> str:
-    """Nanoseconds as exact fixed-point seconds (``1317042145.967790592``), as TUM files hold
-    them; a float's ``%.9f`` of a Unix time is off by up to a few hundred ns."""
-    sign, t_ns = ("-", -t_ns) if t_ns < 0 else ("", t_ns)
-    return f"{sign}{t_ns // 1_000_000_000}.{t_ns % 1_000_000_000:09d}"
 
 
 def _frame_stamps_ns(sequence, n: int) -> list[int] | None:
