@@ -239,7 +239,10 @@ def sim_command(
     out: Annotated[Path, typer.Option(help="Output folder (EuRoC ASL layout).")],
     preset: Annotated[
         str,
-        typer.Option(help="Roadway: straight (long corridor), loop (shaft-bottom yard), junction."),
+        typer.Option(
+            help="Roadway: straight (long corridor), loop (shaft-bottom yard), junction, "
+            "dead_end (a 30 m branch ending in a face)."
+        ),
     ] = "loop",
     frames: Annotated[int, typer.Option(min=1, max=10**7, help="Stereo frames to render.")] = 400,
     light: Annotated[
@@ -251,8 +254,20 @@ def sim_command(
     dust: Annotated[bool, typer.Option("--dust", help="Floating dust lit by the lamp.")] = False,
     flicker: Annotated[bool, typer.Option("--flicker", help="Exposure flicker.")] = False,
     blackout: Annotated[
-        bool, typer.Option("--blackout", help="The headlamp goes out for about 1 s mid-run.")
+        bool,
+        typer.Option(
+            "--blackout", help="The lights go out for --blackout-duration (mid-run by default)."
+        ),
     ] = False,
+    blackout_duration: Annotated[
+        float, typer.Option(metavar="SECONDS", help="With --blackout: how long it lasts.")
+    ] = 1.0,
+    blackout_at: Annotated[
+        float | None,
+        typer.Option(
+            metavar="SECONDS", help="With --blackout: when it starts (default: centred mid-run)."
+        ),
+    ] = None,
     movers: Annotated[
         bool, typer.Option("--movers", help="A walking worker and a moving cart cross the view.")
     ] = False,
@@ -295,6 +310,28 @@ def sim_command(
     spin_duration: Annotated[
         float, typer.Option(help="Duration of the turn on the spot in seconds.")
     ] = 6.0,
+    stop_duration: Annotated[
+        float,
+        typer.Option(
+            metavar="SECONDS",
+            help="With --spin-at: the robot stands still this long before turning (with "
+            "--spin-deg 0 a plain stop).",
+        ),
+    ] = 0.0,
+    shotcrete_start: Annotated[
+        float,
+        typer.Option(
+            metavar="METRES", help="Where the smooth shotcrete lining starts along the path."
+        ),
+    ] = 0.0,
+    shotcrete_length: Annotated[
+        float,
+        typer.Option(
+            metavar="METRES",
+            help="Length of smooth shotcrete lining (no arches, bolts, pipe or cables; walls, "
+            "roof and floor nearly uniform); 0 = none.",
+        ),
+    ] = 0.0,
     no_lidar: Annotated[bool, typer.Option("--no-lidar", help="Skip the LiDAR scans.")] = False,
     no_noise: Annotated[
         bool, typer.Option("--no-noise", help="Exact measurements (no image, IMU or range noise).")
@@ -318,6 +355,8 @@ def sim_command(
         dust=dust,  # type: ignore[arg-type]
         flicker=flicker,
         blackout=blackout,
+        blackout_s=blackout_duration,
+        blackout_at_s=blackout_at,
         movers=movers,
         roof_lamps=roof_lamps,
         speed_mps=speed,
@@ -327,6 +366,9 @@ def sim_command(
         spin_at_s=spin_at,
         spin_deg=spin_deg,
         spin_duration_s=spin_duration,
+        stop_duration_s=stop_duration,
+        shotcrete_start_m=shotcrete_start,
+        shotcrete_length_m=shotcrete_length,
         lidar=not no_lidar,
         noise=not no_noise,
         seed=seed,

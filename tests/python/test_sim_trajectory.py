@@ -420,3 +420,49 @@ def test_spin_beyond_the_path_raises() -> None:
     traj = RobotTrajectory(straight(), options=spin_options())
     with pytest.raises(InputError, match=r"more than the 40\.00 m path"):
         RobotTrajectory(straight(), duration_s=traj.duration_s + 0.1, options=spin_options())
+
+
+def test_stop_before_the_spin_is_exact_rest_and_the_imu_integrates_across_it() -> None:
+    """stop_duration_s: at rest (velocity, angular velocity zero; the accelerometer reads
+    gravity only) from spin_at_s for that long, then the turn; C2 at every junction, and the
+    IMU integrates from cruise before the stop to cruise after the restart."""
+    stop = 3.0
+    options = dataclasses.replace(spin_options(90.0), stop_duration_s=stop)
+    traj = RobotTrajectory(rounded_rectangle(), options=options)
+    plain = RobotTrajectory(rounded_rectangle(), options=spin_options(90.0))
+    assert traj.duration_s == pytest.approx(plain.duration_s + stop)
+    t = np.linspace(SPIN_AT, SPIN_AT + stop, 601)
+    np.testing.assert_array_equal(traj.velocity(t), 0.0)
+    np.testing.assert_array_equal(traj.angular_velocity_body(t), 0.0)
+    assert np.abs(traj.position(t) - traj.position(SPIN_AT)).max() < 1e-12
+    imu = traj.imu(rate_hz=200.0)
+    at_rest = (imu["t_ns"] >= SPIN_AT * 1e9) & (imu["t_ns"] <= (SPIN_AT + stop) * 1e9)
+    assert np.count_nonzero(at_rest) == 601
+    np.testing.assert_allclose(imu["gyro"][at_rest], 0.0, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(imu["acc"][at_rest], axis=1), 9.81, atol=1e-12)
+    # the turn is the plain spin's, shifted by the stop
+    t_turn = np.linspace(SPIN_AT, SPIN_AT + SPIN_S, 301)
+    np.testing.assert_allclose(
+        traj.angular_velocity_body(t_turn + stop), plain.angular_velocity_body(t_turn), atol=1e-12
+    )
+    h = 1e-7
+    for tj in (
+        *spin_junctions()[:2],
+        SPIN_AT + stop,
+        SPIN_AT + stop + SPIN_S,
+        SPIN_AT + stop + SPIN_S + RAMP_S,
+    ):
+        for f, tol in (
+            (traj.velocity, 1e-5),
+            (traj.acceleration, 1e-4),
+            (traj.angular_velocity_body, 1e-5),
+        ):
+            assert np.abs(f(tj + h)[0] - f(tj - h)[0]).max() < tol, f"{f.__name__} jumps at {tj} s"
+    t = imu["t_ns"] * 1e-9
+    i0 = int(np.searchsorted(t, SPIN_AT - RAMP_S - 0.5))
+    i1 = int(np.searchsorted(t, SPIN_AT + stop + SPIN_S + RAMP_S + 0.5))
+    p0, v0, R0 = traj.position(t[i0])[0], traj.velocity(t[i0])[0], traj.rotation(t[i0])[0]
+    p, R = integrate_imu(imu, i0, i1 - i0, p0, v0, R0)
+    assert np.linalg.norm(p - traj.position(t[i1])[0]) < 0.01
+    angle = np.linalg.norm(Rotation.from_matrix(traj.rotation(t[i1])[0].T @ R).as_rotvec())
+    assert np.rad2deg(angle) < 0.1

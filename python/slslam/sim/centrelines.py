@@ -64,3 +64,19 @@ def junction_path(
         _arc(np.array([branch_at_m - r, r]), r, -np.pi / 2, 0.0),
         _line(np.array([branch_at_m, r, 0.0]), np.array([branch_at_m, branch_m - 2.0, 0.0])),
     )
+
+
+def dead_end_roadways(
+    main_m: float = 36.0, branch_at_m: float = 10.0, branch_m: float = 30.0
+) -> list[np.ndarray]:
+    """A main roadway along +x and a dead-end branch leaving it at a right angle towards +y
+    (the branch's last point is where its face stands: see ``roadway.end_cap``)."""
+    return junction_roadways(main_m, branch_at_m, branch_m)
+
+
+def dead_end_path(
+    branch_at_m: float = 10.0, branch_m: float = 30.0, turn_radius_m: float = 4.0
+) -> np.ndarray:
+    """The robot's path into the dead end: a short main roadway stretch, the turn, then up the
+    branch to 2 m before its face."""
+    return junction_path(branch_at_m, branch_m, turn_radius_m)

@@ -28,6 +28,10 @@ class Material(IntEnum):
     CABLE = 7
     WORKER = 8
     CART = 9
+    #: Smooth shotcrete lining (no bolt plates, services or arches): an id of the Python side
+    #: only; the simulator shades it as SHOTCRETE with that texture cancelled and a faint
+    #: sub-centimetre grain instead (``sequence.smooth_shotcrete_shading``).
+    SMOOTH_SHOTCRETE = 10
     NONE = 255
 
 
@@ -276,6 +280,51 @@ def roadway_mesh(
             )
         )
     return Mesh.concat(parts)
+
+
+def end_cap(
+    centreline: np.ndarray, section: CrossSection = CrossSection(), material: int = Material.ROCK
+) -> Mesh:
+    """A flat face closing a roadway at its last centreline point (a dead end): the
+    cross-section polygon, perpendicular to the last tangent, as a fan of triangles."""
+    section.check()
+    st = Stations.from_centreline(centreline)
+    profile, _ = section.profile()  # closed: the last floor point is the first wall point
+    centre = np.array([0.0, section.height_m / 2])
+    ring = np.concatenate([centre[None], profile[:-1]])
+    left, end = st.left[-1], st.position[-1]
+    verts = end + ring[:, :1] * left + ring[:, 1:] * np.array([0.0, 0.0, 1.0])
+    k = np.arange(1, len(ring))
+    tris = np.column_stack([np.zeros_like(k), k, np.where(k + 1 < len(ring), k + 1, 1)])
+    return Mesh(verts, tris.astype(np.int32), np.full(len(tris), material, np.uint8))
+
+
+#: Materials of the roadway shell (walls, roof, floor, faces) that a shotcrete lining covers;
+#: arches, pipes and cables (STEEL, PIPE, CABLE) inside the lined stretch are removed.
+_SHELL = (Material.ROCK, Material.COAL, Material.SHOTCRETE, Material.ROOF_MESH, Material.FLOOR)
+
+
+def line_with_shotcrete(
+    mesh: Mesh, path: np.ndarray, start_m: float, length_m: float, section: CrossSection
+) -> tuple[Mesh, np.ndarray]:
+    """Line the stretch ``[start_m, start_m + length_m]`` of a roadway with smooth shotcrete.
+
+    The stretch is measured along ``path`` (the robot's path, (M, 3) [m], from its start). A
+    triangle belongs to it when the path point nearest to its centroid (horizontally, within
+    the roadway's width) lies in the stretch. Its shell triangles become
+    ``Material.SMOOTH_SHOTCRETE`` and its arches, pipe and cables go, so that walls, roof and
+    floor carry no corner at all. Returns the new mesh and the mask of lined triangles in it.
+    """
+    st = Stations.from_centreline(path)
+    centroids = mesh.vertices[mesh.triangles].mean(axis=1)
+    dist, idx = cKDTree(st.position[:, :2]).query(centroids[:, :2])
+    s = st.s[idx]
+    inside = (s >= start_m) & (s <= start_m + length_m) & (dist <= section.width_m)
+    shell = np.isin(mesh.material, np.array(_SHELL, dtype=np.uint8))
+    keep = ~inside | shell
+    material = np.where(inside & shell, Material.SMOOTH_SHOTCRETE, mesh.material)
+    lined = Mesh(mesh.vertices, mesh.triangles[keep], material[keep].astype(np.uint8))
+    return lined, (inside & shell)[keep]
 
 
 def inside_roadway(

@@ -21,25 +21,40 @@ from typing import Literal
 import numpy as np
 
 from slslam import _core
+from slslam.errors import InputError
 from slslam.progress import progress_bar
 from slslam.sim import centrelines
 from slslam.sim.asl_writer import AslWriter
 from slslam.sim.dust import DustCloud
 from slslam.sim.movers import Mover, default_movers
 from slslam.sim.raycast import Hits, RaycastScene
-from slslam.sim.roadway import CrossSection, Mesh, Stations, network_mesh
+from slslam.sim.roadway import (
+    CrossSection,
+    Material,
+    Mesh,
+    Stations,
+    end_cap,
+    line_with_shotcrete,
+    network_mesh,
+)
 from slslam.sim.sensors import Lidar, StereoCamera
 from slslam.sim.trajectory import ImuNoise, RobotTrajectory, TrajectoryOptions
 
 log = logging.getLogger(__name__)
 
-Preset = Literal["straight", "loop", "junction"]
-PRESETS: tuple[str, ...] = ("straight", "loop", "junction")
+Preset = Literal["straight", "loop", "junction", "dead_end"]
+PRESETS: tuple[str, ...] = ("straight", "loop", "junction", "dead_end")
 #: Power of each roof lamp and the direction-less ambient light [irradiance units (* m^2)].
 ROOF_LAMP_POWER = 4.0
 AMBIENT = 0.002
 #: First timestamp of a simulated sequence [ns] (small enough to stay exact in float64 seconds).
 T0_NS = 1_000_000_000_000
+#: Smooth shotcrete lining: its albedo, and the faint grain on it: value noise on cells of
+#: SHOTCRETE_GRAIN_M [m] in world coordinates (sub-centimetre, about one pixel at 3 m) that
+#: scales the albedo by 1 +- SHOTCRETE_GRAIN_CONTRAST at most (uniform).
+SHOTCRETE_ALBEDO = 0.55
+SHOTCRETE_GRAIN_M = 0.006
+SHOTCRETE_GRAIN_CONTRAST = 0.03
 
 
 @dataclass(frozen=True)
@@ -52,8 +67,9 @@ class SimOptions:
     light: float = 1.0  # global light level [-]: 1.0 / 0.5 / 0.15 like OIVIO's onboard light
     dust: bool = False  # floating dust lit by the headlamp
     flicker: bool = False  # exposure flicker (per-frame light variation of about 10 %)
-    blackout: bool = False  # the headlamp goes out for blackout_s in the middle of the run
+    blackout: bool = False  # all lights go out for blackout_s [s] from blackout_at_s [s]
     blackout_s: float = 1.0  # [s]
+    blackout_at_s: float | None = None  # start of the blackout [s]; None: centred mid-run
     movers: bool = False  # a walking worker and a moving cart cross the view
     roof_lamps: bool = False  # a roof lamp every roof_lamp_spacing_m
     roof_lamp_spacing_m: float = 20.0
@@ -69,6 +85,12 @@ class SimOptions:
     spin_at_s: float | None = None  # the robot stops and turns on the spot at this time [s]
     spin_deg: float = 360.0  # yaw turned on the spot [deg], > 0 = left; kept afterwards
     spin_duration_s: float = 6.0  # duration of the turn [s]
+    stop_duration_s: float = 0.0  # with spin_at_s: standing still before the turn [s]
+    # Smooth shotcrete lining over [shotcrete_start_m, + shotcrete_length_m] along the robot's
+    # path (first lap) [m]: no arches, bolts, pipe, cables; walls, roof, floor (and a dead end's
+    # face) nearly uniform. Length 0: none.
+    shotcrete_start_m: float = 0.0
+    shotcrete_length_m: float = 0.0
     exposure: float = 2.0  # sensor exposure [-]: light 1.0 gives a median gray of about 90
     headlamp_power: float = 12.0  # [irradiance units * m^2]
     section: CrossSection = field(default_factory=CrossSection)
@@ -98,6 +120,20 @@ class SimOptions:
                 "loop_length_m must be in [2, 1000] and loop_radius_m in [3, 500], got "
                 f"{self.loop_length_m} and {self.loop_radius_m}"
             )
+        if not (np.isfinite(self.blackout_s) and self.blackout_s > 0):
+            raise InputError("blackout_s", f"must be a duration > 0 [s], got {self.blackout_s}")
+        if self.blackout_at_s is not None:
+            end = self.frames / self.rate_hz
+            if not (np.isfinite(self.blackout_at_s) and 0 <= self.blackout_at_s < end):
+                raise InputError(
+                    "blackout_at_s",
+                    f"must be in [0, {end:g}) s (the {self.frames} frames' time), "
+                    f"got {self.blackout_at_s}",
+                )
+        for name in ("shotcrete_start_m", "shotcrete_length_m"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise InputError(name, f"must be a distance >= 0 [m], got {value}")
         self.section.check()
         self.camera.check()
         self.trajectory_options()  # checks the spin options
@@ -111,10 +147,52 @@ class SimOptions:
             spin_at_s=self.spin_at_s,
             spin_deg=self.spin_deg,
             spin_duration_s=self.spin_duration_s,
+            stop_duration_s=self.stop_duration_s,
         )
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+def shotcrete_grain(points: np.ndarray) -> np.ndarray:
+    """Faint grain of the smooth shotcrete at world points (N, 3) [m]: a factor in
+    ``1 +- SHOTCRETE_GRAIN_CONTRAST`` per cell of ``SHOTCRETE_GRAIN_M``, from a hash of the cell,
+    so every view of a point sees the same grain."""
+    cell = np.floor(np.asarray(points, dtype=np.float64) / SHOTCRETE_GRAIN_M).astype(np.int64)
+    primes = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.uint64)
+    h = cell.view(np.uint64) * primes  # wraps modulo 2^64
+    h = h[:, 0] ^ h[:, 1] ^ h[:, 2]
+    for shift, mult in ((33, 0xFF51AFD7ED558CCD), (33, 0xC4CEB9FE1A85EC53)):  # murmur3 mixing
+        h = (h ^ (h >> np.uint64(shift))) * np.uint64(mult)
+    h ^= h >> np.uint64(33)
+    uniform = (h >> np.uint64(11)).astype(np.float64) * (1.0 / 2.0**53)  # [0, 1)
+    return 1.0 + SHOTCRETE_GRAIN_CONTRAST * (2.0 * uniform - 1.0)
+
+
+def smooth_shotcrete_shading(hits: Hits) -> tuple[np.ndarray, np.ndarray]:
+    """Normals and material ids to shade hits with: smooth shotcrete pixels as SHOTCRETE whose
+    procedural texture and bolt plates are cancelled.
+
+    The shading kernel's light is linear in the normal's length (irradiance = power * n.l / d^2,
+    n is not renormalised), so scaling the normal by ``target / albedo`` (``albedo`` the kernel's
+    SHOTCRETE texture at the point, bolt plates included) makes the lit radiance
+    ``target * irradiance``: a uniform ``SHOTCRETE_ALBEDO`` times the grain. What stays of the
+    texture: the direction-less ambient term (``AMBIENT``, < 1 % of the headlamp's light inside
+    its cone) and, beyond about 9 m, the finest octave that the kernel fades out with distance
+    and ``solid_texture`` (no pixel footprint) does not.
+    """
+    smooth = hits.material == Material.SMOOTH_SHOTCRETE
+    if not np.any(smooth):
+        return hits.normal, hits.material
+    material = hits.material.copy()
+    material[smooth] = Material.SHOTCRETE
+    points = np.ascontiguousarray(hits.point[smooth], dtype=np.float32)
+    normals = np.ascontiguousarray(hits.normal[smooth], dtype=np.float32)
+    albedo = _core.solid_texture(points, material[smooth], normals)
+    scale = SHOTCRETE_ALBEDO * shotcrete_grain(points) / np.maximum(albedo, 1e-3)
+    normal = np.array(hits.normal, dtype=np.float32, copy=True)
+    normal[smooth] = normals * scale[:, None].astype(np.float32)
+    return normal, material
 
 
 def preset_geometry(
@@ -130,6 +208,8 @@ def preset_geometry(
         return [line], path
     if preset == "junction":
         return centrelines.junction_roadways(), centrelines.junction_path()
+    if preset == "dead_end":
+        return centrelines.dead_end_roadways(), centrelines.dead_end_path()
     raise ValueError(f"unknown preset '{preset}' (choose from {', '.join(PRESETS)})")
 
 
@@ -143,6 +223,12 @@ class Simulator:
             options.preset, options.laps, options.loop_length_m, options.loop_radius_m
         )
         self.mesh = network_mesh(roadways, options.section)
+        if options.preset == "dead_end":  # the branch ends in a face
+            self.mesh = Mesh.concat([self.mesh, end_cap(roadways[1], options.section)])
+        self.shotcrete_triangles = 0
+        if options.shotcrete_length_m > 0:
+            self.mesh, lined = self._line_with_shotcrete(self.mesh)
+            self.shotcrete_triangles = int(np.count_nonzero(lined))
         self.scene = RaycastScene(self.mesh)
         duration = (options.frames - 1) / options.rate_hz + 1.0 / options.rate_hz
         self.trajectory = RobotTrajectory(
@@ -159,6 +245,21 @@ class Simulator:
         self._sensor.noise = options.noise
         self._sensor.seed = options.seed
         self._sensor.exposure = options.exposure
+
+    def _line_with_shotcrete(self, mesh: Mesh) -> tuple[Mesh, np.ndarray]:
+        """The mesh with the shotcrete stretch of the options lined (along the first lap)."""
+        opts = self.options
+        _, path = preset_geometry(opts.preset, 1, opts.loop_length_m, opts.loop_radius_m)
+        length = float(Stations.from_centreline(path).s[-1])
+        if opts.shotcrete_start_m >= length:
+            raise InputError(
+                "shotcrete_start_m",
+                f"{opts.shotcrete_start_m} m is past the end of the {length:.1f} m path of "
+                f"preset '{opts.preset}'",
+            )
+        return line_with_shotcrete(
+            mesh, path, opts.shotcrete_start_m, opts.shotcrete_length_m, opts.section
+        )
 
     @property
     def frame_times_s(self) -> np.ndarray:
@@ -191,8 +292,13 @@ class Simulator:
             level *= float(np.clip(1.0 + 0.1 * rng.standard_normal(), 0.6, 1.4))
         if self.options.blackout:
             t = frame / self.options.rate_hz
-            mid = 0.5 * self.options.frames / self.options.rate_hz
-            if abs(t - mid) < self.options.blackout_s / 2:
+            start = self.options.blackout_at_s
+            if start is None:
+                mid = 0.5 * self.options.frames / self.options.rate_hz
+                dark = abs(t - mid) < self.options.blackout_s / 2
+            else:
+                dark = start <= t < start + self.options.blackout_s
+            if dark:
                 level = 0.0
         return level
 
@@ -228,10 +334,11 @@ class Simulator:
         """Image formation (C++): textures, lights and sensor model for one camera's hits."""
         cam = self.camera
         shading_camera = _core.ShadingCamera(cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3])
+        normal, material = smooth_shotcrete_shading(hits)
         return _core.shade_image(
             hits.point,
-            hits.normal,
-            hits.material,
+            normal,
+            material,
             cam.height,
             cam.width,
             shading_camera,
@@ -311,6 +418,7 @@ class Simulator:
             "options": opts.to_dict(),
             "frames_written": 0,
             "mesh_triangles": len(self.mesh.triangles),
+            "shotcrete_triangles": self.shotcrete_triangles,
         }
         writer.write_manifest(manifest)
         imu_noise = ImuNoise()

@@ -6,9 +6,10 @@ frame: x forward, y left, z up (the IMU frame).
 
 The centreline polyline is resampled, lightly smoothed and fitted with a quintic spline that is
 parametrised by arc length ``s``. The robot moves along it with ``s(t)``: a quintic smoothstep
-ramp from rest to cruise speed, then constant speed. Optionally the robot turns on the spot:
-it slows to rest with the mirrored ramp, stays at ``s`` constant while a yaw offset ``psi(t)``
-(quintic smoothstep) turns it about its own up axis, then ramps back to cruise speed.
+ramp from rest to cruise speed, then constant speed. Optionally the robot stops and turns on
+the spot: it slows to rest with the mirrored ramp, stands still for ``stop_duration_s``, stays
+at ``s`` constant while a yaw offset ``psi(t)`` (quintic smoothstep) turns it about its own up
+axis, then ramps back to cruise speed.
 Ground-induced vibration (height, roll, pitch) is a sum of sinusoids in ``s``, so it vanishes at
 rest and has ``vibration_freq_hz`` at cruise speed. Every quantity (velocity, acceleration,
 angular velocity) is analytic: derivatives of the spline and the chain rule, never finite
@@ -79,6 +80,9 @@ class TrajectoryOptions:
     spin_at_s: float | None = None
     spin_deg: float = 360.0
     spin_duration_s: float = 6.0
+    # With spin_at_s: the robot stands still for stop_duration_s [s] at rest before the turn
+    # starts (velocity and angular velocity exactly zero; spin_deg = 0 makes it a plain stop).
+    stop_duration_s: float = 0.0
 
     def __post_init__(self) -> None:
         self.check()
@@ -91,7 +95,12 @@ class TrajectoryOptions:
                 continue
             _require(np.isfinite(value), src, f"{name} must be finite, got {value}")
         _require(self.speed_mps > 0, src, f"speed_mps must be > 0, got {self.speed_mps}")
-        for name in ("accel_time_s", "vibration_amplitude_m", "corner_smoothing_m"):
+        for name in (
+            "accel_time_s",
+            "vibration_amplitude_m",
+            "corner_smoothing_m",
+            "stop_duration_s",
+        ):
             value = getattr(self, name)
             _require(value >= 0, src, f"{name} must be >= 0, got {value}")
         _require(self.vibration_freq_hz > 0, src, "vibration_freq_hz must be > 0")
@@ -245,7 +254,8 @@ class RobotTrajectory:
                 f"{o.spin_at_s} s stops the robot at {s_stop:.2f} m; with the {ramp_m:.2f} m "
                 f"ramp back to speed it needs more than the {self.length_m:.2f} m path",
             )
-            full += o.spin_duration_s + o.accel_time_s  # the pause and the two half-speed ramps
+            # the stop, the turn and the two half-speed ramps
+            full += o.stop_duration_s + o.spin_duration_s + o.accel_time_s
         if duration_s is None:
             return full
         _require(bool(np.isfinite(duration_s) and duration_s > 0), "duration_s", "must be > 0")
@@ -275,21 +285,24 @@ class RobotTrajectory:
         sdd = (v / ta) * 30.0 * x**2 * (x - 1.0) ** 2
         if self.options.spin_at_s is not None:
             # speed v * (ramp(t) - ramp(t - t_stop) + ramp(t - t_go)): each ramp is C2 and
-            # constant outside its accel_time_s, so the sum is C2, and exactly 0 during the spin
-            t_stop = self.options.spin_at_s - ta
-            t_go = self.options.spin_at_s + self.options.spin_duration_s
+            # constant outside its accel_time_s, so the sum is C2, and exactly 0 during the stop
+            # and the spin
+            o = self.options
+            t_stop = o.spin_at_s - ta
+            t_go = o.spin_at_s + o.stop_duration_s + o.spin_duration_s
             for start, sign in ((t_stop, -v), (t_go, v)):
                 g, gd, gdd = _unit_ramp(t - start, ta)
                 s, sd, sdd = s + sign * g, sd + sign * gd, sdd + sign * gdd
         return s, sd, sdd
 
     def _spin_yaw(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Yaw offset psi [rad] of the turn on the spot, psi' [rad/s] and psi'' [rad/s^2].
+        """Yaw offset psi [rad] of the turn on the spot, psi' [rad/s] and psi'' [rad/s^2]; the
+        turn starts ``stop_duration_s`` after the robot comes to rest at ``spin_at_s``.
 
         The IMU sits at the body origin, so the gyro needs psi' only; psi'' (the angular
         acceleration, zero at both ends of the turn) is there for checks."""
         o = self.options
-        x = np.clip((t - o.spin_at_s) / o.spin_duration_s, 0.0, 1.0)
+        x = np.clip((t - o.spin_at_s - o.stop_duration_s) / o.spin_duration_s, 0.0, 1.0)
         turn = np.deg2rad(o.spin_deg)
         psi = turn * x**3 * (x * (6.0 * x - 15.0) + 10.0)
         psi_d = (turn / o.spin_duration_s) * 30.0 * x**2 * (x - 1.0) ** 2
