@@ -6,10 +6,10 @@ headlamp blackout longer than the IMU bridge; the tracker on each, camera only b
         [--frames-scale 1.0] [--data-dir DIR] [--out DIR] [--set tracking.KEY=VALUE ...]
 
 The cases are defined in tracking_recovery.py's SEQUENCES (so ``tracking_recovery.py
---sequences shotcrete_l100`` runs one too, at its --frames): 20 m of smooth shotcrete on the
+--sequences shotcrete_l100`` runs one too, at its --frames): 16 m of smooth shotcrete on the
 loop's first straight at light 1.0 (shotcrete_l100) and at 0.15 with dust (shotcrete_l015_dust);
 the dead-end branch lined with shotcrete up to its face, light 0.5 with flicker, a 3 s stop and
-a 360 degree turn on the spot 9 m into the lining (shotcrete_branch); a 4 s blackout on the
+a 360 degree turn on the spot 7 m into the lining (shotcrete_branch); a 4 s blackout on the
 junction at light 0.5 (blackout_long). Each is simulated (seed 0, no LiDAR) with the frames it
 needs to get through its hard part and a little beyond, once, into --data-dir.
 
@@ -45,10 +45,10 @@ from common import RESULTS_DIR, parse_overrides, write_results
 
 #: Frames each case is simulated and run for (20 Hz): through the hard part and a little beyond.
 CASE_FRAMES = {
-    "shotcrete_l100": 720,  # the stretch is driven from t = 8.5 s to 33.5 s
-    "shotcrete_l015_dust": 720,
-    "shotcrete_branch": 860,  # in the lining from t = 14.8 s; stop 27-30 s, turn 30-36 s
-    "blackout_long": 400,  # dark from t = 8 s to 12 s
+    "shotcrete_l100": 600,  # the stretch is driven from t = 7.25 s to 27.25 s
+    "shotcrete_l015_dust": 600,
+    "shotcrete_branch": 760,  # in the lining from t = 14.75 s; stop 24.5-27.5 s, turn -33.5 s
+    "blackout_long": 300,  # dark from t = 8 s to 12 s
 }
 CASES = list(CASE_FRAMES)
 

@@ -63,25 +63,25 @@ SEQUENCES = {
     # --set tracking.imu.enabled=false): how the tracker comes back after 1 s of darkness
     "junction_blackout": {"preset": "junction", "light": 0.5, "blackout": True},
     # issue 62's hard cases (benchmarks/hard_cases.py runs them, each with its own length):
-    # 20 m of smooth shotcrete (no arches, bolts, pipe, cables, nearly uniform walls, roof and
-    # floor) on the loop's first straight, 6-26 m along the path, at light 1.0 ...
+    # 16 m of smooth shotcrete (no arches, bolts, pipe, cables, nearly uniform walls, roof and
+    # floor) on the loop's first straight, 5-21 m along the path, at light 1.0 ...
     "shotcrete_l100": {
         "preset": "loop",
         "light": 1.0,
-        "shotcrete_start_m": 6.0,
-        "shotcrete_length_m": 20.0,
+        "shotcrete_start_m": 5.0,
+        "shotcrete_length_m": 16.0,
     },
     # ... and at light 0.15 with dust
     "shotcrete_l015_dust": {
         "preset": "loop",
         "light": 0.15,
         "dust": True,
-        "shotcrete_start_m": 6.0,
-        "shotcrete_length_m": 20.0,
+        "shotcrete_start_m": 5.0,
+        "shotcrete_length_m": 16.0,
     },
     # the dead-end branch lined with shotcrete from 11 m along the path to its face (25 m of
-    # it), light 0.5 with flicker; the robot comes to rest 20 m along the path (9 m into the
-    # lining, at t = 27 s), stands still 3 s, turns 360 degrees on the spot in 6 s facing the
+    # it), light 0.5 with flicker; the robot comes to rest 18 m along the path (7 m into the
+    # lining, at t = 24.5 s), stands still 3 s, turns 360 degrees on the spot in 6 s facing the
     # smooth walls, and drives on towards the face
     "shotcrete_branch": {
         "preset": "dead_end",
@@ -89,7 +89,7 @@ SEQUENCES = {
         "flicker": True,
         "shotcrete_start_m": 11.0,
         "shotcrete_length_m": 26.0,
-        "spin_at_s": 27.0,
+        "spin_at_s": 24.5,
         "stop_duration_s": 3.0,
         "spin_deg": 360.0,
         "spin_duration_s": 6.0,
