@@ -14,8 +14,8 @@ junction at light 0.5 (blackout_long). Each is simulated (seed 0, no LiDAR) with
 needs to get through its hard part and a little beyond, once, into --data-dir.
 
 Configurations as in tracking_recovery.py: ORB + lines (orb_lines, `slslam run --orb`), XFeat +
-lines (xfeat_lines, `slslam run`'s default front end), ... Camera only unless --imu (then the
-IMU bridge runs, as `slslam run` does by default on the simulator's imu0/).
+lines (xfeat_lines, `slslam run --xfeat`), ... Camera only unless --imu (then the IMU bridge
+runs, as `slslam run` does by default on the simulator's imu0/).
 
 Per run, besides tracking_recovery.py's table: the hard part's frames (the robot inside the
 shotcrete stretch, or the lights out), the share of them with a camera pose (OK, RELOCALISED,
