@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "slslam/core/check.h"
+#include "slslam/tracking/keyframe_decision.h"
 #include "slslam/tracking/tracker_internal.h"
 
 namespace slslam {
@@ -18,6 +19,21 @@ namespace {
 // Threaded local mapping: keyframes that may wait for it (ORB-SLAM3's stereo limit). Past it
 // tracking goes on from the last keyframe until the queue shrinks.
 constexpr int kMaxQueuedKeyFrames = 3;
+
+// The keyframe rules of the tracker's options (the same keys, named for DecideKeyframe).
+KeyframeRules KeyframeRulesOf(const TrackerOptions& o) {
+  KeyframeRules r;
+  r.max_frames = o.keyframe_max_frames;
+  r.min_frames = o.keyframe_min_frames;
+  r.min_frames_noisy = o.keyframe_min_frames_noisy;
+  r.min_interval_s = o.keyframe_min_interval_s;
+  r.track_ratio = o.keyframe_track_ratio;
+  r.min_close_tracked = o.keyframe_min_inliers;
+  r.min_inliers = o.min_inliers;
+  r.weak_inliers = o.weak_keyframe_inliers;
+  r.weak_frames = o.weak_keyframe_frames;
+  return r;
+}
 
 // `frame` itself, or a copy completed by `completer` when the flag `pending` marks what it lacks
 // (the right image's lines, or the left image's) and a completer was given; the copy's flag
@@ -377,42 +393,27 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
       ++close_untracked;
     }
   }
-  const bool need_close = close_tracked < options_.keyframe_min_inliers && close_untracked > 70;
   const int tracked = pose.point_inliers;
   // A young map has few points seen by three keyframes; the inliers of the first frame tracked
   // after the keyframe stand in for the reference then (how many of its points can be tracked).
   // Detected frames only: projected ones keep one point per cell.
   const int first_tracked = first_tracked_ == 0 && frames_since >= 1 ? tracked : first_tracked_;
   if (!decide_only && !projected) first_tracked_ = first_tracked;
-  reference = std::max(reference, first_tracked);
-  // The minimum gap after the last keyframe, in frames and in time.
-  const int min_frames = frame.noisy && options_.keyframe_min_frames_noisy >= 0
-                             ? options_.keyframe_min_frames_noisy
-                             : options_.keyframe_min_frames;
-  const bool past_gap =
-      frames_since >= min_frames &&
-      frame.timestamp - last_keyframe_time_s_ >= options_.keyframe_min_interval_s;
-  // c1 of ORB-SLAM3 without the gap (c1a and c1c), then with it (c1b).
-  const bool c1_without_gap = frames_since >= options_.keyframe_max_frames ||
-                              tracked < 0.25 * reference || need_close;
-  const bool c1 = c1_without_gap || past_gap;
-  const bool c2 = (tracked < options_.keyframe_track_ratio * reference || need_close) &&
-                  tracking.weighted_inliers > options_.min_inliers;
-  // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
-  const bool weak = tracking.weighted_inliers < options_.weak_keyframe_inliers &&
-                    frames_since >= options_.weak_keyframe_frames;
-  // The minimum gap is a hard one while tracking is strong.
-  const bool gap = frames_since >= 1 && past_gap;
-  const bool insert =
-      frames_since >= 1 &&
-      ((gap && c1 && c2) || weak || frames_since >= options_.keyframe_max_frames);
+  KeyframeEvidence evidence;
+  evidence.frames_since = frames_since;
+  evidence.seconds_since = frame.timestamp - last_keyframe_time_s_;
+  evidence.noisy = frame.noisy;
+  evidence.tracked = tracked;
+  evidence.reference = std::max(reference, first_tracked);
+  evidence.close_tracked = close_tracked;
+  evidence.close_untracked = close_untracked;
+  evidence.weighted_inliers = tracking.weighted_inliers;
+  const KeyframeDecision decision = DecideKeyframe(evidence, KeyframeRulesOf(options_));
   // ORB-SLAM3's brake (mapping_brake, threaded mode; sequential local mapping is always idle):
   // while local mapping is busy the gap alone is no reason for a keyframe (c1b), and a keyframe
   // that is due stops the running local BA early and queues, unless kMaxQueuedKeyFrames wait.
-  if (!options_.mapping_brake || !insert || mapper_->Idle()) return insert;
-  const bool due = (c1_without_gap && c2 && gap) || weak ||
-                   frames_since >= options_.keyframe_max_frames;
-  if (!due) return false;
+  if (!options_.mapping_brake || !decision.insert || mapper_->Idle()) return decision.insert;
+  if (!decision.due) return false;
   if (!decide_only) mapper_->InterruptBA();
   return mapper_->QueuedKeyFrames() < kMaxQueuedKeyFrames;
 }
