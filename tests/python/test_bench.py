@@ -8,6 +8,7 @@ temporary folder, so parallel test processes do not share one).
 from __future__ import annotations
 
 import dataclasses
+import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -142,15 +143,17 @@ def test_ray_cells_equal_inline_cells(sweeps) -> None:
     for cell_id in inline.records:
         assert _deterministic(on_ray.records[cell_id]) == _deterministic(inline.records[cell_id])
         assert on_ray.records[cell_id]["result"]["ate_rmse_m"] is not None
-    hosts = {r["measurements"]["pid"] for r in on_ray.records.values()}
-    assert len(hosts) >= 1
+    # the Ray cells ran in worker processes, not in this one
+    assert os.getpid() not in {r["measurements"]["pid"] for r in on_ray.records.values()}
 
 
 def test_rerun_runs_nothing_and_a_change_reruns_its_cells(sweeps) -> None:
     spec, root, _, on_ray = sweeps
     again = run_bench(spec, root / "ray", workers=2, data_dir=root / "inputs", progress=False)
     assert again.ran == [] and len(again.cached) == 4
-    assert again.records == on_ray.records
+    assert {i: _deterministic(r) for i, r in again.records.items()} == {
+        i: _deterministic(r) for i, r in on_ray.records.items()
+    }
     orb = dataclasses.replace(spec.configuration("orb"),
                               overlay={"tracking": {"use_lines": False, "min_inliers": 12}})
     changed = dataclasses.replace(spec, configurations=(spec.configuration("orb_lines"), orb))
