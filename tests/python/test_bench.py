@@ -20,10 +20,10 @@ try:
 except ImportError:  # the Ray tests skip; the rest run
     ray = None
 
-from slslam.bench import load_spec, parse_spec, run_bench
+from slslam.bench import load_spec, run_bench
 from slslam.bench.blocks import replace_block, update_file
 from slslam.bench.cells import plan_cells
-from slslam.bench.results import write_results
+from slslam.bench.results import compare_results, write_results
 from slslam.bench.spec import SpecError
 from slslam.cli import main
 
@@ -143,6 +143,7 @@ def test_ray_cells_equal_inline_cells(sweeps) -> None:
     for cell_id in inline.records:
         assert _deterministic(on_ray.records[cell_id]) == _deterministic(inline.records[cell_id])
         assert on_ray.records[cell_id]["result"]["ate_rmse_m"] is not None
+    assert len(compare_results(root / "inline", root / "ray")["same"]) == 4
     # the Ray cells ran in worker processes, not in this one
     assert os.getpid() not in {r["measurements"]["pid"] for r in on_ray.records.values()}
 
@@ -199,3 +200,52 @@ configurations:
     assert bad["status"] == "failed" and "unknown dataset layout" in bad["error"]
     assert run.records["loop_30/orb/seed0"]["status"] == "ok"
     assert (tmp_path / "out" / "cells" / "broken" / "orb" / "seed0.json").is_file()
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_timed_out_cell_is_reported(sweeps, tmp_path: Path, workers: int) -> None:
+    _, root, _, _ = sweeps
+    path = _spec(tmp_path, """
+seeds: [0]
+timeout_s: 0.3
+sequences:
+  loop_30: {sim: {preset: loop, frames: 30, light: 1.0, lidar: false}}
+configurations:
+  orb_lines: {point_frontend: orb}
+""")
+    run = run_bench(load_spec(path), tmp_path / "out", workers=workers,
+                    data_dir=root / "inputs", progress=False)
+    record = run.records["loop_30/orb_lines/seed0"]
+    assert record["status"] == "timeout" and "timeout of 0.3 s" in record["error"]
+    assert run.failed == ["loop_30/orb_lines/seed0"]
+
+
+def test_interrupt_keeps_finished_cells(sweeps, tmp_path: Path) -> None:
+    """SIGINT to `slslam bench --workers 1` after the first cell: that cell's record stays, the
+    summary says what is missing, the exit code is 128 + SIGINT, and a rerun completes it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    _, root, _, _ = sweeps
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
+    command = [sys.executable, "-m", "slslam", "bench", str(SMOKE), "--workers", "1",
+               "--out", str(out), "--data-dir", str(root / "inputs"), "--no-plots"]
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    first = out / "cells" / "loop_30" / "orb_lines" / "seed0.json"
+    deadline = time.monotonic() + 120
+    while not first.is_file() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGINT, err
+    assert "stopped" in err and "Traceback" not in err
+    assert first.is_file()
+    info = __import__("json").loads((out / "bench.json").read_text())
+    assert "loop_30/orb_lines/seed0" in info["ran"] and info["not_run"]
+    again = run_bench(load_spec(SMOKE), out, workers=1, data_dir=root / "inputs",
+                      progress=False)
+    assert "loop_30/orb_lines/seed0" in again.cached and len(again.ran) == 4 - len(again.cached)

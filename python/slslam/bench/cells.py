@@ -21,9 +21,11 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 import os
 import signal
 import socket
+import sys
 import threading
 import time
 import traceback
@@ -39,6 +41,8 @@ from slslam.bench.inputs import ensure_simulated, sim_options
 from slslam.bench.keys import KEY_SCHEMA, digest, software, tree_fingerprint
 from slslam.bench.provenance import machine
 from slslam.bench.spec import ConfigSpec, Kind, Resources, SequenceSpec, Spec, SpecError
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,15 @@ def plan_cells(spec: Spec) -> list[Cell]:
     for config in spec.configurations:
         if config.kind == "visual":
             config_material = {"kind": "visual", "config": visual_config(spec, config)}
+            tracking = config_material["config"]["tracking"]
+            if not tracking["sequential"]:
+                # inline local mapping (the default) gives the same poses on every run and
+                # backend; on its own thread the keyframes depend on the threads' timing
+                log.warning(
+                    "configuration %s: local mapping on a thread of its own "
+                    "(tracking.sequential false): its cells' results can differ between runs",
+                    config.name,
+                )
         else:
             config_material = {"kind": "lidar", "options": lidar_options(config)}
         names = config.sequences or tuple(s.name for s in spec.sequences)
@@ -242,6 +255,14 @@ def _peak_memory_mib() -> float | None:
     except OSError:
         return None
     return None
+
+
+def _ray_node() -> str | None:
+    """The Ray node running this cell (None inline): which machine of a cluster it was."""
+    ray = sys.modules.get("ray")
+    if ray is None or not ray.is_initialized():
+        return None
+    return ray.get_runtime_context().get_node_id()
 
 
 def _one_line(exc: BaseException, limit: int = 500) -> str:
@@ -359,6 +380,7 @@ def execute_cell(cell: Cell, out: str | Path, data_dir: str | Path) -> dict[str,
         "host": socket.gethostname(),
         "pid": os.getpid(),
         "machine": machine(),
+        "ray_node": _ray_node(),
     }
     start = time.perf_counter()
     per_cell_memory = _reset_peak_memory()

@@ -144,7 +144,9 @@ def bench_report_command(
     out: OutOption = None,
     update: Annotated[
         list[Path] | None,
-        typer.Option(help="Rewrite the spec's marked block (<!-- slslam-bench:NAME begin/end -->)."),
+        typer.Option(
+            help="Rewrite the spec's marked block (<!-- slslam-bench:NAME begin/end -->)."
+        ),
     ] = None,
 ) -> None:
     """Print (or write into marked blocks) the summary of the spec's finished cells; runs
@@ -159,3 +161,30 @@ def bench_report_command(
         return
     for path in update:
         _update(parsed, out, spec, path)
+
+
+@bench_app.command("compare")
+def bench_compare_command(
+    a: Annotated[Path, typer.Argument(help="A results folder (--out of a sweep).")],
+    b: Annotated[Path, typer.Argument(help="Another results folder.")],
+) -> None:
+    """Check two sweeps' cells for equal results: same key, status, scores and trajectory bytes
+    (times and memory are left out). Exit code 1 when any shared cell differs."""
+    from slslam.bench.results import compare_results
+    from slslam.errors import InputError
+
+    for folder in (a, b):
+        if not (folder / "cells").is_dir():
+            raise InputError(folder, "not a results folder (no cells/ in it)")
+    found = compare_results(a, b)
+    say = Console()
+    say.print(
+        f"{len(found['same'])} cells identical, {len(found['different'])} different, "
+        f"{len(found['other_key'])} with another key, {len(found['only_a'])} only in {a}, "
+        f"{len(found['only_b'])} only in {b}",
+        soft_wrap=True,
+    )
+    for cell_id in found["different"]:
+        say.print(f"  different: {cell_id}")
+    if found["different"]:
+        raise typer.Exit(1)

@@ -362,3 +362,39 @@ def load_finished(spec: Spec, out: Path) -> BenchRun:
             run.records[cell.id] = record
             run.cached.append(cell.id)
     return run
+
+
+def deterministic_view(record: dict[str, Any]) -> dict[str, Any]:
+    """The part of a cell record that must not change between runs of the same cell: key,
+    status, scores and the trajectory's hash (not times, memory, hosts)."""
+    return {k: record.get(k) for k in ("key", "status", "result", "trajectory_sha256")}
+
+
+def compare_results(a: Path, b: Path) -> dict[str, list[str]]:
+    """Cells of two results folders side by side: ``same``, ``different`` (same key, other
+    scores or trajectory), ``other_key`` and ``only_a`` / ``only_b`` (cell ids)."""
+    from slslam.bench.runner import read_record
+
+    def records(root: Path) -> dict[str, dict[str, Any]]:
+        found = {}
+        for path in sorted((Path(root) / "cells").glob("*/*/seed*.json")):
+            record = read_record(path)
+            if record is not None:
+                found[str(path.relative_to(Path(root) / "cells").with_suffix(""))] = record
+        return found
+
+    ra, rb = records(a), records(b)
+    out: dict[str, list[str]] = {k: [] for k in ("same", "different", "other_key", "only_a",
+                                                  "only_b")}
+    for cell_id in sorted(set(ra) | set(rb)):
+        if cell_id not in rb:
+            out["only_a"].append(cell_id)
+        elif cell_id not in ra:
+            out["only_b"].append(cell_id)
+        elif ra[cell_id].get("key") != rb[cell_id].get("key"):
+            out["other_key"].append(cell_id)
+        elif deterministic_view(ra[cell_id]) == deterministic_view(rb[cell_id]):
+            out["same"].append(cell_id)
+        else:
+            out["different"].append(cell_id)
+    return out

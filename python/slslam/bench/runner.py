@@ -222,11 +222,10 @@ def _run_ray(
 
     started_here = _ray_init(address, workers, ray_temp_dir)
     remote = ray.remote(max_retries=0)(execute_cell)
-    shared = [
-        c for c in todo if not c.exclusive
-    ]  # submitted together: Ray queues them by their requests
+    shared = [c for c in todo if not c.exclusive]  # submitted together: Ray queues them
     alone = [c for c in todo if c.exclusive]
     pending: dict[Any, Cell] = {}
+    killed: set[Any] = set()  # tasks the driver cancelled past their deadline
 
     def submit(cell: Cell) -> None:
         ref = remote.options(
@@ -242,12 +241,14 @@ def _run_ray(
                 try:
                     record = ray.get(ref)
                 except Exception as exc:  # the worker died (a crash in the core) or was killed
-                    status = "timeout" if isinstance(exc, ray.exceptions.TaskCancelledError) else (
-                        "failed"
-                    )
-                    message = " ".join(str(exc).split())[:500] or type(exc).__name__
-                    if status == "timeout":
-                        message = f"killed {KILL_GRACE_S:g} s past its timeout of {cell.timeout_s:g} s"
+                    if ref in killed:
+                        status = "timeout"
+                        message = (
+                            f"killed {KILL_GRACE_S:g} s past its timeout of {cell.timeout_s:g} s"
+                        )
+                    else:
+                        status = "failed"
+                        message = " ".join(str(exc).split())[:500] or type(exc).__name__
                     record = _failure(cell, status, message)
                 save(cell, record)
                 bar.done(record)
@@ -258,8 +259,9 @@ def _run_ray(
                 if began is None:
                     continue
                 running += 1
-                if now - began > cell.timeout_s + KILL_GRACE_S:
+                if now - began > cell.timeout_s + KILL_GRACE_S and ref not in killed:
                     ray.cancel(ref, force=True)
+                    killed.add(ref)
             bar.set_running(running)
 
     try:

@@ -2,9 +2,12 @@
 
     name: recovery                   # optional, default: the file's stem
     description: what the sweep measures
-    seeds: [0, 1, 2]                 # simulator seeds (simulated sequences run once per seed)
+    seeds: [0, 1, 2]                 # simulator seeds: each simulated sequence runs once per
+                                     # seed; a recorded one once (seed 0) unless it lists seeds:
     timeout_s: 1800                  # per cell [s]; a cell over it is reported as failed
-    resources: {cpus: 1, gpus: 0}    # Ray request of each cell (a configuration may override)
+    resources: {cpus: 1, gpus: 0}    # Ray request of each cell (a configuration may override;
+                                     # gpus: onnxruntime's CUDA provider, which the front ends'
+                                     # providers: auto pick when Ray gives the task a GPU)
     report: [ate, rpe, posed_ratio, maps, fps, memory]   # columns of the summary table
     sequences:
       loop_dark:                     # a simulated sequence: SimOptions fields (slslam sim)
@@ -16,8 +19,8 @@
         path: run.bag
         left: /cam0/image_raw
         right: /cam1/image_raw
-        calib: [kalibr.yaml]
-    configurations:
+        calib: [kalibr.yaml]         # (LiDAR runs: lidar: and imu: topics, default: the only
+    configurations:                  #  PointCloud2 / Imu topic of the bag)
       orb_lines:
         label: ORB + lines           # shown in the tables (default: the name)
         point_frontend: orb          # the front end, with its preset (as slslam run --orb)
@@ -25,7 +28,9 @@
         overlay: {tracking: {use_lines: true}}   # ... then these keys over it ...
         set: [tracking.imu.enabled=false]        # ... then KEY=VALUE flags over both
         sequences: [loop_dark]       # optional: only these sequences
-        exclusive: true              # timing cells: run alone on the machine
+        exclusive: true              # timing cells: run after the others, one at a time
+        resources: {cpus: 2}         # this configuration's Ray request
+        timeout_s: 600
       lidar:
         kind: lidar                  # the LiDAR pipeline (slslam lidar run)
         lidar: {loop_closure: false, imu: true, deskew: true, map_voxel_m: 0.1}
@@ -39,8 +44,6 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
-
-import yaml
 
 from slslam.errors import InputError
 from slslam.yaml_io import short_repr
@@ -226,9 +229,8 @@ def _sim_options(reader: _Reader) -> dict[str, Any]:
     from slslam.sim import SimOptions
 
     defaults = SimOptions()
-    allowed = sorted(
-        f.name for f in dataclasses.fields(SimOptions) if f.name not in ("section", "camera", "seed")
-    )
+    nested = ("section", "camera", "seed")  # the geometry stays default; the seed is the cell's
+    allowed = sorted(f.name for f in dataclasses.fields(SimOptions) if f.name not in nested)
     options: dict[str, Any] = {}
     for key, value in reader.data.items():
         if key == "seed":
@@ -258,7 +260,7 @@ def _sim_options(reader: _Reader) -> dict[str, Any]:
 
 
 def _sequence(reader: _Reader, name: str, base: Path) -> SequenceSpec:
-    reader.only({"sim", "path", "max_frames", "seeds", "left", "right", "imu", "calib"})
+    reader.only({"sim", "path", "max_frames", "seeds", "left", "right", "imu", "lidar", "calib"})
     max_frames = reader.get("max_frames", int)
     if max_frames is not None and max_frames < 2:
         reader.fail(f"must be >= 2, got {max_frames}", "max_frames")
@@ -268,17 +270,19 @@ def _sequence(reader: _Reader, name: str, base: Path) -> SequenceSpec:
         reader.fail("give exactly one of sim: (simulator options) and path: (a recorded sequence)")
     topics: dict[str, Any] = {}
     if has_sim:
-        for key in ("left", "right", "imu", "calib"):
+        for key in ("left", "right", "imu", "lidar", "calib"):
             if key in reader.data:
                 reader.fail("only for a recorded ROS bag (path:)", key)
-        return SequenceSpec(name, sim=_sim_options(reader.sub("sim")), max_frames=max_frames,
-                            seeds=seeds)
+        sim = _sim_options(reader.sub("sim"))
+        return SequenceSpec(name, sim=sim, max_frames=max_frames, seeds=seeds)
     raw = reader.get("path", str)
     path = Path(raw).expanduser()
     path = (path if path.is_absolute() else base / path).resolve()
-    for key in ("left", "right", "imu"):
+    for key in ("left", "right", "imu", "lidar"):
         if key in reader.data:
             topics[key] = reader.get(key, str)
+    if ("left" in topics) != ("right" in topics):
+        reader.fail("a ROS bag's visual runs need both left: and right: image topics")
     if "calib" in reader.data:
         calib = reader.data["calib"]
         calib = [calib] if isinstance(calib, str) else calib
@@ -415,7 +419,3 @@ def load_spec(path: str | Path) -> Spec:
         raise SpecError(path, "spec file not found")
     return parse_spec(read_yaml(path, SpecError), path)
 
-
-def dump_overlay(overlay: dict[str, Any]) -> str:
-    """An overlay mapping as YAML text (for messages and the cell records)."""
-    return yaml.safe_dump(overlay, sort_keys=True)
