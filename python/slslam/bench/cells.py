@@ -39,7 +39,7 @@ import yaml
 
 from slslam.bench.inputs import ensure_simulated, sim_options
 from slslam.bench.keys import KEY_SCHEMA, digest, software, tree_fingerprint
-from slslam.bench.provenance import machine
+from slslam.bench.provenance import git_commit, machine
 from slslam.bench.spec import ConfigSpec, Kind, Resources, SequenceSpec, Spec, SpecError
 
 log = logging.getLogger(__name__)
@@ -257,6 +257,14 @@ def _peak_memory_mib() -> float | None:
     return None
 
 
+def _checkout() -> str:
+    """The commit of the slslam source this process runs (a checkout's ``git describe
+    --dirty``; an installed package: its core's build commit)."""
+    import slslam
+
+    return git_commit(Path(slslam.__file__).parent)
+
+
 def _ray_node() -> str | None:
     """The Ray node running this cell (None inline): which machine of a cluster it was."""
     ray = sys.modules.get("ray")
@@ -421,6 +429,9 @@ def execute_cell(cell: Cell, out: str | Path, data_dir: str | Path) -> dict[str,
     measurements["peak_rss_mib"] = peak
     measurements["memory_scope"] = "cell" if per_cell_memory else "process"
     measurements["finished_unix"] = time.time()
+    # the machine's 1-minute load average at the end: other jobs slow frames/s down
+    measurements["load_1min"] = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    measurements["slslam_checkout"] = _checkout()
     record["measurements"] = measurements
     record["material"] = cell.material
     return record
