@@ -249,3 +249,23 @@ def test_interrupt_keeps_finished_cells(sweeps, tmp_path: Path) -> None:
     again = run_bench(load_spec(SMOKE), out, workers=1, data_dir=root / "inputs",
                       progress=False)
     assert "loop_30/orb_lines/seed0" in again.cached and len(again.ran) == 4 - len(again.cached)
+
+
+def test_lidar_cell(tmp_path: Path) -> None:
+    """A LiDAR configuration runs the LiDAR pipeline on a simulated LiDAR + IMU sequence."""
+    import slslam.lidar
+
+    if not slslam.lidar.available():
+        pytest.skip("slslam._core was built without PCL: no LiDAR pipeline")
+    path = _spec(tmp_path, """
+seeds: [0]
+sequences:
+  straight: {sim: {preset: straight, frames: 40, cameras: false, lidar: true}}
+configurations:
+  lidar_odometry: {kind: lidar, lidar: {loop_closure: false}}
+""")
+    run = run_bench(load_spec(path), tmp_path / "out", workers=1, progress=False)
+    record = run.records["straight/lidar_odometry/seed0"]
+    assert record["status"] == "ok", record.get("error")
+    assert record["result"]["frames"] == 20 and record["result"]["ate_rmse_m"] < 1.0
+    assert record["trajectory_sha256"] is not None
