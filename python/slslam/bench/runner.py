@@ -134,6 +134,22 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """SIGINT and SIGTERM ignored for the duration (main thread only): clean-up that must end."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
 def _failure(cell: Cell, status: str, error: str) -> dict[str, Any]:
     """The record of a cell whose task did not return one (a crashed or killed worker)."""
     return {
@@ -265,19 +281,25 @@ def _run_ray(
             bar.set_running(running)
 
     try:
-        for cell in shared:
-            submit(cell)
-        drain()
-        for cell in alone:
-            submit(cell)
+        with _sigterm_as_interrupt():  # over the handler ray.init installs in the driver
+            for cell in shared:
+                submit(cell)
             drain()
+            for cell in alone:
+                submit(cell)
+                drain()
     except KeyboardInterrupt as exc:
-        for ref in pending:
-            ray.cancel(ref, force=False)  # KeyboardInterrupt in the task: it stops its run
+        with _signals_held():  # a second Ctrl-C does not cut the clean-up short
+            for ref in pending:
+                try:
+                    ray.cancel(ref, force=False)  # KeyboardInterrupt in the task: it stops
+                except Exception as cancel_error:  # a task that finished meanwhile
+                    log.debug("cancel: %s", cancel_error)
         raise BenchInterrupted(getattr(exc, "signum", signal.SIGINT)) from None
     finally:
         if started_here:
-            ray.shutdown()
+            with _signals_held():
+                ray.shutdown()
 
 
 def run_bench(
@@ -333,11 +355,13 @@ def run_bench(
                 _run_inline(todo, out, data_dir, save, bar)
             elif todo:
                 _run_ray(todo, out, data_dir, save, bar, address, workers, ray_temp_dir)
-    except BenchInterrupted:
+    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM) anywhere in the sweep
+        stop = exc if isinstance(exc, BenchInterrupted) else BenchInterrupted(signal.SIGINT)
         run.wall_s = time.perf_counter() - start
         if on_done is not None:
-            on_done(run)
-        raise
+            with _signals_held():  # the pages of the finished cells are written whole
+                on_done(run)
+        raise stop from None
     finally:
         bar.close()
     run.wall_s = time.perf_counter() - start
