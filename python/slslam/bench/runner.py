@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import shutil
 import signal
 import tempfile
 import time
@@ -192,9 +193,11 @@ def _started_at(cell: Cell, out: Path) -> float | None:
         return None
 
 
-def _ray_init(address: str | None, workers: int | None, temp_dir: str | None) -> bool:
-    """Starts or joins Ray unless this process already did; True when this call started it
-    (and so shuts it down)."""
+def _ray_init(
+    address: str | None, workers: int | None, temp_dir: str | None
+) -> tuple[bool, str | None]:
+    """Starts or joins Ray unless this process already did: (whether this call started it, and
+    so shuts it down; the session folder it made, removed afterwards)."""
     try:
         import ray
     except ImportError:
@@ -204,7 +207,7 @@ def _ray_init(address: str | None, workers: int | None, temp_dir: str | None) ->
             "inline with --workers 1",
         ) from None
     if ray.is_initialized():
-        return False
+        return False, None
     kwargs: dict[str, Any] = {
         "include_dashboard": False,
         "log_to_driver": False,
@@ -217,11 +220,13 @@ def _ray_init(address: str | None, workers: int | None, temp_dir: str | None) ->
         kwargs["address"] = address
         if env:
             kwargs["runtime_env"] = {"env_vars": env}
-    else:
+    made = None
+    if not address:
         kwargs["num_cpus"] = workers or os.cpu_count() or 1
-        kwargs["_temp_dir"] = temp_dir or tempfile.mkdtemp(prefix="slslam-ray-")
+        made = None if temp_dir else tempfile.mkdtemp(prefix="slslam-ray-")
+        kwargs["_temp_dir"] = temp_dir or made
     ray.init(**kwargs)
-    return True
+    return True, made
 
 
 def _run_ray(
@@ -236,7 +241,7 @@ def _run_ray(
 ) -> None:
     import ray
 
-    started_here = _ray_init(address, workers, ray_temp_dir)
+    started_here, session_dir = _ray_init(address, workers, ray_temp_dir)
     remote = ray.remote(max_retries=0)(execute_cell)
     shared = [c for c in todo if not c.exclusive]  # submitted together: Ray queues them
     alone = [c for c in todo if c.exclusive]
@@ -300,6 +305,8 @@ def _run_ray(
         if started_here:
             with _signals_held():
                 ray.shutdown()
+                if session_dir is not None:  # Ray's logs and sockets of this sweep
+                    shutil.rmtree(session_dir, ignore_errors=True)
 
 
 def run_bench(
