@@ -714,6 +714,10 @@ from slslam.lidar.cli import lidar_app  # noqa: E402  (its own module: the LiDAR
 
 app.add_typer(lidar_app, name="lidar")
 
+from slslam.bench.cli import bench_app  # noqa: E402  (its own module: batch evaluation)
+
+app.add_typer(bench_app, name="bench")
+
 
 @vocab_app.command("train")
 def vocab_train_command(
