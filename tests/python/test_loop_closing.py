@@ -95,6 +95,32 @@ def test_a_map_with_other_line_descriptors_is_refused(loop_run, small_loop, tmp_
         )
 
 
+def test_a_map_loads_only_with_the_vocabulary_it_was_made_with(loop_run, small_loop, tmp_path):
+    """The map file stores its vocabulary's identity (file name and checksum): another ORB
+    vocabulary is refused with the reason, the map's own loads."""
+    from slslam import _core
+    from slslam.place import Vocabulary, VocabularyOptions
+
+    out, _ = loop_run
+    header = _core.read_map_file_header(str(out / "atlas.slmap"))
+    assert header["vocabulary"].startswith("orb_vocabulary.slvoc@")
+    assert len(header["vocabulary"].split("@")[1]) == 16
+    rng = np.random.default_rng(0)
+    images = [rng.integers(0, 256, size=(200, 32), dtype=np.uint8) for _ in range(8)]
+    other = tmp_path / "other.slvoc"
+    Vocabulary.train(images, VocabularyOptions(branching=4, levels=2)).save(other)
+    config = config_from_dict({"tracking": {"vocabulary_path": str(other)}})
+    with pytest.raises(InputError, match=r"atlas\.slmap: the map was made with the vocabulary "):
+        run_sequence(
+            small_loop,
+            tmp_path / "a",
+            config,
+            max_frames=2,
+            progress=False,
+            load_map=out / "atlas.slmap",
+        )
+
+
 def test_bad_map_files_are_clear_errors(small_loop, tmp_path):
     broken = tmp_path / "broken.slmap"
     broken.write_bytes(b"not a map at all")

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <set>
 
@@ -145,6 +146,13 @@ Front ReadFront(ByteReader* in, uint32_t version, const Where& where) {
   if (f.ids.next_keyframe < 0 || f.ids.next_point < 0 || f.ids.next_line < 0) {
     where.Fail("negative id counters (", f.ids.next_keyframe, ", ", f.ids.next_point, ", ",
                f.ids.next_line, ")");
+  }
+  constexpr int kMaxNextId = std::numeric_limits<int>::max() - map_io_detail::kIdHeadroom;
+  if (f.ids.next_keyframe > kMaxNextId || f.ids.next_point > kMaxNextId ||
+      f.ids.next_line > kMaxNextId) {
+    where.Fail("id counters (", f.ids.next_keyframe, ", ", f.ids.next_point, ", ",
+               f.ids.next_line, ") leave fewer than ", map_io_detail::kIdHeadroom,
+               " new ids before int32 overflow (at most ", kMaxNextId, ")");
   }
   f.table.resize(in->Count(kTableEntryBytes, "map count"));
   uint64_t total = 0;

@@ -17,6 +17,10 @@ constexpr int kMaxOctave = 64;               // pyramid levels [-]
 constexpr double kRotationTolerance = 1e-6;
 
 bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+// Finite and within kMaxCoordinateM of the origin in every coordinate.
+bool Plausible(const Eigen::Vector3d& v) {
+  return v.allFinite() && v.cwiseAbs().maxCoeff() <= kMaxCoordinateM;
+}
 
 bool IsRotation(const Eigen::Matrix3d& R) {
   if (!R.allFinite()) return false;
@@ -56,7 +60,10 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
   const int n = f.NumKeypoints();
   const Keypoints& k = f.keypoints;
   if (f.index < 0) where.Fail("keyframe ", kf, ": frame index ", f.index, " is negative");
-  if (!std::isfinite(f.timestamp)) where.Fail("keyframe ", kf, ": frame timestamp is not finite");
+  if (!(std::abs(f.timestamp) <= kMaxTimestampS)) {
+    where.Fail("keyframe ", kf, ": frame timestamp ", f.timestamp, " s is not finite or beyond ",
+               kMaxTimestampS, " s (int64 nanoseconds)");
+  }
   if (!k.uv.allFinite()) where.Fail("keyframe ", kf, ": a keypoint position is not finite");
   if ((k.score.size() != n && k.score.size() != 0) || !k.score.allFinite()) {
     where.Fail("keyframe ", kf, ": ", k.score.size(), " keypoint scores (finite) for ", n,
@@ -104,8 +111,9 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
 void CheckKeyFrame(const KeyFrame& kf, const MapContent& c, const MapFileHeader& header,
                    const Where& where) {
   const int id = kf.id;
-  if (!IsRotation(kf.cam_from_world.rotation) || !Finite(kf.cam_from_world.translation)) {
-    where.Fail("keyframe ", id, ": pose is not finite or its rotation is not orthonormal");
+  if (!IsRotation(kf.cam_from_world.rotation) || !Plausible(kf.cam_from_world.translation)) {
+    where.Fail("keyframe ", id, ": pose is not finite, beyond ", kMaxCoordinateM,
+               " m, or its rotation is not orthonormal");
   }
   if (kf.frame == nullptr) where.Fail("keyframe ", id, ": no frame");
   CheckFrame(*kf.frame, header, where, id);
@@ -151,7 +159,7 @@ void CheckRetired(int id, const RetiredKeyFrame& r, const MapContent& c, const W
       (r.parent == id || (!c.keyframes.count(r.parent) && !c.retired.count(r.parent)))) {
     where.Fail("culled keyframe ", id, ": parent ", r.parent, " is not a keyframe of the map");
   }
-  if (!IsRotation(r.kf_from_parent.rotation) || !Finite(r.kf_from_parent.translation)) {
+  if (!IsRotation(r.kf_from_parent.rotation) || !Plausible(r.kf_from_parent.translation)) {
     where.Fail("culled keyframe ", id, ": relative pose is not finite or not a rotation");
   }
 }
@@ -186,16 +194,19 @@ void CheckLandmarkCommon(const Landmark& l, const MapContent& c, const MapIds& i
 
 void CheckPoint(const MapPoint& p, const MapContent& c, const MapFileHeader& header,
                 const MapIds& ids, const Where& where) {
-  if (!Finite(p.position)) where.Fail("point ", p.id, ": position is not finite");
+  if (!Plausible(p.position)) {
+    where.Fail("point ", p.id, ": position is not finite or beyond ", kMaxCoordinateM, " m");
+  }
   CheckDescriptorType(p.descriptor, header, where, "point", p.id);
   CheckLandmarkCommon(p, c, ids, where, "point",
                       [](const StereoFrame& f) { return f.NumKeypoints(); });
 }
 
 void CheckLine(const MapLine& l, const MapContent& c, const MapIds& ids, const Where& where) {
-  if (!Finite(l.line.n) || !Finite(l.line.v) || l.line.v.norm() == 0.0 || !Finite(l.start) ||
-      !Finite(l.end)) {
-    where.Fail("line ", l.id, ": not finite, or no direction");
+  if (!Finite(l.line.n) || !Finite(l.line.v) || l.line.v.norm() == 0.0 || !Plausible(l.start) ||
+      !Plausible(l.end)) {
+    where.Fail("line ", l.id, ": not finite, endpoints beyond ", kMaxCoordinateM,
+               " m, or no direction");
   }
   CheckMatrix(l.descriptor, where, "line", l.id);
   CheckLandmarkCommon(l, c, ids, where, "line", [](const StereoFrame& f) { return f.NumLines(); });

@@ -49,6 +49,12 @@ class Where {
 
 constexpr size_t kMaxVersionBytes = 256;  // header string limits [bytes]
 constexpr size_t kMaxVocabularyBytes = 4096;
+// Plausibility bounds of a map's records (a damaged or crafted file goes beyond them):
+// keyframe times within int64 nanoseconds [s], positions within 10,000 km of the origin [m].
+constexpr double kMaxTimestampS = 9.2e9;
+constexpr double kMaxCoordinateM = 1e7;
+// Id counters leave this many new ids to the run that loads the file, so ids never overflow.
+constexpr int kIdHeadroom = 1 << 24;
 
 // OpenCV matrices a map file may hold: two-dimensional, depths CV_8U..CV_16F, 1 to 4 channels.
 constexpr int kMaxMatDepth = CV_16F;

@@ -51,6 +51,10 @@ class Vocabulary {
   // Writes path + ".partial" then renames it to path, so readers never see half a file.
   // Throws std::invalid_argument naming the path when it cannot be written.
   void Save(const std::string& path) const;
+  // The checksum its file holds (FNV-1a 64 of the file's bytes before it), the same for the
+  // vocabulary loaded and for the one trained and saved; 0 for an empty vocabulary. Map files
+  // store it, and a map loads only with the vocabulary it was made with.
+  uint64_t Checksum() const;
 
   bool empty() const { return num_nodes() == 0; }
   int num_words() const { return static_cast<int>(node_of_word_.size()); }

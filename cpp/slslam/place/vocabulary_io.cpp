@@ -42,17 +42,22 @@ constexpr uint32_t kMaxCols = 1 << 16;  // far beyond any descriptor; guards the
 
 }  // namespace
 
+// Largest IDF weight a word can have: log(N / n) with N images counted in 64 bits is below
+// ln(2^64) = 44.4; a file holding more was not written by training [-].
+constexpr double kMaxWordWeight = 64.0;
+
 class VocabularyFile {
  public:
   static void Write(const Vocabulary& v, const std::string& path);
   static Vocabulary Read(const std::string& path);
+  // The file's bytes without the checksum, and their checksum.
+  static ByteWriter Serialize(const Vocabulary& v);
 
  private:
   static void CheckTree(const Vocabulary& v, const std::string& path);
 };
 
-void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
-  SLSLAM_CHECK(!v.empty(), path, ": cannot save an empty vocabulary");
+ByteWriter VocabularyFile::Serialize(const Vocabulary& v) {
   const bool binary = v.descriptor_type_ == CV_8U;
   ByteWriter out;
   out.Bytes(kMagic, sizeof(kMagic));
@@ -76,6 +81,12 @@ void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
       for (int i = 0; i < v.cols_; ++i) out.F32(v.float_[static_cast<size_t>(n) * v.cols_ + i]);
     }
   }
+  return out;
+}
+
+void VocabularyFile::Write(const Vocabulary& v, const std::string& path) {
+  SLSLAM_CHECK(!v.empty(), path, ": cannot save an empty vocabulary");
+  ByteWriter out = Serialize(v);
   out.U64(Fnv1a64(out.buffer().data(), out.buffer().size()));
 
   const std::string partial = path + ".partial";
@@ -102,6 +113,10 @@ Vocabulary VocabularyFile::Read(const std::string& path) {
   };
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) fail("is a folder, not a vocabulary file");
+  // A FIFO or a device would block or never end: only regular files are read.
+  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)) {
+    fail("is not a regular file (a FIFO, device or socket), not a vocabulary file");
+  }
   std::ifstream file(path, std::ios::binary);
   if (!file.is_open()) fail("cannot open the vocabulary file (missing or unreadable)");
   const std::vector<uint8_t> data((std::istreambuf_iterator<char>(file)),
@@ -217,8 +232,9 @@ void VocabularyFile::CheckTree(const Vocabulary& v, const std::string& path) {
       fail(Message("leaf ", i, " has word id ", w, ": not unique in [0, ", leaves, ")"));
     }
     seen[w] = true;
-    if (!std::isfinite(v.weight_[i]) || v.weight_[i] < 0.0) {
-      fail(Message("word ", w, " has weight ", v.weight_[i], " (must be finite and >= 0)"));
+    if (!(v.weight_[i] >= 0.0 && v.weight_[i] <= kMaxWordWeight)) {
+      fail(Message("word ", w, " has weight ", v.weight_[i], " (an IDF weight is in [0, ",
+                   kMaxWordWeight, "])"));
     }
   }
   for (const float value : v.float_) {
@@ -229,5 +245,11 @@ void VocabularyFile::CheckTree(const Vocabulary& v, const std::string& path) {
 Vocabulary Vocabulary::Load(const std::string& path) { return VocabularyFile::Read(path); }
 
 void Vocabulary::Save(const std::string& path) const { VocabularyFile::Write(*this, path); }
+
+uint64_t Vocabulary::Checksum() const {
+  if (empty()) return 0;
+  ByteWriter out = VocabularyFile::Serialize(*this);
+  return Fnv1a64(out.buffer().data(), out.buffer().size());
+}
 
 }  // namespace slslam

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "slslam/core/check.h"
@@ -11,13 +12,35 @@
 
 namespace slslam {
 
+namespace {
+
+// The map header's vocabulary: "<file name>@<checksum, 16 hex digits>". The file name, not the
+// path: the same vocabulary sits elsewhere on another machine; the checksum tells whether it is
+// the same vocabulary (Vocabulary::Checksum).
+std::string VocabularyIdentity(const std::string& path, const Vocabulary* vocabulary) {
+  std::string name = std::filesystem::path(path).filename().string();
+  if (vocabulary == nullptr || vocabulary->empty()) return name;
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016llx",
+                static_cast<unsigned long long>(vocabulary->Checksum()));
+  return name + "@" + hex;
+}
+
+// The checksum part of a header's vocabulary identity; empty when the file holds none (a file
+// written before identities held checksums, or by a run without a vocabulary).
+std::string ChecksumOf(const std::string& identity) {
+  const size_t at = identity.rfind('@');
+  return at == std::string::npos ? std::string() : identity.substr(at + 1);
+}
+
+}  // namespace
+
 void Tracker::SaveMap(const std::string& path, const std::string& version) {
   Flush();
   MapFileHeader header;
   header.slslam_version = version;
   header.rig = options_.rig;
-  // The file name, not the path: the same vocabulary sits elsewhere on another machine.
-  header.vocabulary = std::filesystem::path(options_.vocabulary_path).filename().string();
+  header.vocabulary = VocabularyIdentity(options_.vocabulary_path, vocabulary_.get());
   header.line_descriptor = options_.line_descriptor;
   std::vector<const Map*> maps;
   std::vector<std::unique_lock<Mutex>> locks;
@@ -62,6 +85,15 @@ void Tracker::LoadMap(const std::string& path) {
                a.fx, ", baseline ", loaded.header.rig.baseline_m, " m; this run: ", b.width, "x",
                b.height, ", fx ", b.fx, ", baseline ", options_.rig.baseline_m, " m)");
   SLSLAM_CHECK(!loaded.maps.empty(), path, ": the file holds no map");
+  // Keyframes' bag-of-words vectors and relocalisation compare words of one vocabulary only.
+  const std::string saved = ChecksumOf(loaded.header.vocabulary);
+  const std::string current = ChecksumOf(VocabularyIdentity(options_.vocabulary_path,
+                                                            vocabulary_.get()));
+  SLSLAM_CHECK(saved.empty() || saved == current, path, ": the map was made with the vocabulary ",
+               loaded.header.vocabulary, " and this run loads another (",
+               VocabularyIdentity(options_.vocabulary_path, vocabulary_.get()),
+               "); its keyframes' words would not compare: give the run the map's vocabulary "
+               "(tracking.vocabulary_path)");
   SLSLAM_CHECK(loaded.header.line_descriptor == options_.line_descriptor, path,
                ": the map's lines carry ", LineDescriptorName(loaded.header.line_descriptor),
                " descriptors and this run computes ", LineDescriptorName(options_.line_descriptor),

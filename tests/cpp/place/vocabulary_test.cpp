@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -12,8 +13,10 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include "slslam/core/byte_io.h"
 #include "synthetic_descriptors.h"
 
 namespace slslam {
@@ -247,6 +250,16 @@ TEST(Vocabulary, SaveLoadRoundTripGivesIdenticalTransforms) {
     const std::string again = TempPath("roundtrip_again.slvoc");
     loaded.Save(again);
     EXPECT_EQ(ReadBytes(path), ReadBytes(again));
+    // The identity map files store: the file's own checksum, for the trained and the loaded one.
+    const std::vector<uint8_t> bytes = ReadBytes(path);
+    uint64_t stored = 0;
+    for (int b = 7; b >= 0; --b) stored = (stored << 8) | bytes[bytes.size() - 8 + b];
+    EXPECT_NE(trained.Checksum(), 0u);
+    EXPECT_EQ(trained.Checksum(), stored);
+    EXPECT_EQ(loaded.Checksum(), stored);
+    VocabularyOptions other = options;
+    other.seed = 7;
+    EXPECT_NE(Vocabulary::Train(images, other).Checksum(), trained.Checksum());
     std::remove(path.c_str());
     std::remove(again.c_str());
   }
@@ -313,6 +326,33 @@ TEST_F(VocabularyFileDefects, FutureVersionIsRejected) {
   std::vector<uint8_t> bad = bytes_;
   bad[8] = 99;  // format version, little-endian uint32 at offset 8
   EXPECT_NE(LoadError(bad).find("newer"), std::string::npos);
+}
+
+TEST_F(VocabularyFileDefects, ImplausibleWordWeightIsRejectedEvenWithAValidChecksum) {
+  // The last node is a leaf: its weight (f64 after parent and word, i32 each) set to 1e80, and
+  // the checksum recomputed, as a file written by other code could hold.
+  std::vector<uint8_t> bad = bytes_;
+  const size_t node_bytes = 16 + 32;
+  const size_t weight_at = bad.size() - 8 - node_bytes + 8;
+  const double weight = 1e80;
+  std::memcpy(bad.data() + weight_at, &weight, sizeof(weight));
+  const uint64_t sum = Fnv1a64(bad.data(), bad.size() - 8);
+  for (int b = 0; b < 8; ++b) bad[bad.size() - 8 + b] = static_cast<uint8_t>(sum >> (8 * b));
+  EXPECT_NE(LoadError(bad).find("an IDF weight is in [0, 64]"), std::string::npos)
+      << LoadError(bad);
+}
+
+TEST_F(VocabularyFileDefects, FifoIsRefusedWithoutReading) {
+  const std::string fifo = TempPath("vocabulary.fifo");
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    Vocabulary::Load(fifo);  // would block forever in open() if it were read
+    FAIL() << "a FIFO loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  std::remove(fifo.c_str());
 }
 
 TEST_F(VocabularyFileDefects, MissingFileNamesThePath) {
