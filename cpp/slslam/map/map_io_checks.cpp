@@ -64,7 +64,10 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
     where.Fail("keyframe ", kf, ": frame timestamp ", f.timestamp, " s is not finite or beyond ",
                kMaxTimestampS, " s (int64 nanoseconds)");
   }
-  if (!k.uv.allFinite()) where.Fail("keyframe ", kf, ": a keypoint position is not finite");
+  if (!k.uv.allFinite() || (k.uv.size() > 0 && k.uv.cwiseAbs().maxCoeff() > kMaxImageCoordinatePx)) {
+    where.Fail("keyframe ", kf, ": a keypoint position is not finite or beyond ",
+               kMaxImageCoordinatePx, " px");
+  }
   if ((k.score.size() != n && k.score.size() != 0) || !k.score.allFinite()) {
     where.Fail("keyframe ", kf, ": ", k.score.size(), " keypoint scores (finite) for ", n,
                " keypoints");
@@ -88,6 +91,13 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
   if (!AllFinite(f.u_right) || !AllFinite(f.depth)) {
     where.Fail("keyframe ", kf, ": a right column or depth is not finite");
   }
+  for (const double d : f.depth) {
+    // a stereo depth [m], or -1 for a keypoint without one
+    if (!(d == -1.0 || (d > 0.0 && d <= kMaxCoordinateM))) {
+      where.Fail("keyframe ", kf, ": depth ", d, " m is neither -1 (none) nor in (0, ",
+                 kMaxCoordinateM, "]");
+    }
+  }
   const size_t m = f.lines.size();
   for (const LineSegment& s : f.lines) {
     if (!s.start.allFinite() || !s.end.allFinite()) {
@@ -102,8 +112,9 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
                " depth flags for ", m, " segments");
   }
   for (const auto& ends : f.line_endpoints) {
-    if (!Finite(ends[0]) || !Finite(ends[1])) {
-      where.Fail("keyframe ", kf, ": a stereo line endpoint is not finite");
+    if (!Plausible(ends[0]) || !Plausible(ends[1])) {
+      where.Fail("keyframe ", kf, ": a stereo line endpoint is not finite or beyond ",
+                 kMaxCoordinateM, " m");
     }
   }
 }
@@ -140,8 +151,10 @@ void CheckKeyFrame(const KeyFrame& kf, const MapContent& c, const MapFileHeader&
     if (l != -1 && !c.lines.count(l)) where.Fail("keyframe ", id, ": unknown line id ", l);
   }
   for (const auto& [word, weight] : kf.bow) {
-    if (!std::isfinite(weight) || weight < 0.0) {
-      where.Fail("keyframe ", id, ": word ", word, " has weight ", weight);
+    // an L1-normalised bag of words: each weight in [0, 1]
+    if (!(weight >= 0.0 && weight <= 1.0 + 1e-9)) {
+      where.Fail("keyframe ", id, ": word ", word, " has weight ", weight,
+                 " (an L1-normalised bag of words holds weights in [0, 1])");
     }
   }
   for (const auto& [node, keypoints] : kf.bow_features) {

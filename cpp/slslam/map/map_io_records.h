@@ -53,6 +53,8 @@ constexpr size_t kMaxVocabularyBytes = 4096;
 // keyframe times within int64 nanoseconds [s], positions within 10,000 km of the origin [m].
 constexpr double kMaxTimestampS = 9.2e9;
 constexpr double kMaxCoordinateM = 1e7;
+// Keypoint positions within this many pixels of the image origin [px].
+constexpr double kMaxImageCoordinatePx = 1e6;
 // Id counters leave this many new ids to the run that loads the file, so ids never overflow.
 constexpr int kIdHeadroom = 1 << 24;
 
