@@ -157,8 +157,12 @@ def test_orb_is_the_default_front_end_with_its_preset():
     camera = RectifiedStereoCamera(458.0, 458.0, 376.0, 240.0, 752, 480, 0.11, np.eye(4))
     assert config.tracking.stereo_row_search and not Config().tracking.stereo_row_search
     assert _core_options(camera, config).stereo.row_search
+    # and dark frames through the gamma curve (features.low_light; none by default)
+    assert config.features.low_light.mode == "gamma" and Config().features.low_light.mode == "none"
+    assert default_config("xfeat").features.low_light.mode == "none"
     tracking = dataclasses.replace(config.tracking, stereo_row_search=False)
-    assert dataclasses.replace(config, tracking=tracking) == Config()
+    features = dataclasses.replace(config.features, low_light=Config().features.low_light)
+    assert dataclasses.replace(config, tracking=tracking, features=features) == Config()
 
 
 def test_xfeat_preset():
@@ -239,7 +243,11 @@ def test_front_end_presets_sit_under_the_configs_own_keys(tmp_path):
     orb = config_from_dict({"features": {"point_frontend": "orb"}})
     assert orb == default_config("orb")
     assert orb.tracking == dataclasses.replace(Config().tracking, stereo_row_search=True)
-    assert orb.features == dataclasses.replace(Config().features, point_frontend="orb")
+    assert orb.features == dataclasses.replace(
+        Config().features,
+        point_frontend="orb",
+        low_light=dataclasses.replace(Config().features.low_light, mode="gamma"),
+    )
     path.write_text("features:\n  point_frontend: xfeat\n")
     assert load_config(path, point_frontend="orb") == orb
     path.write_text("features:\n  point_frontend: orb\ntracking:\n  stereo_row_search: false\n")
