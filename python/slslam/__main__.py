@@ -3,9 +3,9 @@
 import sys
 
 try:
-    from slslam.cli import main
+    from slslam.cli import entry
 except KeyboardInterrupt:  # SIGINT while the modules load: one line, not a traceback
     sys.stderr.write("stopped: interrupted by SIGINT\n")
     sys.exit(130)
 
-sys.exit(main())
+entry()

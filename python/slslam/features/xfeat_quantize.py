@@ -117,6 +117,8 @@ def quantize_xfeat(
         def get_next(self):
             return next(self._it, None)
 
+    from slslam.files import copy_atomic
+
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -143,7 +145,7 @@ def quantize_xfeat(
             logging.getLogger().removeFilter(quiet)
         session = ort.InferenceSession(str(partial), providers=["CPUExecutionProvider"])
         validate_session(session, partial)
-        partial.replace(out)
+        copy_atomic(partial, out)  # the temporary folder may be on another file system
     return {
         "onnxruntime": ort.__version__,
         "source": f"{source.name} sha256 {sha256(source)}",

@@ -10,8 +10,12 @@
     <out>/groundtruth_cam0.tum, groundtruth_body.tum     the same ground truth in TUM format
     <out>/manifest.json                                  preset, seed, parameters, status
 
-Index files are appended row by row and flushed, so a run that stops midway leaves a readable
-sequence of the frames written so far.
+Every data file (image, scan, point times, sensor.yaml, the IMU and ground-truth tables, the
+manifest) is written under a temporary name and renamed when whole (:mod:`slslam.files`), so no
+file under its final name is ever truncated. Index files (data.csv, poses_kitti.txt, times.txt,
+groundtruth_cam0.tum) are appended one whole row per frame, after that frame's files are renamed,
+and flushed: a run that stops between frames leaves a readable sequence of the frames written
+so far, every row naming a complete file.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from slslam._version import __version__
+from slslam.files import atomic_output, write_text_atomic
 
 CAMERA_YAML = """%YAML:1.0
 # Simulated rectified camera written by slslam {version}.
@@ -117,10 +122,10 @@ class AslWriter:
         self._files[key].flush()
 
     def write_manifest(self, manifest: dict) -> None:
-        path = self.out / "manifest.json"
-        tmp = path.with_name("manifest.json.partial")
-        tmp.write_text(json.dumps({"slslam_version": __version__, **manifest}, indent=2) + "\n")
-        tmp.replace(path)
+        write_text_atomic(
+            self.out / "manifest.json",
+            json.dumps({"slslam_version": __version__, **manifest}, indent=2) + "\n",
+        )
 
     def write_calibration(
         self,
@@ -136,7 +141,8 @@ class AslWriter:
         for name, T in (("cam0", T_body_cam0), ("cam1", T_body_cam1)):
             if not (self.mav0 / name).is_dir():
                 continue
-            (self.mav0 / name / "sensor.yaml").write_text(
+            write_text_atomic(
+                self.mav0 / name / "sensor.yaml",
                 CAMERA_YAML.format(
                     version=__version__,
                     comment=f"slslam simulated {name}",
@@ -148,9 +154,10 @@ class AslWriter:
                     fy=camera.fx,
                     cx=camera.cx,
                     cy=camera.cy,
-                )
+                ),
             )
-        (self.mav0 / "imu0" / "sensor.yaml").write_text(
+        write_text_atomic(
+            self.mav0 / "imu0" / "sensor.yaml",
             IMU_YAML.format(
                 version=__version__,
                 comment="slslam simulated IMU",
@@ -159,10 +166,11 @@ class AslWriter:
                 grw=imu_noise.gyroscope_random_walk,
                 and_=imu_noise.accelerometer_noise_density,
                 arw=imu_noise.accelerometer_random_walk,
-            )
+            ),
         )
         if lidar is not None:
-            (self.mav0 / "lidar0" / "sensor.yaml").write_text(
+            write_text_atomic(
+                self.mav0 / "lidar0" / "sensor.yaml",
                 LIDAR_YAML.format(
                     version=__version__,
                     T=_flat(lidar.T_body_lidar),
@@ -170,13 +178,16 @@ class AslWriter:
                     beams=lidar.beams,
                     blocks=lidar.sweep_blocks,
                     period=1.0 / lidar_rate_hz,
-                )
+                ),
             )
 
     def write_stereo(self, t_ns: int, left: np.ndarray, right: np.ndarray, write_image) -> None:
-        """Write both images, then their index rows (an index row never names a missing file)."""
+        """Write both images (each renamed when whole), then their index rows (an index row
+        never names a missing or partial file)."""
         for key, image in (("cam0", left), ("cam1", right)):
-            write_image(str(self.mav0 / key / "data" / f"{t_ns}.png"), image)
+            # the temporary name keeps .png: the encoder picks the format by the suffix
+            with atomic_output(self.mav0 / key / "data" / f"{t_ns}.png", keep_suffix=True) as tmp:
+                write_image(str(tmp), image)
         for key in ("cam0", "cam1"):
             self._row(key, f"{t_ns},{t_ns}.png")
 
@@ -195,15 +206,20 @@ class AslWriter:
         """A sweep starting at t_ns: KITTI .bin points, their times after t_ns [s] (float32, same
         order) and the sensor pose at t_ns."""
         lidar0 = self.mav0 / "lidar0"
-        np.asarray(point_time_s, np.float32).tofile(lidar0 / "point_time" / f"{t_ns}.bin")
-        points.astype(np.float32).tofile(lidar0 / "data" / f"{t_ns}.bin")
+        with atomic_output(lidar0 / "point_time" / f"{t_ns}.bin") as tmp:
+            np.asarray(point_time_s, np.float32).tofile(tmp)
+        with atomic_output(lidar0 / "data" / f"{t_ns}.bin") as tmp:
+            points.astype(np.float32).tofile(tmp)
         self._row("lidar0", f"{t_ns},{t_ns}.bin")
         self._row("lidar_poses", " ".join(f"{v:.9e}" for v in T_world_lidar[:3].ravel()))
         self._row("lidar_times", f"{t_ns * 1e-9:.9f}")
 
     def write_imu(self, imu: dict[str, np.ndarray]) -> None:
         table = np.column_stack([imu["gyro"], imu["acc"]])
-        with (self.mav0 / "imu0" / "data.csv").open("w", encoding="utf-8") as f:
+        with (
+            atomic_output(self.mav0 / "imu0" / "data.csv") as tmp,
+            tmp.open("w", encoding="utf-8") as f,
+        ):
             f.write(
                 "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
                 "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"
@@ -218,7 +234,10 @@ class AslWriter:
         q = quat_wxyz(T_world_body[:, :3, :3])
         p = T_world_body[:, :3, 3]
         zeros = np.zeros((len(t_ns), 6))
-        with (self.mav0 / "state_groundtruth_estimate0" / "data.csv").open("w") as f:
+        with (
+            atomic_output(self.mav0 / "state_groundtruth_estimate0" / "data.csv") as tmp,
+            tmp.open("w", encoding="utf-8") as f,
+        ):
             f.write(
                 "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
                 "q_RS_y [], q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], "
@@ -228,7 +247,10 @@ class AslWriter:
             )
             for t, row in zip(t_ns, np.column_stack([p, q, velocity, zeros]), strict=True):
                 f.write(f"{t}," + ",".join(f"{v:.9f}" for v in row) + "\n")
-        with (self.out / "groundtruth_body.tum").open("w") as f:
+        with (
+            atomic_output(self.out / "groundtruth_body.tum") as tmp,
+            tmp.open("w", encoding="utf-8") as f,
+        ):
             f.write("# timestamp tx ty tz qx qy qz qw (T_world_body)\n")
             for t, pi, qi in zip(t_ns, p, q, strict=True):
                 f.write(

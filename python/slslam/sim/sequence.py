@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -407,9 +408,21 @@ class Simulator:
         if "lidar" in record:
             writer.write_lidar(record["t_ns"], *record["lidar"])
 
-    def write(self, out: str | Path, progress: bool = True) -> dict:
-        """Write the whole sequence (EuRoC ASL layout); returns the manifest."""
+    def write(
+        self,
+        out: str | Path,
+        progress: bool = True,
+        between_frames: Callable[[], None] | None = None,
+    ) -> dict:
+        """Write the whole sequence (EuRoC ASL layout); returns the manifest.
+
+        ``between_frames`` is called once before anything is written and after each frame is
+        handed to the writer; what it raises (``RunInterrupted`` from a signal) stops the run
+        there: nothing is written when it raises first, else the frames so far are written whole
+        and the manifest says ``"status": "interrupted"`` and how many (``frames_written``)."""
         opts = self.options
+        if between_frames is not None:
+            between_frames()
         writer = AslWriter(out, lidar=opts.lidar, cameras=opts.cameras)
         manifest = {
             "status": "running",
@@ -448,6 +461,7 @@ class Simulator:
         # Files of frame k are written on a second thread while frame k+1 renders (PNG encoding
         # releases the GIL); one pending frame at most, so records stay in order.
         pending: Future | None = None
+        submitted = 0
         try:
             with ThreadPoolExecutor(max_workers=1) as pool:
                 for frame in progress_bar(
@@ -456,14 +470,22 @@ class Simulator:
                     record = self._render_record(frame, rng)
                     if pending is not None:
                         pending.result()
-                        manifest["frames_written"] = frame
+                        manifest["frames_written"] = submitted
                     pending = pool.submit(self._write_record, writer, record)
+                    submitted += 1
+                    if between_frames is not None:
+                        between_frames()
                 if pending is not None:
                     pending.result()
                     manifest["frames_written"] = opts.frames
             manifest["status"] = "complete"
-        except BaseException:
+        except BaseException as exc:
             manifest["status"] = "interrupted"
+            manifest["stopped_by"] = str(exc) or type(exc).__name__
+            # the pool waited for the frame in flight: counted when its files were written
+            if pending is not None and pending.done() and not pending.cancelled():
+                if pending.exception() is None:
+                    manifest["frames_written"] = submitted
             raise
         finally:
             elapsed = time.perf_counter() - start
