@@ -545,15 +545,14 @@ def run_command(
     import dataclasses
 
     from slslam.config import load_config
+    from slslam.files import check_output_folder, check_output_target
     from slslam.tracking import run_sequence
     from slslam.tracking.run import RunInterrupted
 
-    _check_output_folder(out)
-    from slslam.files import check_output_file
-
+    check_output_folder(out, "--out")
     for option, named in (("--rerun", rerun), ("--save-map", save_map)):
         if named is not None:  # checked now, not when the run ends
-            check_output_file(named, option)
+            check_output_target(named, option)
     if quiet:
         from slslam.progress import set_quiet
 
@@ -939,9 +938,9 @@ def config_command(
     )
     header = f"slslam {__version__}: the configuration of `slslam run{options}`"
     if out is not None:
-        from slslam.files import check_output_file
+        from slslam.files import check_output_target
 
-        dump_config(cfg, check_output_file(out, "--out"), header=header)
+        dump_config(cfg, check_output_target(out, "--out"), header=header)
         Console().print(f"wrote {out}")
     else:
         sys.stdout.write(config_to_yaml(cfg, header))
