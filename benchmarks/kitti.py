@@ -57,32 +57,38 @@ def path_length_m(path: PosePath3D) -> float:
     return float(np.linalg.norm(np.diff(path.positions_xyz, axis=0), axis=1).sum())
 
 
-def reference_for(folder: Path) -> tuple[Path | None, str]:
-    """The trajectory to score against and what it is."""
-    seq = KittiSequence(folder)
+def reference_for(seq: KittiSequence) -> tuple[Path | None, PosePath3D | None, str]:
+    """The reference file to give the run (None: the sequence's own ground truth, or none), the
+    trajectory to score against, and what it is."""
     if seq.groundtruth_path is not None:
-        return None, f"ground truth {seq.groundtruth_path}"
-    candidates = sorted(folder.glob("reference_*.tum"))
+        return None, seq.groundtruth(), f"ground truth {seq.groundtruth_path}"
+    candidates = sorted(seq.root.glob("reference_*.tum"))
     if candidates:
-        return candidates[0], f"reference estimate {candidates[0].name}"
-    return None, "none"
+        reference = candidates[0]
+        return reference, read_trajectory(reference, "tum"), f"reference estimate {reference.name}"
+    return None, None, "none"
 
 
-def run_one(folder: Path, name: str, out: Path, frames: int | None) -> dict:
-    reference, _ = reference_for(folder)
+def run_one(
+    seq: KittiSequence,
+    reference: tuple[Path | None, PosePath3D | None, str],
+    name: str,
+    out: Path,
+    frames: int | None,
+) -> dict:
+    reference_path, gt, _ = reference
     summary = run_sequence(
-        folder, out, make_config(name), max_frames=frames, progress=False, groundtruth=reference
+        # the folder, not the opened sequence: metrics.json names the dataset by its path
+        seq.root,
+        out,
+        make_config(name),
+        max_frames=frames,
+        progress=False,
+        groundtruth=reference_path,
     )
     m = summary.metrics
     traj_file = out / "trajectory.tum"
     estimate = read_trajectory(traj_file, "tum") if traj_file.stat().st_size else None
-    seq = KittiSequence(folder)
-    if reference is not None:
-        gt = read_trajectory(reference, "tum")
-    elif seq.groundtruth_path is not None:
-        gt = seq.groundtruth()
-    else:
-        gt = None
     row: dict = {
         "frames": m["frames"],
         "posed": m["tracked_frames"],
@@ -148,10 +154,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     results: dict = {}
     for folder in folders:
-        _, what = reference_for(folder)
-        print(f"{folder.name}: scored against {what}")
+        seq = KittiSequence(folder)
+        reference = reference_for(seq)
+        print(f"{folder.name}: scored against {reference[2]}")
         results[folder.name] = {
-            name: run_one(folder, name, args.out / folder.name / name, args.frames)
+            name: run_one(seq, reference, name, args.out / folder.name / name, args.frames)
             for name in names
         }
     text = table(results)

@@ -36,9 +36,12 @@ log = logging.getLogger("slslam")
 
 
 def _check_output_folder(out: Path | None) -> None:
-    """``--out`` must be a folder (or not exist yet): an existing file is a one-line error."""
-    if out is not None and out.exists() and not out.is_dir():
-        raise InputError(out, "--out names an existing file; give a folder (it is created)")
+    """``--out``, when given, must be a folder that exists or can be made and written
+    (:func:`slslam.files.check_output_folder`): otherwise a one-line error before any work."""
+    if out is not None:
+        from slslam.files import check_output_folder
+
+        check_output_folder(out, "--out")
 
 
 def _stats_table(title: str, stats: dict[str, float]) -> Table:
@@ -346,11 +349,10 @@ def sim_command(
     Writes EuRoC's ASL layout (mav0/cam0, cam1, imu0, state_groundtruth_estimate0, lidar0),
     ground truth as TUM files and a manifest.json; `slslam info OUT` reads it back.
     """
-    from slslam.files import check_output_folder
     from slslam.sim import SimOptions, Simulator
     from slslam.tracking.run import RunInterrupted, _Signals
 
-    check_output_folder(out, "--out")
+    _check_output_folder(out)
     options = SimOptions(
         preset=preset,
         frames=frames,
@@ -545,11 +547,11 @@ def run_command(
     import dataclasses
 
     from slslam.config import load_config
-    from slslam.files import check_output_folder, check_output_target
+    from slslam.files import check_output_target
     from slslam.tracking import run_sequence
     from slslam.tracking.run import RunInterrupted
 
-    check_output_folder(out, "--out")
+    _check_output_folder(out)
     for option, named in (("--rerun", rerun), ("--save-map", save_map)):
         if named is not None:  # checked now, not when the run ends
             check_output_target(named, option)

@@ -136,9 +136,13 @@ def _replace_line(path: Path, key: str, line: str | None) -> None:
     ("key", "line", "message"),
     [
         ("P1", None, "missing key 'P1'"),
-        ("P1", "P1: 1 2 3", "'P1': expected 12 numbers, got 3"),
-        ("P1", "P1: " + " ".join(["x"] * 12), "'P1': .* are not numbers"),
-        ("P1", "P1: " + _projection(BASELINE).replace("7.000000000000e+02", "nan", 1), "finite"),
+        ("P1", "P1: 1 2 3", "'P1' must have 12 numbers, got 3"),
+        ("P1", "P1: " + " ".join(["x"] * 12), "'P1' must be a list of numbers"),
+        (
+            "P1",
+            "P1: " + _projection(BASELINE).replace("7.000000000000e+02", "nan", 1),
+            "'P1' contains NaN or Inf",
+        ),
         ("P1", "P1: " + _projection(-BASELINE), "to the right"),
         (
             "P1",

@@ -39,13 +39,16 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
     return data
 
 
-def _require(data: dict[str, Any], key: str, path: Path) -> Any:
+def require_key(data: dict[str, Any], key: str, path: Path) -> Any:
+    """``data[key]``; CalibrationError naming ``path`` and the key when it is missing."""
     if key not in data:
         raise CalibrationError(path, f"missing key '{key}'")
     return data[key]
 
 
-def _numbers(value: Any, count: int, key: str, path: Path) -> np.ndarray:
+def numbers_of(value: Any, count: int, key: str, path: Path) -> np.ndarray:
+    """``value`` (a list of numbers or of their texts) as ``count`` finite floats;
+    CalibrationError naming ``path`` and ``key`` otherwise."""
     try:
         array = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError, OverflowError):
@@ -60,11 +63,11 @@ def _numbers(value: Any, count: int, key: str, path: Path) -> np.ndarray:
 
 
 def _transform(data: dict[str, Any], path: Path) -> np.ndarray:
-    raw = _require(data, "T_BS", path)
+    raw = require_key(data, "T_BS", path)
     values = raw.get("data") if isinstance(raw, dict) else raw
     if values is None:
         raise CalibrationError(path, "'T_BS' has no 'data' list")
-    T = _numbers(values, 16, "T_BS", path).reshape(4, 4)
+    T = numbers_of(values, 16, "T_BS", path).reshape(4, 4)
     if not is_rigid_transform(T):
         raise CalibrationError(path, "'T_BS' is not a rigid transform (rotation block or last row)")
     return T
@@ -99,7 +102,7 @@ class CameraCalibration:
         path = Path(path)
         data = load_yaml(path)
         T = _transform(data, path)
-        width, height = _numbers(_require(data, "resolution", path), 2, "resolution", path)
+        width, height = numbers_of(require_key(data, "resolution", path), 2, "resolution", path)
         if width <= 0 or height <= 0 or width != int(width) or height != int(height):
             raise CalibrationError(
                 path, f"'resolution' must be two positive integers, got {width:g} x {height:g}"
@@ -110,7 +113,7 @@ class CameraCalibration:
                 f"'resolution' {width:g} x {height:g} is not a camera image "
                 f"(at most {MAX_RESOLUTION_PX} px a side)",
             )
-        fx, fy, cx, cy = _numbers(_require(data, "intrinsics", path), 4, "intrinsics", path)
+        fx, fy, cx, cy = numbers_of(require_key(data, "intrinsics", path), 4, "intrinsics", path)
         if fx <= 0 or fy <= 0:
             raise CalibrationError(
                 path, f"'intrinsics' focal lengths must be > 0, got {fx:g}, {fy:g}"
@@ -121,15 +124,15 @@ class CameraCalibration:
                 f"'intrinsics' principal point ({cx:g}, {cy:g}) lies far outside the "
                 f"{width:g} x {height:g} image",
             )
-        model = _require(data, "distortion_model", path)
+        model = require_key(data, "distortion_model", path)
         if model not in SUPPORTED_DISTORTION_MODELS:
             raise CalibrationError(
                 path,
                 f"distortion_model '{model}' is not supported "
                 f"(supported: {', '.join(SUPPORTED_DISTORTION_MODELS)})",
             )
-        dist = _numbers(
-            _require(data, "distortion_coefficients", path), 4, "distortion_coefficients", path
+        dist = numbers_of(
+            require_key(data, "distortion_coefficients", path), 4, "distortion_coefficients", path
         )
         for name, value, bound in zip(
             ("k1", "k2", "p1", "p2"),
@@ -145,7 +148,7 @@ class CameraCalibration:
                 )
         rate = data.get("rate_hz")
         if rate is not None:
-            (rate,) = _numbers(rate, 1, "rate_hz", path)
+            (rate,) = numbers_of(rate, 1, "rate_hz", path)
             if rate <= 0:
                 raise CalibrationError(path, f"'rate_hz' must be > 0, got {rate:g}")
         return cls(
@@ -187,7 +190,7 @@ class ImuCalibration:
             "accelerometer_noise_density",
             "accelerometer_random_walk",
         ):
-            (value,) = _numbers(_require(data, key, path), 1, key, path)
+            (value,) = numbers_of(require_key(data, key, path), 1, key, path)
             if value < 0 or (key == "rate_hz" and value == 0):
                 raise CalibrationError(path, f"'{key}' must be positive, got {value}")
             values[key] = float(value)

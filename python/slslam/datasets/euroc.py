@@ -197,6 +197,30 @@ def _check_files_exist(files: list[Path], csv_path: Path) -> None:
         )
 
 
+def read_sequence_image(
+    reader: GrayImageReader,
+    path: Path,
+    expected: tuple[int, int] | None = None,
+    expected_from: str = "",
+) -> np.ndarray:
+    """One image of a sequence as uint8 gray; :class:`DatasetError` naming the file when it is
+    unreadable or, with ``expected`` (H, W), of another size (``expected_from`` says where that
+    size comes from: "image is WxH but <expected_from> WxH")."""
+    try:
+        image = reader(path)
+    except ValueError as exc:
+        raise DatasetError(
+            path, str(exc).replace(f"{path}", "").strip(": ") or "unreadable image"
+        ) from None
+    if expected is not None and image.shape != expected:
+        raise DatasetError(
+            path,
+            f"image is {image.shape[1]}x{image.shape[0]} but {expected_from} "
+            f"{expected[1]}x{expected[0]}",
+        )
+    return image
+
+
 def stereo_rectifier(
     left: CameraCalibration, right: CameraCalibration, where: str | Path
 ) -> _core.StereoRectifier:
@@ -298,20 +322,8 @@ class EurocSequence:
         return len(self._pairs)
 
     def _load(self, path: Path) -> np.ndarray:
-        try:
-            image = self._read_image(path)
-        except ValueError as exc:
-            raise DatasetError(
-                path, str(exc).replace(f"{path}", "").strip(": ") or "unreadable image"
-            ) from None
         expected = (self.left_calibration.height, self.left_calibration.width)
-        if image.shape != expected:
-            raise DatasetError(
-                path,
-                f"image is {image.shape[1]}x{image.shape[0]} but the "
-                f"calibration is for {expected[1]}x{expected[0]}",
-            )
-        return image
+        return read_sequence_image(self._read_image, path, expected, "the calibration is for")
 
     def __getitem__(self, index: int) -> StereoFrame:
         if not -len(self) <= index < len(self):

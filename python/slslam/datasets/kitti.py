@@ -34,7 +34,13 @@ from typing import Literal
 import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
 
-from slslam.datasets.euroc import MIN_BASELINE_M, RectifiedStereoCamera, StereoFrame
+from slslam.datasets.calibration import numbers_of, require_key
+from slslam.datasets.euroc import (
+    MIN_BASELINE_M,
+    RectifiedStereoCamera,
+    StereoFrame,
+    read_sequence_image,
+)
 from slslam.datasets.images import GrayImageReader
 from slslam.datasets.trajectory_io import read_trajectory
 from slslam.errors import CalibrationError, DatasetError
@@ -86,19 +92,8 @@ def read_kitti_calibration(path: str | Path) -> dict[str, str]:
 
 
 def _numbers(entries: dict[str, str], key: str, count: int, path: Path) -> np.ndarray:
-    if key not in entries:
-        raise CalibrationError(path, f"missing key '{key}'")
-    try:
-        values = np.array([float(v) for v in entries[key].split()], dtype=np.float64)
-    except ValueError:
-        raise CalibrationError(
-            path, f"'{key}': {short_repr(entries[key], 60)} are not numbers"
-        ) from None
-    if values.size != count:
-        raise CalibrationError(path, f"'{key}': expected {count} numbers, got {values.size}")
-    if not np.all(np.isfinite(values)):
-        raise CalibrationError(path, f"'{key}': values must be finite")
-    return values
+    """The ``count`` numbers of calibration line ``key``."""
+    return numbers_of(require_key(entries, key, path).split(), count, key, path)
 
 
 def stereo_camera_from_projections(
@@ -334,19 +329,9 @@ class KittiSequence:
         return len(self._pair.left)
 
     def _load(self, path: Path, expected: tuple[int, int] | None) -> np.ndarray:
-        try:
-            image = self._read_image(path)
-        except ValueError as exc:
-            raise DatasetError(
-                path, str(exc).replace(f"{path}", "").strip(": ") or "unreadable image"
-            ) from None
-        if expected is not None and image.shape != expected:
-            raise DatasetError(
-                path,
-                f"image is {image.shape[1]}x{image.shape[0]} but the sequence's first image is "
-                f"{expected[1]}x{expected[0]}",
-            )
-        return image
+        return read_sequence_image(
+            self._read_image, path, expected, "the sequence's first image is"
+        )
 
     def __getitem__(self, index: int) -> StereoFrame:
         if not -len(self) <= index < len(self):

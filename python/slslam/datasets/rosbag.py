@@ -33,8 +33,8 @@ import numpy as np
 
 from slslam.datasets.calibration import (
     CameraCalibration,
-    _numbers,
     load_yaml,
+    numbers_of,
 )
 from slslam.datasets.euroc import (
     RectifiedStereoCamera,
@@ -154,9 +154,9 @@ def _kalibr_camera(data: dict, name: str, path: Path, T_body_cam: np.ndarray) ->
             path,
             f"'{name}.distortion_model' {entry['distortion_model']!r} is not supported (radtan)",
         )
-    fx, fy, cx, cy = _numbers(need("intrinsics"), 4, f"{name}.intrinsics", path)
-    width, height = _numbers(need("resolution"), 2, f"{name}.resolution", path)
-    dist = _numbers(need("distortion_coeffs"), 4, f"{name}.distortion_coeffs", path)
+    fx, fy, cx, cy = numbers_of(need("intrinsics"), 4, f"{name}.intrinsics", path)
+    width, height = numbers_of(need("resolution"), 2, f"{name}.resolution", path)
+    dist = numbers_of(need("distortion_coeffs"), 4, f"{name}.distortion_coeffs", path)
     if fx <= 0 or fy <= 0 or width <= 0 or height <= 0 or width != int(width):
         raise CalibrationError(path, f"'{name}': focal lengths and resolution must be positive")
     return CameraCalibration(
@@ -173,7 +173,7 @@ def _kalibr_camera(data: dict, name: str, path: Path, T_body_cam: np.ndarray) ->
 
 
 def _transform(value, key: str, path: Path) -> np.ndarray:
-    T = _numbers(value, 16, key, path).reshape(4, 4)
+    T = numbers_of(value, 16, key, path).reshape(4, 4)
     if not is_rigid_transform(T):
         raise CalibrationError(path, f"'{key}' is not a rigid transform")
     return T

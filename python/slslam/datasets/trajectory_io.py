@@ -170,24 +170,38 @@ def tum_time(t_ns: int) -> str:
     return f"{sign}{t_ns // 1_000_000_000}.{t_ns % 1_000_000_000:09d}"
 
 
+def tum_lines(times: list[str], T_world_frame: np.ndarray) -> list[str]:
+    """TUM lines ``time x y z qx qy qz qw`` (newline-terminated; positions and quaternions to
+    1e-9) of poses ``T_world_frame`` (N, 4, 4) at the given time texts (:func:`tum_time`)."""
+    from scipy.spatial.transform import Rotation
+
+    T = np.asarray(T_world_frame, dtype=np.float64).reshape(-1, 4, 4)
+    if len(times) != len(T):
+        raise ValueError(f"{len(times)} timestamps for {len(T)} poses")
+    if not len(T):
+        return []
+    quats = Rotation.from_matrix(T[:, :3, :3]).as_quat()  # x y z w
+    rows = np.column_stack([T[:, :3, 3], quats])
+    return [
+        t + " " + " ".join(f"{v:.9f}" for v in row) + "\n"
+        for t, row in zip(times, rows, strict=True)
+    ]
+
+
 def write_tum_ns(path: str | Path, t_ns: np.ndarray, T_world_frame: np.ndarray) -> Path:
     """A TUM file of poses ``T_world_frame`` (N, 4, 4) at integer times ``t_ns`` (N,), the times
     written exactly (:func:`tum_time`); written to a temporary name and renamed."""
-    from scipy.spatial.transform import Rotation
-
     path = Path(path)
     t_ns = np.asarray(t_ns, dtype=np.int64).reshape(-1)
-    T = np.asarray(T_world_frame, dtype=np.float64).reshape(-1, 4, 4)
-    if len(t_ns) != len(T):
-        raise TrajectoryFileError(path, f"{len(t_ns)} timestamps for {len(T)} poses")
+    try:
+        lines = tum_lines([tum_time(t) for t in t_ns.tolist()], T_world_frame)
+    except ValueError as exc:
+        raise TrajectoryFileError(path, str(exc)) from None
     path.parent.mkdir(parents=True, exist_ok=True)
-    quats = Rotation.from_matrix(T[:, :3, :3]).as_quat() if len(T) else np.zeros((0, 4))
-    rows = np.column_stack([T[:, :3, 3], quats]) if len(T) else np.zeros((0, 7))
     tmp = path.with_name(path.name + ".partial")
     try:
         with tmp.open("w", encoding="ascii") as f:
-            for t, row in zip(t_ns.tolist(), rows, strict=True):
-                f.write(tum_time(t) + " " + " ".join(f"{v:.9f}" for v in row) + "\n")
+            f.writelines(lines)
         tmp.replace(path)
     finally:
         tmp.unlink(missing_ok=True)

@@ -46,13 +46,12 @@ from pathlib import Path
 
 import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
-from scipy.spatial.transform import Rotation
 
 from slslam.config import Config, check_config, default_config, dump_config
 from slslam.datasets.euroc import EurocSequence, is_euroc
 from slslam.datasets.kitti import KittiSequence, is_kitti
 from slslam.datasets.rosbag import is_rosbag
-from slslam.datasets.trajectory_io import tum_time
+from slslam.datasets.trajectory_io import tum_lines, tum_time
 from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
@@ -213,12 +212,8 @@ def _stamp(stamps_ns: list[int] | None, index: int, timestamp_s: float) -> str:
 
 
 def _tum_line(result: TrackResult, stamps_ns: list[int] | None = None) -> str:
-    q = Rotation.from_matrix(result.T_world_cam[:3, :3]).as_quat()  # x y z w
-    t = result.T_world_cam[:3, 3]
-    return (
-        f"{_stamp(stamps_ns, result.index, result.timestamp)} {t[0]:.9f} {t[1]:.9f} {t[2]:.9f} "
-        f"{q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n"
-    )
+    time = _stamp(stamps_ns, result.index, result.timestamp)
+    return tum_lines([time], result.T_world_cam)[0]
 
 
 def write_ply(path: Path, points: np.ndarray, lines: np.ndarray) -> Path:
@@ -278,12 +273,12 @@ def _write_final_trajectory(
         return None
     tmp = out / "trajectory.tum.partial"
     try:
+        times = [
+            _stamp(stamps_ns, int(i), float(t))
+            for i, t in zip(final.index, final.timestamp, strict=True)
+        ]
         with tmp.open("w", encoding="ascii") as f:
-            quats = Rotation.from_matrix(final.T_world_cam[:, :3, :3]).as_quat()  # x y z w
-            rows = np.column_stack([final.T_world_cam[:, :3, 3], quats])
-            for index, timestamp, row in zip(final.index, final.timestamp, rows, strict=True):
-                values = " ".join(f"{v:.9f}" for v in row)
-                f.write(f"{_stamp(stamps_ns, int(index), float(timestamp))} {values}\n")
+            f.writelines(tum_lines(times, final.T_world_cam))
         online = out / "trajectory.tum"
         if online.exists():
             online.replace(out / "trajectory_online.tum")
