@@ -7,6 +7,7 @@
 #   core          cameras, the stereo rig, images, checks
 #   features      keypoints, lines, descriptors, the stereo frame's data
 #   geometry      rotations, Pluecker lines, reprojection residuals
+#   inertial      IMU preintegration, the inertial state and its covariance, inertial initialisation
 #   place         bag-of-words vocabulary and keyframe database
 #   map           keyframes, points, lines, covisibility, map files
 #   optimization  Ceres problems: pose, bundle adjustment, pose graph
@@ -14,17 +15,18 @@
 #   tracking      stereo matching, the stereo front end, the tracker
 #   sim           the roadway simulator's renderer (beside the SLAM layers)
 #   lidar         LiDAR registration and LiDAR-inertial SLAM (beside; needs PCL)
-set(SLSLAM_LAYERS core features geometry place map optimization mapping tracking sim lidar)
+set(SLSLAM_LAYERS core features geometry inertial place map optimization mapping tracking sim lidar)
 set(SLSLAM_LAYER_DEPS_core "")
 set(SLSLAM_LAYER_DEPS_features core)
 set(SLSLAM_LAYER_DEPS_geometry core)
+set(SLSLAM_LAYER_DEPS_inertial core geometry)
 set(SLSLAM_LAYER_DEPS_place core)
 set(SLSLAM_LAYER_DEPS_map core features geometry place)
-set(SLSLAM_LAYER_DEPS_optimization core geometry)
+set(SLSLAM_LAYER_DEPS_optimization core geometry inertial)
 set(SLSLAM_LAYER_DEPS_mapping map optimization)
 set(SLSLAM_LAYER_DEPS_tracking mapping)
 set(SLSLAM_LAYER_DEPS_sim core)
-set(SLSLAM_LAYER_DEPS_lidar core geometry)
+set(SLSLAM_LAYER_DEPS_lidar core geometry inertial)
 
 # SLSLAM_LAYER_BELOW_<layer>: every layer it may include (transitive closure of the table).
 foreach(layer IN LISTS SLSLAM_LAYERS)

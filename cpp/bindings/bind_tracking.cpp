@@ -189,6 +189,7 @@ class TrackerSession {
     LocalMappingStats s;
     int maps = 0;
     TrackingStats t;
+    Tracker::InertialReport imu;
     LoopClosingStats loops;
     std::vector<LoopEvent> events;
     {
@@ -199,6 +200,7 @@ class TrackerSession {
       s = tracker_.mapping_stats();
       maps = tracker_.live_maps();
       t = tracker_.stats();
+      imu = tracker_.inertial_report();
       loops = tracker_.loop_stats();
       events = tracker_.loop_events();
     }
@@ -221,6 +223,20 @@ class TrackerSession {
     out["local_ba_iterations"] = s.ba_iterations;
     out["local_ba_rejected_steps"] = s.ba_rejected_steps;
     out["inertial_frames"] = t.inertial_frames;
+    out["inertial_weak_updates"] = t.inertial_weak_updates;
+    out["inertial_keyframes"] = t.inertial_keyframes;
+    py::dict imu_out;
+    imu_out["has_imu"] = imu.has_imu;
+    imu_out["initialised"] = imu.initialised;
+    imu_out["first_pose_s"] = imu.first_pose_s;
+    imu_out["first_init_s"] = imu.first_init_s;
+    imu_out["initialisations"] = imu.initialisations;
+    imu_out["refinements"] = imu.refinements;
+    imu_out["last_failure"] = imu.last_failure;
+    imu_out["gyro_bias_radps"] = imu.gyro_bias;
+    imu_out["acc_bias_mps2"] = imu.acc_bias;
+    imu_out["g_world_mps2"] = imu.g_world;
+    out["imu"] = imu_out;
     out["relocalisations"] = t.relocalisations;
     out["relocalisation_attempts"] = t.relocalisation_attempts;
     out["maps_started"] = t.maps_started;
@@ -396,25 +412,37 @@ void BindTracking(py::module_& m) {
       .def_readwrite("vocabulary_levels_up", &RelocalisationOptions::vocabulary_levels_up)
       .def("check", &RelocalisationOptions::Check);
 
-  py::class_<InertialBridgeOptions>(
-      m, "InertialBridgeOptions",
-      "The IMU bridge through short visual outages (gravity, velocity and gyro bias fitted to the "
-      "recent tracked poses).")
+  py::class_<InertialOptions>(
+      m, "InertialOptions",
+      "The IMU tightly coupled in tracking: initialisation, prediction, the pose prior, the "
+      "propagated pose while the camera cannot track.")
       .def(py::init<>())
-      .def_readwrite("window_s", &InertialBridgeOptions::window_s)
-      .def_readwrite("min_window_s", &InertialBridgeOptions::min_window_s)
-      .def_readwrite("max_gap_s", &InertialBridgeOptions::max_gap_s)
-      .def_readwrite("max_sample_gap_s", &InertialBridgeOptions::max_sample_gap_s)
-      .def_readwrite("gravity_mps2", &InertialBridgeOptions::gravity_mps2)
-      .def_readwrite("gravity_tolerance_mps2", &InertialBridgeOptions::gravity_tolerance_mps2)
+      .def_readwrite("time_offset_s", &InertialOptions::time_offset_s)
+      .def_readwrite("gyro_noise_density", &InertialOptions::gyro_noise_density)
+      .def_readwrite("acc_noise_density", &InertialOptions::acc_noise_density)
+      .def_readwrite("gyro_random_walk", &InertialOptions::gyro_random_walk)
+      .def_readwrite("acc_random_walk", &InertialOptions::acc_random_walk)
+      .def_readwrite("gravity_mps2", &InertialOptions::gravity_mps2)
+      .def_readwrite("gravity_tolerance_mps2", &InertialOptions::gravity_tolerance_mps2)
+      .def_readwrite("window_s", &InertialOptions::window_s)
+      .def_readwrite("min_window_s", &InertialOptions::min_window_s)
+      .def_readwrite("refine_after_s", &InertialOptions::refine_after_s)
+      .def_readwrite("refine_min_path_m", &InertialOptions::refine_min_path_m)
+      .def_readwrite("max_sample_gap_s", &InertialOptions::max_sample_gap_s)
+      .def_readwrite("lost_sigma_fraction", &InertialOptions::lost_sigma_fraction)
+      .def_readwrite("lost_sigma_min_m", &InertialOptions::lost_sigma_min_m)
+      .def_readwrite("max_gap_s", &InertialOptions::max_gap_s)
+      .def_readwrite("weak_update_min_inliers", &InertialOptions::weak_update_min_inliers)
+      .def_readwrite("keyframe_interval_s", &InertialOptions::keyframe_interval_s)
+      .def_readwrite("visual_information_scale", &InertialOptions::visual_information_scale)
       .def_property(
           "T_body_cam",
-          [](const InertialBridgeOptions& o) { return o.body_from_cam.ToMatrix4(); },
-          [](InertialBridgeOptions& o, const Eigen::Matrix4d& T) {
+          [](const InertialOptions& o) { return o.body_from_cam.ToMatrix4(); },
+          [](InertialOptions& o, const Eigen::Matrix4d& T) {
             o.body_from_cam = Rigid3d::FromMatrix4(T);
           },
           "4x4 pose of the rectified left camera in the IMU (body) frame.")
-      .def("check", &InertialBridgeOptions::Check);
+      .def("check", &InertialOptions::Check);
 
   py::class_<PoseGraphOptions>(m, "PoseGraphOptions", "Essential-graph optimisation.")
       .def(py::init<>())
@@ -538,6 +566,10 @@ void BindTracking(py::module_& m) {
       .def_readonly("needs_keypoints", &FrameOutput::needs_keypoints,
                     "the frame came without keypoints and the tracker could not place the map's "
                     "points in it: nothing changed, prepare it again with detected keypoints")
+      .def_readonly("imu_initialised", &FrameOutput::imu_initialised,
+                    "the inertial state existed after this frame")
+      .def_readonly("position_sigma_m", &FrameOutput::position_sigma_m,
+                    "its position standard deviation then [m] (0: no IMU)")
       .def_readonly("projected_keypoints", &FrameOutput::projected_keypoints,
                     "tracked on this many projected keypoints (0: on detected ones)");
 

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialBridgeOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'TriangulationOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'detect_lsd_segments', 'estimate_noise_sigma', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'TriangulationOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'associate_points_to_lines', 'detect_lsd_segments', 'estimate_noise_sigma', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -1058,9 +1058,9 @@ class RelocalisationOptions:
     @vocabulary_levels_up.setter
     def vocabulary_levels_up(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-class InertialBridgeOptions:
+class InertialOptions:
     """
-    The IMU bridge through short visual outages (gravity, velocity and gyro bias fitted to the recent tracked poses).
+    The IMU tightly coupled in tracking: initialisation, prediction, the pose prior, the propagated pose while the camera cannot track.
     """
     def __init__(self) -> None:
         ...
@@ -1075,6 +1075,18 @@ class InertialBridgeOptions:
     def T_body_cam(self, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
         ...
     @property
+    def acc_noise_density(self) -> float:
+        ...
+    @acc_noise_density.setter
+    def acc_noise_density(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def acc_random_walk(self) -> float:
+        ...
+    @acc_random_walk.setter
+    def acc_random_walk(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def gravity_mps2(self) -> float:
         ...
     @gravity_mps2.setter
@@ -1085,6 +1097,36 @@ class InertialBridgeOptions:
         ...
     @gravity_tolerance_mps2.setter
     def gravity_tolerance_mps2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gyro_noise_density(self) -> float:
+        ...
+    @gyro_noise_density.setter
+    def gyro_noise_density(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gyro_random_walk(self) -> float:
+        ...
+    @gyro_random_walk.setter
+    def gyro_random_walk(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def keyframe_interval_s(self) -> float:
+        ...
+    @keyframe_interval_s.setter
+    def keyframe_interval_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lost_sigma_fraction(self) -> float:
+        ...
+    @lost_sigma_fraction.setter
+    def lost_sigma_fraction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lost_sigma_min_m(self) -> float:
+        ...
+    @lost_sigma_min_m.setter
+    def lost_sigma_min_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def max_gap_s(self) -> float:
@@ -1103,6 +1145,36 @@ class InertialBridgeOptions:
         ...
     @min_window_s.setter
     def min_window_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def refine_after_s(self) -> float:
+        ...
+    @refine_after_s.setter
+    def refine_after_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def refine_min_path_m(self) -> float:
+        ...
+    @refine_min_path_m.setter
+    def refine_min_path_m(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def time_offset_s(self) -> float:
+        ...
+    @time_offset_s.setter
+    def time_offset_s(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def visual_information_scale(self) -> float:
+        ...
+    @visual_information_scale.setter
+    def visual_information_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def weak_update_min_inliers(self) -> int:
+        ...
+    @weak_update_min_inliers.setter
+    def weak_update_min_inliers(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     @property
     def window_s(self) -> float:
@@ -1250,7 +1322,7 @@ class TrackerOptions:
     """
     dynamic: DynamicCellOptions
     dynamic_cells: bool
-    imu: InertialBridgeOptions
+    imu: InertialOptions
     lines_on_demand: bool
     localise_only: bool
     loop_closing: LoopClosingOptions
@@ -1515,6 +1587,11 @@ class FrameOutput:
         4x4 pose: x_cam = T x_world.
         """
     @property
+    def imu_initialised(self) -> bool:
+        """
+        the inertial state existed after this frame
+        """
+    @property
     def inlier_lines(self) -> int:
         ...
     @property
@@ -1557,6 +1634,11 @@ class FrameOutput:
     @property
     def optimisation_ms(self) -> float:
         ...
+    @property
+    def position_sigma_m(self) -> float:
+        """
+        its position standard deviation then [m] (0: no IMU)
+        """
     @property
     def projected_keypoints(self) -> int:
         """

@@ -485,6 +485,13 @@ def run_command(
     no_lines: Annotated[
         bool, typer.Option("--no-lines", help="Points only (overrides the config).")
     ] = False,
+    no_imu: Annotated[
+        bool,
+        typer.Option(
+            "--no-imu",
+            help="Camera only: ignore the sequence's IMU (as tracking.imu.enabled: false).",
+        ),
+    ] = False,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
     quiet: Annotated[
         bool,
@@ -564,6 +571,9 @@ def run_command(
     cfg = load_config(config, point_frontend=_frontend_flag(orb, xfeat))
     if no_lines:
         cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, use_lines=False))
+    if no_imu:
+        imu_off = dataclasses.replace(cfg.tracking.imu, enabled=False)
+        cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, imu=imu_off))
     sequence = _open_bag(dataset, left, right, imu, calib)
     shown = None
     if viewer or rerun is not None:
@@ -606,6 +616,17 @@ def run_command(
         f"({m['frontend']}{' + lines' if m['lines'] else ''}), {m['keyframes']} keyframes, "
         f"{m['map_points']} points, {m['map_lines']} lines"
     )
+    imu_report = m.get("imu", {})
+    if imu_report.get("has_imu"):
+        init = imu_report.get("init_after_s")
+        console.print(
+            f"IMU: initialised {init:.2f} s after the first pose, "
+            f"{m.get('inertial_frames', 0)} frames "
+            "carried by it"
+            if init is not None
+            else f"IMU: not initialised ({imu_report.get('last_failure') or 'too few poses'})",
+            highlight=False,
+        )
     if "ape" in m:
         console.print(f"ATE RMSE (SE3, tracked frames): {m['ape']['rmse']:.4f} m")
     elif "evaluation_error" in m:

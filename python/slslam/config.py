@@ -202,12 +202,24 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
 IMU_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("use_imu",)} | {
     name: (f"imu.{name}",)
     for name in (
-        "window_s",
-        "min_window_s",
-        "max_gap_s",
-        "max_sample_gap_s",
+        "time_offset_s",
+        "gyro_noise_density",
+        "acc_noise_density",
+        "gyro_random_walk",
+        "acc_random_walk",
         "gravity_mps2",
         "gravity_tolerance_mps2",
+        "window_s",
+        "min_window_s",
+        "refine_after_s",
+        "refine_min_path_m",
+        "max_sample_gap_s",
+        "lost_sigma_fraction",
+        "lost_sigma_min_m",
+        "max_gap_s",
+        "weak_update_min_inliers",
+        "keyframe_interval_s",
+        "visual_information_scale",
     )
 }
 LINES_TO_CORE: dict[str, tuple[str, ...]] = {
@@ -360,28 +372,48 @@ class LoopClosingConfig:
 
 @dataclass(frozen=True)
 class ImuConfig:
-    """The IMU bridge through short visual outages (state INERTIAL); mirrors C++
-    ``InertialBridgeOptions`` (``TrackerOptions.imu``; ``enabled`` is ``use_imu``). Used when the
-    sequence has IMU samples (EuRoC ``imu0/``) or they are given to ``Tracker.add_imu``; the
+    """The IMU tightly coupled in tracking (docs/imu.md); mirrors C++ ``InertialOptions``
+    (``TrackerOptions.imu``; ``enabled`` is ``use_imu``). Used when the sequence has IMU samples
+    (EuRoC ``imu0/``, a bag's ``--imu`` topic) or they are given to ``Tracker.add_imu``; the
     camera's pose in the IMU frame is the calibration's ``T_body_cam``."""
 
-    # bridge frames the camera cannot track with the IMU (gravity, velocity and gyro bias fitted
-    # to the recent tracked poses)
+    # use the IMU: initialisation from the first seconds of tracking, then its prediction and
+    # prior in every frame, its propagated pose where the camera cannot track (INERTIAL)
     enabled: bool = _imu("enabled")
-    window_s: float = _imu("window_s", "[0.1, 1000]")  # tracked poses the fit uses [s]
-    # the fit needs tracked poses spanning at least this [s] (at most window_s)
-    min_window_s: float = _imu("min_window_s", "[0.05, 1000]")
-    # longest time after the last tracked pose that is bridged [s] (dead reckoning's error grows
-    # with its square; 0: never)
-    max_gap_s: float = _imu("max_gap_s", "[0, 100]")
-    # IMU samples further apart than this: no bridge across the hole [s]
-    max_sample_gap_s: float = _imu("max_sample_gap_s", "(0, 10]")
-    gravity_mps2: float = _imu("gravity_mps2", "[1, 100]")  # expected |g| [m/s^2]
-    # a fitted gravity further off than this is a bad fit: no bridge [m/s^2]
+    time_offset_s: float = _imu("time_offset_s", "[-10, 10]")  # t_cam = t_imu + this [s]
+    # IMU noise, Kalibr / EuRoC sensor.yaml units
+    gyro_noise_density: float = _imu("gyro_noise_density", "[0, 1]")  # [rad/s/sqrt(Hz)]
+    acc_noise_density: float = _imu("acc_noise_density", "[0, 1]")  # [m/s^2/sqrt(Hz)]
+    gyro_random_walk: float = _imu("gyro_random_walk", "[0, 1]")  # [rad/s^2/sqrt(Hz)]
+    acc_random_walk: float = _imu("acc_random_walk", "[0, 1]")  # [m/s^3/sqrt(Hz)]
+    gravity_mps2: float = _imu("gravity_mps2", "(0, 20)")  # expected |g| [m/s^2]
+    # an initialisation whose unconstrained gravity is further off is refused [m/s^2]
     gravity_tolerance_mps2: float = _imu("gravity_tolerance_mps2", "(0, 100]")
+    window_s: float = _imu("window_s", "[0.1, 1000]")  # tracked poses the initialisation uses [s]
+    # the initialisation needs tracked poses spanning at least this [s] (at most window_s)
+    min_window_s: float = _imu("min_window_s", "[0.05, 1000]")
+    # the initialisation runs again this long after the first [s] ...
+    refine_after_s: float = _imu("refine_after_s", "[0, 1e6]")
+    # ... over a window in which the body moved at least this far [m]
+    refine_min_path_m: float = _imu("refine_min_path_m", "[0, 1e6]")
+    # IMU samples further apart than this: no propagation across the hole [s]
+    max_sample_gap_s: float = _imu("max_sample_gap_s", "(0, 10]")
+    # lost when the position sigma passes this fraction of the distance driven since the last
+    # frame the camera tracked ...
+    lost_sigma_fraction: float = _imu("lost_sigma_fraction", "[0, 10]")
+    lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1e6]")  # ... or this floor [m]
+    max_gap_s: float = _imu("max_gap_s", "[0, 1e6]")  # and after this long without vision [s]
+    # a frame not tracked (fewer than min_inliers) still corrects the state with this many
+    # inliers (0: never)
+    weak_update_min_inliers: int = _imu("weak_update_min_inliers", "[0, 100000]")
+    # an INERTIAL frame with stereo points for a map becomes a keyframe at the IMU's pose when the
+    # last keyframe is this old: the map goes on where it did not reach (0: never) [s]
+    keyframe_interval_s: float = _imu("keyframe_interval_s", "[0, 1e6]")
+    # the pose optimiser's information is scaled by this before it corrects the state
+    visual_information_scale: float = _imu("visual_information_scale", "[1e-6, 1e6]")
 
     def relations_error(self, where: str) -> str | None:
-        """The C++ check between two keys (InertialBridgeOptions::Check), as a message naming
+        """The C++ check between two keys (InertialOptions::Check), as a message naming
         both, or None."""
         if self.min_window_s > self.window_s:
             return (

@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "slslam/lidar/imu_preintegration.h"
+#include "slslam/inertial/imu_preintegration.h"
 
 namespace slslam::lidar {
 

@@ -10,6 +10,7 @@
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
+#include <ceres/sized_cost_function.h>
 #include <Eigen/Cholesky>
 
 #include "slslam/core/check.h"
@@ -58,6 +59,36 @@ struct PoseTerm {
   double huber = 0.0;   ///< Huber threshold on the whitened residual's norm [-]
   double weight = 1.0;  ///< scale of the term's cost [-]
   bool line = false;    ///< the landmark is a line (orthonormal parameters)
+  bool prior = false;   ///< the pose prior: no landmark, never a kernel
+};
+
+// The pose prior's whitened residual L^T d (information = L L^T) with d = Minus(pose, mean) in
+// the left tangent; its Jacobian in the tangent is taken as L^T (d's own Jacobian is the
+// identity at d = 0, and off it by terms of the order of d).
+class PosePriorCost final : public ceres::SizedCostFunction<6, kPoseSize> {
+ public:
+  explicit PosePriorCost(const PosePrior& prior) {
+    PoseToParameters(prior.mean, mean_.data());
+    const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(prior.information);
+    sqrt_information_t_ = llt.matrixL().transpose();
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    Eigen::Matrix<double, 6, 1> d;
+    PoseManifold().Minus(parameters[0], mean_.data(), d.data());
+    Eigen::Map<Eigen::Matrix<double, 6, 1>> r(residuals);
+    r = sqrt_information_t_ * d;
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, 6, kPoseSize, Eigen::RowMajor>> j(jacobians[0]);
+      j.setZero();
+      j.leftCols<6>() = sqrt_information_t_;
+    }
+    return true;
+  }
+
+ private:
+  std::array<double, kPoseSize> mean_;
+  Eigen::Matrix<double, 6, 6> sqrt_information_t_;
 };
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -87,24 +118,26 @@ void AddToNormalEquations(const double* jacobian, const double* residual, double
 bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, const double* pose,
                        PoseNormalEquations* out) {
   *out = PoseNormalEquations{};
-  double residual[4];
-  double jacobian[4 * kPoseSize];  // row-major rows x 7; the tangent is the first 6 columns
+  double residual[6];
+  double jacobian[6 * kPoseSize];  // row-major rows x 7; the tangent is the first 6 columns
   for (const PoseTerm* term : terms) {
     const double* parameters[2] = {pose, term->landmark};
     double* jacobians[2] = {jacobian, nullptr};
     if (!term->cost->Evaluate(parameters, residual, jacobians)) return false;
-    const int rows = term->cost->num_residuals();  // 2 or 3
+    const int rows = term->cost->num_residuals();  // 2 or 3; 6 for the prior
     double squared = 0.0;
     for (int r = 0; r < rows; ++r) squared += residual[r] * residual[r];
     double rho = squared, rho1 = 1.0;
-    if (robust && squared > term->huber * term->huber) {
+    if (robust && !term->prior && squared > term->huber * term->huber) {
       const double norm = std::sqrt(squared);
       rho = 2.0 * term->huber * norm - term->huber * term->huber;
       rho1 = term->huber / norm;
     }
     out->cost += 0.5 * term->weight * rho;
     const double w = term->weight * rho1;
-    if (rows == 3) {
+    if (rows == 6) {
+      AddToNormalEquations<6>(jacobian, residual, w, out);
+    } else if (rows == 3) {
       AddToNormalEquations<3>(jacobian, residual, w, out);
     } else {
       AddToNormalEquations<2>(jacobian, residual, w, out);
@@ -191,6 +224,10 @@ void SolvePoseCeres(const std::vector<const PoseTerm*>& terms, bool robust, int 
   ceres::Problem problem(problem_options);
   problem.AddParameterBlock(pose, kPoseSize, new PoseManifold);
   for (const PoseTerm* term : terms) {
+    if (term->prior) {
+      problem.AddResidualBlock(term->cost.get(), nullptr, pose);
+      continue;
+    }
     ceres::LossFunction* loss = robust ? new ceres::HuberLoss(term->huber) : nullptr;
     if (term->weight != 1.0) {
       loss = new ceres::ScaledLoss(loss, term->weight, ceres::TAKE_OWNERSHIP);
@@ -226,7 +263,7 @@ void PoseOptimizerOptions::Check() const {
 PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_world,
                                  const std::vector<PointObservation>& points,
                                  const std::vector<LineObservation>& lines,
-                                 const PoseOptimizerOptions& options) {
+                                 const PoseOptimizerOptions& options, const PosePrior* prior) {
   rig.Check();
   Require(cam_from_world.rotation.allFinite() && cam_from_world.translation.allFinite(),
           "initial pose is not finite");
@@ -277,6 +314,17 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
     term.landmark = line_params[i].data();
   }
 
+  PoseTerm prior_term;
+  if (prior != nullptr) {
+    Require(prior->information.allFinite() && prior->mean.rotation.allFinite() &&
+                prior->mean.translation.allFinite(),
+            "pose prior is not finite");
+    prior_term.cost = std::make_unique<PosePriorCost>(*prior);
+    prior_term.prior = true;
+  }
+  // With a prior one observation is enough to keep; without, three determine a pose.
+  const size_t min_active = prior != nullptr ? 1 : 3;
+
   std::array<double, kPoseSize> pose;
   PoseToParameters(cam_from_world, pose.data());
   std::vector<const PoseTerm*> active;
@@ -290,10 +338,11 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
       if (result.line_inlier[i]) active.push_back(&line_terms[i]);
     }
     // Three points (or an equivalent set of lines) determine a pose; fewer is not a pose.
-    if (active.size() < 3) {
+    if (active.size() < min_active) {
       if (round == 0) return result;  // success stays false, pose stays the initial guess
       break;
     }
+    if (prior != nullptr) active.push_back(&prior_term);
     if (options.own_solver) {
       SolvePoseLevenbergMarquardt(active, robust, options.iterations_per_round, pose.data());
     } else {
@@ -317,7 +366,22 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
       std::count(result.point_inlier.begin(), result.point_inlier.end(), true));
   result.line_inliers = static_cast<int>(
       std::count(result.line_inlier.begin(), result.line_inlier.end(), true));
-  result.success = result.point_inliers + result.line_inliers >= 3;
+  result.success = result.point_inliers + result.line_inliers >= static_cast<int>(min_active);
+  if (prior != nullptr) {
+    // The posterior information at the result: the inliers without kernel and the prior.
+    active.clear();
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (result.point_inlier[i]) active.push_back(&point_terms[i]);
+    }
+    for (size_t i = 0; i < line_terms.size(); ++i) {
+      if (result.line_inlier[i]) active.push_back(&line_terms[i]);
+    }
+    active.push_back(&prior_term);
+    PoseNormalEquations at_result;
+    if (EvaluatePoseTerms(active, /*robust=*/false, pose.data(), &at_result)) {
+      result.information = at_result.information;
+    }
+  }
   return result;
 }
 

@@ -46,6 +46,14 @@ struct PoseOptimizerOptions {
   void Check() const;
 };
 
+// A Gaussian prior on the pose (the visual-inertial tracker's IMU prediction): the cost
+// 1/2 d^T information d with d the left tangent (rho, omega) of cam_from_world against `mean`
+// (optimization/manifolds.h), added to every round without a robust kernel.
+struct PosePrior {
+  Rigid3d mean;  ///< cam_from_world
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct PoseOptimizerResult {
   Rigid3d cam_from_world;          ///< world -> camera
   std::vector<bool> point_inlier;  ///< per input point observation
@@ -53,13 +61,18 @@ struct PoseOptimizerResult {
   int point_inliers = 0;
   int line_inliers = 0;
   bool success = false;  ///< false: too few usable observations, the pose is the initial one
+  /// With a prior: the Gauss-Newton information of the left tangent at the result (the inlier
+  /// observations without kernel, plus the prior); zero otherwise.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 // Optimises cam_from_world from an initial guess. Observations of landmarks behind the camera at
-// the start count as outliers. Deterministic (one thread).
+// the start count as outliers. Deterministic (one thread). With a prior the pose is determined
+// even by fewer than three observations (success then needs one inlier).
 PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_world,
                                  const std::vector<PointObservation>& points,
                                  const std::vector<LineObservation>& lines,
-                                 const PoseOptimizerOptions& options = {});
+                                 const PoseOptimizerOptions& options = {},
+                                 const PosePrior* prior = nullptr);
 
 }  // namespace slslam

@@ -147,15 +147,27 @@ void Tracker::FollowCorrections() {
   Map& map = atlas_.map(resolved);
   MutexLock lock(map.mutex());
   if (resolved == active_ && map.correction_epoch() == seen_epoch_) return;
+  const int before_active = active_;
   active_ = resolved;
   seen_epoch_ = map.correction_epoch();
-  if (bridge_) bridge_->ResetPoses();  // its poses are in the world before the correction
-  // The last pose relative to the reference keyframe, as recorded, on the keyframe's new pose.
-  if (records_.empty() || !have_pose_) return;
-  const FrameRecord& r = records_.back();
-  Rigid3d ref_from_world;
-  if (r.reference_kf < 0 || !map.KeyFramePose(r.reference_kf, &ref_from_world)) return;
-  last_cam_from_world_ = r.frame_from_ref * ref_from_world;
+  // The last pose relative to the reference keyframe, as recorded, on the keyframe's new pose;
+  // the inertial state follows it into the corrected world (or is forgotten when it cannot).
+  bool followed = false;
+  if (!records_.empty() && have_pose_) {
+    const FrameRecord& r = records_.back();
+    Rigid3d ref_from_world;
+    if (r.reference_kf >= 0 && map.KeyFramePose(r.reference_kf, &ref_from_world)) {
+      const Rigid3d before = last_cam_from_world_;
+      last_cam_from_world_ = r.frame_from_ref * ref_from_world;
+      followed = true;
+      if (inertial_ && inertial_map_ == before_active) {
+        // world_new_from_world_old = (cam_from_world_new)^-1 * cam_from_world_old
+        inertial_->ChangeWorld(last_cam_from_world_.Inverse() * before);
+        inertial_map_ = active_;
+      }
+    }
+  }
+  if (inertial_ && !followed) inertial_->Reset();
 }
 
 std::unique_lock<Mutex> Tracker::LockActiveMap() {
@@ -184,17 +196,69 @@ void Tracker::Flush() {
 void Tracker::AddImu(double t_s, const Eigen::Vector3d& gyro_radps,
                      const Eigen::Vector3d& acc_mps2) {
   if (!options_.use_imu) return;
-  if (!bridge_) bridge_ = std::make_unique<InertialBridge>(options_.imu);
-  bridge_->AddImu(t_s, gyro_radps, acc_mps2);
+  if (!inertial_) inertial_ = std::make_unique<InertialEstimator>(options_.imu);
+  inertial_->AddImu(t_s, gyro_radps, acc_mps2);
 }
 
-void Tracker::BridgePose(const StereoFrame& frame, const Rigid3d& cam_from_world) {
-  if (!bridge_) return;
-  if (bridge_map_ != active_) {  // another map's world: the poses before do not fit
-    bridge_->ResetPoses();
-    bridge_map_ = active_;
+bool Tracker::InertialPrior(const StereoFrame& frame, PosePrior* prior) const {
+  return inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
+         inertial_->PosePriorAt(frame.timestamp, prior);
+}
+
+void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
+                           const Matrix6d& information, bool with_prior) {
+  if (!inertial_) return;
+  if (inertial_map_ != active_) {  // another map's world: the state before does not fit
+    inertial_->Reset();
+    inertial_map_ = active_;
   }
-  bridge_->AddPose(frame.timestamp, cam_from_world);
+  inertial_->AddVisualPose(frame.timestamp, cam_from_world, information, with_prior);
+}
+
+bool Tracker::InertialCarry(const StereoFrame& frame, const PoseOptimizerResult& local_pose,
+                            bool with_prior, Rigid3d* cam_from_world) {
+  if (!inertial_ || !inertial_->initialised() || inertial_map_ != active_) return false;
+  // Too few inliers to count as tracked, enough to correct the state (the optimisation had the
+  // prior: its information is the posterior's).
+  const int inliers = local_pose.point_inliers + local_pose.line_inliers;
+  const int weak = options_.imu.weak_update_min_inliers;
+  if (with_prior && local_pose.success && weak > 0 && inliers >= weak &&
+      !local_pose.information.isZero(0.0)) {
+    inertial_->AddVisualPose(frame.timestamp, local_pose.cam_from_world, local_pose.information,
+                             /*with_prior=*/true);
+    ++stats_.inertial_weak_updates;
+  } else if (!inertial_->Propagate(frame.timestamp)) {
+    inertial_->Reset();
+    return false;
+  }
+  if (!inertial_->Trustworthy()) {
+    inertial_->Reset();
+    return false;
+  }
+  *cam_from_world = inertial_->cam_from_world();
+  return true;
+}
+
+Tracker::InertialReport Tracker::inertial_report() const {
+  InertialReport r;
+  if (!inertial_) return r;
+  r.has_imu = true;
+  r.initialised = inertial_->initialised();
+  const InertialEstimator::Report& e = inertial_->report();
+  r.first_pose_s = e.first_pose_s;
+  r.first_init_s = e.first_init_s;
+  r.initialisations = e.initialisations;
+  r.refinements = e.refinements;
+  r.last_failure = e.last_failure;
+  r.gyro_bias = inertial_->state().bias.gyro;
+  r.acc_bias = inertial_->state().bias.acc;
+  r.g_world = inertial_->g_world();
+  return r;
+}
+
+void Tracker::FillInertial(TrackResult* result) const {
+  result->imu_initialised = inertial_ && inertial_->initialised() && inertial_map_ == active_;
+  result->position_sigma_m = result->imu_initialised ? inertial_->state().PositionSigma() : 0.0;
 }
 
 void Tracker::Predict(Rigid3d* pred_cam_from_world) const {
@@ -440,6 +504,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
   current_right_ = &right_image;
   TrackResult result = TrackFrame(frame);
   if (result.needs_keypoints) return result;  // (handed back: it comes again, counted then)
+  FillInertial(&result);
   // (the frame as it ended up: its left lines completed on demand or not)
   if (options_.use_lines && !frame->left_lines_pending) ++stats_.line_frames;
   result.frame_lines = frame->NumLines();
@@ -476,11 +541,16 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   FollowCorrections();
   anchor_ = Anchor{};
   Rigid3d predicted;  // cam_from_world
-  Predict(&predicted);
-  // Recently lost with the IMU: its pose is the better guess (kept when it cannot bridge).
-  if (bridge_ && mode_ == Mode::kRecentlyLost && bridge_map_ == active_) {
-    bridge_->Predict(frame->timestamp, &predicted);
-  }
+  // With the IMU initialised its propagated state predicts the pose and gives the frame's pose
+  // optimisation its prior; otherwise the constant-velocity model predicts.
+  PosePrior prior;
+  bool have_prior = false;
+  const auto predict = [&]() {
+    Predict(&predicted);
+    have_prior = mode_ != Mode::kLost && InertialPrior(*frame, &prior);
+    if (have_prior) predicted = prior.mean;
+  };
+  predict();
   // lines_on_demand: a frame that starts a map, a frame while lost, and a frame after thin
   // tracking take their lines before anything else (as if extracted up front).
   if (frame->left_lines_pending &&
@@ -499,7 +569,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       mode_ = Mode::kTracking;
       SetPose(predicted, /*update_velocity=*/false);
       RecordFrame(*frame, /*keyframe=*/true);
-      BridgePose(*frame, predicted);
+      InertialPose(*frame, predicted, Matrix6d::Zero(), /*with_prior=*/false);
     } else {
       result.state = TrackingState::kNotInitialized;
     }
@@ -533,7 +603,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
         lock.unlock();
         active_ = predicted_in;  // FollowCorrections sees the change and follows it
         FollowCorrections();
-        Predict(&predicted);
+        predict();
         continue;
       }
       local = SnapshotLocalMap(*frame, map, last_keyframe_, predicted, points_visible);
@@ -552,7 +622,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     }
     // (projected keypoints are aligned to their patches already)
     tracking = TrackSnapshot(*frame, local, predicted, scale, &valid,
-                             project ? nullptr : current_left_);
+                             project ? nullptr : current_left_, have_prior ? &prior : nullptr);
     tracking.matching_ms += projection_ms;  // (placing the points is their matching)
   };
   if (mode_ != Mode::kLost) {
@@ -574,6 +644,9 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
     }
   }
+  // The local map's pose optimisation (with the IMU prior), for the inertial state's weak
+  // correction when the frame is not tracked; relocalisation below overwrites `tracking`.
+  const PoseOptimizerResult local_pose = tracking.pose;
   if (!tracked && mode_ != Mode::kTracking) {
     // Recently lost: the active map only; lost: every map, the active one first, then the newest.
     std::vector<int> order = {active_};
@@ -659,7 +732,8 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
       }
       if (same_world) {
         LocalTracking with_lines =
-            TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_);
+            TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_,
+                          have_prior ? &prior : nullptr);
         result.matching_ms += with_lines.matching_ms;
         result.optimisation_ms += with_lines.optimisation_ms;
         if (with_lines.pose.success && with_lines.weighted_inliers >= options_.min_inliers) {
@@ -696,7 +770,10 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     result.map_index = active_;
     // After a loss the velocity is unknown: start again from rest.
     SetPose(tracking.pose.cam_from_world, /*update_velocity=*/velocity_known);
-    BridgePose(*frame, tracking.pose.cam_from_world);
+    // (a relocalised pose has no information: the state takes it as it is)
+    InertialPose(*frame, tracking.pose.cam_from_world,
+                 relocalised ? Matrix6d::Zero() : Matrix6d(tracking.pose.information),
+                 have_prior && !relocalised);
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     lost_map_candidates_ = 0;
@@ -761,18 +838,34 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     recent_poses_.clear();
   }
   ++lost_count_;
-  // A short outage with the IMU: the bridged pose is an estimate, and the frame is recorded.
-  // Tracking goes on retrying the local map around it (a wider window, as recently lost).
+  // The camera contributed too little: while the inertial state's uncertainty allows, its pose
+  // is the frame's, and the frame is recorded. Tracking goes on retrying the local map around it
+  // (a wider window, as recently lost).
   Rigid3d inertial;
-  if (bridge_ && mode_ != Mode::kLost && bridge_map_ == active_ &&
-      bridge_->Predict(frame->timestamp, &inertial)) {
+  if (mode_ != Mode::kLost && InertialCarry(*frame, local_pose, have_prior, &inertial)) {
     mode_ = Mode::kRecentlyLost;
     ++stats_.inertial_frames;
     SetPose(inertial, /*update_velocity=*/true);
     result.state = TrackingState::kInertial;
     result.cam_from_world = inertial;
     result.map_index = active_;
-    RecordFrame(*frame, /*keyframe=*/false);
+    // The map goes on where the local map does not reach (a stretch driven in the dark, a wall
+    // whose features the map never saw): a lit frame becomes a keyframe at the IMU's pose, its
+    // stereo points new map points for the frames after it.
+    const double interval = options_.imu.keyframe_interval_s;
+    if (interval > 0.0 && !options_.localise_only && CouldStartMap(*frame) &&
+        frame->timestamp - last_keyframe_time_s_ >= interval) {
+      const auto start = Clock::now();
+      if (frame->left_lines_pending) frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
+      std::shared_ptr<const StereoFrame> keyframe = frame;
+      if (options_.use_lines) keyframe = WithStereoLines(std::move(keyframe));
+      InsertKeyFrame(keyframe, inertial, std::vector<int>(keyframe->NumKeypoints(), -1),
+                     std::vector<int>(keyframe->NumLines(), -1));
+      ++stats_.inertial_keyframes;
+      result.keyframe = true;
+      result.mapping_ms = Ms(start);
+    }
+    RecordFrame(*frame, result.keyframe);
     return result;
   }
   if (lost_count_ > options_.recently_lost_frames)
@@ -807,7 +900,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     lost_count_ = 0;
     lost_map_candidates_ = 0;
     RecordFrame(*frame, /*keyframe=*/true);
-    BridgePose(*frame, last_cam_from_world_);
+    InertialPose(*frame, last_cam_from_world_, Matrix6d::Zero(), /*with_prior=*/false);
   } else {
     result.state = TrackingState::kLost;
   }

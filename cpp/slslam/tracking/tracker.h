@@ -34,13 +34,14 @@
 #include "slslam/optimization/pose_optimizer.h"
 #include "slslam/place/keyframe_database.h"
 #include "slslam/place/vocabulary.h"
-#include "slslam/tracking/inertial_bridge.h"
+#include "slslam/tracking/inertial_estimator.h"
 #include "slslam/tracking/stereo_matching.h"
 
 namespace slslam {
 
-// OK, NEW_MAP and RELOCALISED frames carry a pose the camera estimated, INERTIAL frames one the
-// IMU carried on from the last of those (a short visual outage, see inertial_bridge.h);
+// OK, NEW_MAP and RELOCALISED frames carry a pose the camera estimated (with the IMU's prior once
+// it is initialised), INERTIAL frames one the IMU carried on where the camera contributed too
+// little (inertial_estimator.h);
 // RECENTLY_LOST frames a prediction (decaying velocity), LOST frames the frozen last prediction.
 enum class TrackingState {
   kNotInitialized = 0,
@@ -70,7 +71,9 @@ struct RelocalisationOptions {
 
 // Counts of the loss / recovery machinery since the tracker started.
 struct TrackingStats {
-  int inertial_frames = 0;  ///< frames the IMU bridged
+  int inertial_frames = 0;  ///< frames whose pose the IMU carried (state INERTIAL)
+  int inertial_weak_updates = 0;  ///< ... of them corrected by a weak visual pose
+  int inertial_keyframes = 0;     ///< ... of them made keyframes (InertialOptions::keyframe_interval_s)
   int relocalisations = 0;
   int relocalisation_attempts = 0;
   int maps_started = 0;
@@ -279,10 +282,11 @@ struct TrackerOptions {
   /// only after a frame tracked with at least `weak_keyframe_inliers` weighted inliers.
   bool dynamic_cells = true;
   DynamicCellOptions dynamic;
-  /// Bridge visual outages with the IMU (state INERTIAL) once samples are given (Tracker::AddImu);
-  /// without samples the tracker is camera-only whatever this says.
+  /// The IMU tightly coupled once samples are given (Tracker::AddImu) and it initialised: its
+  /// prediction and prior in every frame's pose, its propagated pose where the camera cannot
+  /// track (state INERTIAL); without samples the tracker is camera-only whatever this says.
   bool use_imu = true;
-  InertialBridgeOptions imu;
+  InertialOptions imu;
 
   void Check() const;
 };
@@ -318,6 +322,8 @@ struct TrackResult {
   /// place the map's points in it: nothing changed, track it again with detected keypoints
   bool needs_keypoints = false;
   int projected_keypoints = 0;  ///< tracked on this many projected keypoints (0: detected ones)
+  bool imu_initialised = false;  ///< the inertial state existed after this frame
+  double position_sigma_m = 0.0;  ///< its position standard deviation then (0: no IMU) [m]
 };
 
 struct MapExport {
@@ -364,6 +370,21 @@ class Tracker {
   LoopClosingStats loop_stats() const;
   std::vector<LoopEvent> loop_events() const;
   TrackingStats stats() const { return stats_; }
+  // The IMU's part of the run (metrics.json): whether samples came, when it initialised, the
+  // bias and gravity estimates now.
+  struct InertialReport {
+    bool has_imu = false;
+    bool initialised = false;
+    double first_pose_s = -1.0;
+    double first_init_s = -1.0;  ///< camera time of the first initialisation (-1: never) [s]
+    int initialisations = 0;
+    int refinements = 0;
+    std::string last_failure;
+    Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  ///< [rad/s]
+    Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();   ///< [m/s^2]
+    Eigen::Vector3d g_world = Eigen::Vector3d::Zero();    ///< in the active map's world [m/s^2]
+  };
+  InertialReport inertial_report() const;
   int num_maps() const { return atlas_.size(); }  ///< maps started (merged ones included)
   int live_maps() const;                          ///< maps not merged into another
   int active_map() const { return active_; }
@@ -444,7 +465,8 @@ class Tracker {
   LocalTracking TrackSnapshot(const StereoFrame& frame, const LocalMapSnapshot& local,
                               const Rigid3d& pred_cam_from_world, float radius_scale,
                               const std::vector<bool>* valid_keypoints = nullptr,
-                              const cv::Mat* refine_image = nullptr) const;
+                              const cv::Mat* refine_image = nullptr,
+                              const PosePrior* prior = nullptr) const;
   // Both in one (caller holds map.mutex()): relocalisation, loop verification.
   LocalTracking TrackLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                               const Rigid3d& pred_cam_from_world, float radius_scale,
@@ -494,10 +516,20 @@ class Tracker {
   std::unique_ptr<LocalMapper> mapper_;
   bool keyframe_images_ = false;  // keyframes keep their left image for local mapping (patches)
   std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
-  std::unique_ptr<InertialBridge> bridge_;  ///< from the first IMU sample on (use_imu)
-  int bridge_map_ = -1;                     ///< the map whose world the bridge's poses are in
-  // Gives the bridge the pose the camera estimated for `frame` (in the active map's world).
-  void BridgePose(const StereoFrame& frame, const Rigid3d& cam_from_world);
+  std::unique_ptr<InertialEstimator> inertial_;  ///< from the first IMU sample on (use_imu)
+  int inertial_map_ = -1;  ///< the map whose world the inertial state is in
+  // The inertial state's prior on the frame's pose; false when there is none (no IMU, not
+  // initialised, another map's world, samples missing).
+  bool InertialPrior(const StereoFrame& frame, PosePrior* prior) const;
+  // Gives the inertial estimator the pose the camera estimated for `frame` (in the active map's
+  // world), with the pose optimiser's information (zero: none) and whether it had the prior.
+  void InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
+                    const Matrix6d& information, bool with_prior);
+  // A frame the camera did not track: true (and the frame's pose) when the inertial state
+  // carries it, after the weak visual correction `tracking` may give.
+  bool InertialCarry(const StereoFrame& frame, const PoseOptimizerResult& local_pose,
+                     bool with_prior, Rigid3d* cam_from_world);
+  void FillInertial(TrackResult* result) const;
   // Aligns matched keypoints to their map points' patches in `image` (track_refine_window_px;
   // null or empty: none): fills tracking->refined_uv (rows of the snapshot: called before they
   // become map ids).

@@ -139,7 +139,8 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
                                               const Rigid3d& pred_cam_from_world,
                                               float radius_scale,
                                               const std::vector<bool>* valid_keypoints,
-                                              const cv::Mat* refine_image) const {
+                                              const cv::Mat* refine_image,
+                                              const PosePrior* prior) const {
   LocalTracking out;
   const auto match_start = Clock::now();
   // Points: matched in a window around the predicted position.
@@ -230,7 +231,7 @@ Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
     lines[i].end_px = frame.lines[out.segments[i]].end.cast<double>();
     lines[i].sigma_px = options_.line_sigma_px;
   }
-  out.pose = OptimizePose(options_.rig, pred_cam_from_world, points, lines, options_.pose);
+  out.pose = OptimizePose(options_.rig, pred_cam_from_world, points, lines, options_.pose, prior);
   out.optimisation_ms = Ms(opt_start);
   out.weighted_inliers =
       out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;

@@ -81,6 +81,8 @@ COUNTS = (
     "map",
     "weighted_inliers",
     "masked_keypoints",
+    "imu",
+    "position_sigma_m",
 )
 
 
@@ -369,6 +371,12 @@ def _map_metrics(map_data: MapData) -> dict:
             "rejected": stats.loops_rejected,
         },
         "merges": stats.merges,
+        "imu": stats.imu
+        | (
+            {"init_after_s": round(stats.imu["first_init_s"] - stats.imu["first_pose_s"], 6)}
+            if stats.imu.get("first_init_s", -1.0) >= 0.0
+            else {}
+        ),
         "global_ba_runs": stats.global_ba_runs,
         "loop_closing_ms": stats.loop_closing_ms,
         "global_ba_ms": stats.global_ba_ms,
@@ -593,7 +601,7 @@ def run_sequence(
 
 
 def _give_imu(sequence, config: Config, tracker: Tracker) -> None:
-    """The sequence's IMU samples to the tracker's bridge (``tracking.imu``), when it has any."""
+    """The sequence's IMU samples to the tracker (``tracking.imu``), when it has any."""
     if not config.tracking.imu.enabled or not callable(getattr(sequence, "imu", None)):
         return
     if getattr(sequence, "has_imu", True) is False:  # a bag run without an IMU topic

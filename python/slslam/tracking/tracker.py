@@ -140,6 +140,8 @@ class FrameCounts(_FieldsAsMapping):
     #: 1 when tracked on keypoints projected from the map (tracking.projected_max_frames): the
     #: point front end did not run on it, ``keypoints`` counts the projected ones; else 0
     projected: int = 0
+    imu: int = 0  #: 1 when the inertial state existed after the frame (IMU initialised), else 0
+    position_sigma_m: float = 0.0  #: its position standard deviation then [m] (0: no IMU)
 
 
 @dataclass
@@ -224,6 +226,9 @@ class MapStats:
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0
+    inertial_frames: int = 0  #: frames whose pose the IMU carried (state INERTIAL)
+    inertial_weak_updates: int = 0  #: ... of them corrected by a weak visual pose
+    inertial_keyframes: int = 0  #: ... of them made keyframes (tracking.imu.keyframe_interval_s)
     line_frames: int = 0  #: frames whose left lines were extracted (all, unless lines_on_demand)
     loop_keyframes_checked: int = 0
     loop_candidates_verified: int = 0
@@ -239,6 +244,9 @@ class MapStats:
     welding_ba_runs: int = 0  #: welding BAs over the seam of a merge
     welding_ba_ms: float = 0.0  #: their build, solve and write back
     loop_events: tuple[LoopEvent, ...] = ()
+    #: the IMU: has_imu, initialised, first_pose_s and first_init_s (camera time [s], -1: never),
+    #: initialisations, refinements, last_failure, gyro_bias_radps, acc_bias_mps2, g_world_mps2
+    imu: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """Plain values (loop events as dicts), e.g. for metrics.json."""
@@ -471,12 +479,13 @@ class Tracker:
 
     # -- per frame -----------------------------------------------------------------------------
     def add_imu(self, t_s: np.ndarray, gyro_radps: np.ndarray, acc_mps2: np.ndarray) -> None:
-        """IMU samples for the bridge through short visual outages (state ``INERTIAL``, see
-        ``tracking.imu`` in configs/default.yaml): ``t_s`` (N,) seconds on the frames' clock,
-        increasing; ``gyro_radps`` and ``acc_mps2`` (N, 3) in the IMU (body) frame, angular rate
-        and specific force. Give them before the frames they precede (online) or all at once
-        before the first frame (offline); each frame uses those up to its timestamp. Bad samples
-        raise ``InputError``; with ``tracking.imu.enabled: false`` they are ignored."""
+        """IMU samples for the visual-inertial tracking (``tracking.imu`` in
+        configs/default.yaml, docs/imu.md): ``t_s`` (N,) seconds on the IMU's clock (the frames'
+        clock shifted by ``tracking.imu.time_offset_s``: t_cam = t_imu + offset), increasing;
+        ``gyro_radps`` and ``acc_mps2`` (N, 3) in the IMU (body) frame, angular rate and specific
+        force. Give them before the frames they precede (online) or all at once before the first
+        frame (offline); each frame uses those up to its timestamp. Bad samples raise
+        ``InputError``; with ``tracking.imu.enabled: false`` they are ignored."""
         t = np.asarray(t_s, dtype=np.float64).reshape(-1)
         gyro = np.asarray(gyro_radps, dtype=np.float64)
         acc = np.asarray(acc_mps2, dtype=np.float64)
@@ -504,7 +513,10 @@ class Tracker:
         if self._imu_pending is None:
             return
         t, gyro, acc = self._imu_pending
-        n = int(np.searchsorted(t, timestamp, side="right"))
+        # (the samples are on the IMU's clock: t_cam = t_imu + tracking.imu.time_offset_s)
+        n = int(
+            np.searchsorted(t, timestamp - self.config.tracking.imu.time_offset_s, side="right")
+        )
         if n == 0:
             return
         self._core.add_imu(t[:n], np.ascontiguousarray(gyro[:n]), np.ascontiguousarray(acc[:n]))
@@ -814,6 +826,8 @@ class Tracker:
             weighted_inliers=round(float(out.weighted_inliers), 3),
             masked_keypoints=out.masked_keypoints,
             projected=int(out.projected_keypoints > 0),
+            imu=int(out.imu_initialised),
+            position_sigma_m=round(float(out.position_sigma_m), 6),
         )
         result = TrackResult(index, timestamp, out.state, T_world_cam, timings, counts)
         self.last_image, self.last_keypoints_uv = frame.left, kl.uv
@@ -912,7 +926,7 @@ class Tracker:
         (and applies an overlapped local BA, ``tracking.mapping_overlap``); False takes the map
         as it stands and changes nothing, so a viewer's snapshots leave the poses as they were."""
         m = self._core.map(settle)
-        names = {f.name for f in dataclasses.fields(MapStats)} - {"loop_events"}
+        names = {f.name for f in dataclasses.fields(MapStats)} - {"loop_events", "imu"}
         events = tuple(
             LoopEvent(
                 int(e["frame_index"]),
@@ -927,7 +941,18 @@ class Tracker:
             np.asarray(m["lines"]).reshape(-1, 6),
             int(m["keyframes"]),
             int(m["maps"]),
-            MapStats(**{k: m[k] for k in names}, loop_events=events),
+            MapStats(
+                **{k: m[k] for k in names},
+                loop_events=events,
+                imu={
+                    k: (
+                        np.asarray(v, dtype=float).reshape(-1).round(9).tolist()
+                        if k.endswith(("_radps", "_mps2"))
+                        else v
+                    )
+                    for k, v in m["imu"].items()
+                },
+            ),
         )
 
     def final_trajectory(self) -> FinalTrajectory:

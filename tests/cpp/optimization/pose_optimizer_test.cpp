@@ -286,3 +286,75 @@ TEST(PoseOptimizer, StepsEqualCeresWithHuberAndScaledLines) {
 
 }  // namespace
 }  // namespace slslam
+
+namespace slslam {
+namespace {
+
+// The pose prior (the visual-inertial tracker's IMU prediction): alone it gives its mean and
+// information, a weak prior changes nothing, a strong one holds
+// the pose, two observations that make a pose with it, and the posterior information.
+TEST(PoseOptimizerPrior, APriorWithNoUsefulObservationGivesItsMeanAndInformation) {
+  const Scene s = MakeScene(10, 0, 0.0, 4);
+  PosePrior prior;
+  prior.mean = Rigid3d(s.R, s.t);
+  Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Random();
+  prior.information = M * M.transpose() + 6.0 * Eigen::Matrix<double, 6, 6>::Identity();
+  // Evaluate the prior's cost through the optimiser on a prior-only problem: with one weak
+  // observation far away the result is the prior's mean.
+  PoseOptimizerOptions options;
+  std::vector<PointObservation> one = {s.points[0]};
+  one[0].sigma_px = 1e6;
+  const PoseOptimizerResult r =
+      OptimizePose(EurocLikeRig(), PerturbedStartPose(s), one, {}, options, &prior);
+  ASSERT_TRUE(r.success);
+  EXPECT_LT(TranslationDifference(r.cam_from_world, prior.mean), 1e-6);
+  EXPECT_LT(RotationErrorDeg(r.cam_from_world.rotation, prior.mean.rotation), 1e-5);
+  EXPECT_LT((r.information - prior.information).norm(), 1e-6 * prior.information.norm());
+}
+
+TEST(PoseOptimizerPrior, AWeakPriorChangesNothingAndAStrongOneHoldsThePose) {
+  const Scene s = MakeScene(150, 20, 0.1, 5);
+  const Rigid3d start = PerturbedStartPose(s);
+  const PoseOptimizerResult free = OptimizePose(EurocLikeRig(), start, s.points, s.lines);
+  PosePrior weak;
+  weak.mean = start;  // 8-10 cm and 2.5 degrees off the truth
+  weak.information = 1e-9 * Eigen::Matrix<double, 6, 6>::Identity();
+  const PoseOptimizerResult with_weak =
+      OptimizePose(EurocLikeRig(), start, s.points, s.lines, {}, &weak);
+  EXPECT_LT(TranslationDifference(free.cam_from_world, with_weak.cam_from_world), 1e-6);
+  EXPECT_EQ(free.point_inliers, with_weak.point_inliers);
+  // The posterior information holds the observations' (a fraction of a mm on 150 points).
+  EXPECT_GT(with_weak.information.diagonal().head<3>().minCoeff(), 1e4);
+  PosePrior strong = weak;
+  strong.information = 1e12 * Eigen::Matrix<double, 6, 6>::Identity();
+  const PoseOptimizerResult held =
+      OptimizePose(EurocLikeRig(), start, s.points, s.lines, {}, &strong);
+  EXPECT_LT(TranslationDifference(held.cam_from_world, start), 1e-4);
+}
+
+TEST(PoseOptimizerPrior, TwoObservationsAndThePriorMakeAPose) {
+  const Scene s = MakeScene(2, 0, 0.0, 6);
+  const Rigid3d truth(s.R, s.t);
+  const Rigid3d start = PerturbedStartPose(s);
+  EXPECT_FALSE(OptimizePose(EurocLikeRig(), start, s.points, {}).success);
+  PosePrior prior;
+  prior.mean = start;
+  prior.information = Eigen::Matrix<double, 6, 6>::Identity() * 1e2;  // 10 cm, 5.7 degrees
+  const PoseOptimizerResult r = OptimizePose(EurocLikeRig(), start, s.points, {}, {}, &prior);
+  EXPECT_TRUE(r.success);
+  EXPECT_EQ(r.point_inliers, 2);
+  // Pulled towards the truth by the two points.
+  const double before = TranslationDifference(start, truth);
+  const double after = TranslationDifference(r.cam_from_world, truth);
+  EXPECT_LT(after, before);
+  EXPECT_THROW(
+      {
+        PosePrior bad = prior;
+        bad.information(0, 0) = NAN;
+        OptimizePose(EurocLikeRig(), start, s.points, {}, {}, &bad);
+      },
+      std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace slslam

@@ -380,12 +380,26 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(relocalisation.min_inliers, "tracking.relocalisation.min_inliers", 0, 1e9, "(]"),
        FIELD(relocalisation.vocabulary_levels_up, "tracking.relocalisation.vocabulary_levels_up", 0,
              32, "[]"),
-       FIELD(imu.window_s, "tracking.imu.window_s", 1, 1e4, "[]"),  // >= min_window_s
-       FIELD(imu.min_window_s, "tracking.imu.min_window_s", 0, 3, "(]"),
-       FIELD(imu.max_gap_s, "tracking.imu.max_gap_s", 0, 1e4, "[]"),
+       FIELD(imu.time_offset_s, "tracking.imu.time_offset_s", -10, 10, "[]"),
+       FIELD(imu.gyro_noise_density, "tracking.imu.gyro_noise_density", 0, 1, "[]"),
+       FIELD(imu.acc_noise_density, "tracking.imu.acc_noise_density", 0, 1, "[]"),
+       FIELD(imu.gyro_random_walk, "tracking.imu.gyro_random_walk", 0, 1, "[]"),
+       FIELD(imu.acc_random_walk, "tracking.imu.acc_random_walk", 0, 1, "[]"),
+       FIELD(imu.gravity_mps2, "tracking.imu.gravity_mps2", 0, 20, "()"),
+       FIELD(imu.gravity_tolerance_mps2, "tracking.imu.gravity_tolerance_mps2", 0, 100, "(]"),
+       FIELD(imu.window_s, "tracking.imu.window_s", 1, 1000, "[]"),  // >= min_window_s
+       FIELD(imu.min_window_s, "tracking.imu.min_window_s", 0.05, 3, "[]"),  // <= window_s
+       FIELD(imu.refine_after_s, "tracking.imu.refine_after_s", 0, 1e6, "[]"),
+       FIELD(imu.refine_min_path_m, "tracking.imu.refine_min_path_m", 0, 1e6, "[]"),
        FIELD(imu.max_sample_gap_s, "tracking.imu.max_sample_gap_s", 0, 10, "(]"),
-       FIELD(imu.gravity_mps2, "tracking.imu.gravity_mps2", 0, 100, "(]"),
-       FIELD(imu.gravity_tolerance_mps2, "tracking.imu.gravity_tolerance_mps2", 0, 100, "(]")},
+       FIELD(imu.lost_sigma_fraction, "tracking.imu.lost_sigma_fraction", 0, 10, "[]"),
+       FIELD(imu.lost_sigma_min_m, "tracking.imu.lost_sigma_min_m", 0, 1e6, "[]"),
+       FIELD(imu.max_gap_s, "tracking.imu.max_gap_s", 0, 1e6, "[]"),
+       FIELD(imu.weak_update_min_inliers, "tracking.imu.weak_update_min_inliers", 0, 100000,
+             "[]"),
+       FIELD(imu.keyframe_interval_s, "tracking.imu.keyframe_interval_s", 0, 1e6, "[]"),
+       FIELD(imu.visual_information_scale, "tracking.imu.visual_information_scale", 1e-6, 1e6,
+             "[]")},
       construct, base);
 }
 

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "slslam/features/image_patch.h"
+#include "slslam/geometry/rotation.h"
 #include "slslam/mapping/triangulation.h"
 #include "slslam/optimization/bundle_adjustment.h"
 #include "slslam/place/vocabulary.h"
@@ -325,6 +326,89 @@ TEST(TrackerTest, AShortBlackoutIsRecentlyLostThenTrackingResumesInTheSameMap) {
     EXPECT_LT(CenterError(results[k], k), 0.05) << k;
   }
   EXPECT_EQ(tracker.num_maps(), 1);
+}
+
+// The camera's motion of TruePose as a function of time (frame k at 0.05 k s), for IMU samples.
+Rigid3d TrueWorldFromCam(double t) {
+  const double k = t / 0.05;
+  const Eigen::Vector3d center(0.15 * std::sin(k / 10.0), 0.02 * std::sin(k / 7.0), 0.05 * k);
+  const Eigen::Matrix3d R_wc =
+      Eigen::AngleAxisd(0.06 * std::sin(k / 15.0), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  return Rigid3d(R_wc, center);
+}
+
+// IMU samples of a body on the camera (body_from_cam the identity) at 200 Hz over [0, duration]:
+// white noise at EuRoC's densities, a constant bias; gravity along +y (down in the first
+// camera's frame, the world).
+void FeedTrueImu(double duration, Tracker* tracker) {
+  const Eigen::Vector3d g_world(0.0, 9.81, 0.0);
+  const InertialOptions noise;
+  std::mt19937 rng(17);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double dt = 0.005, h = 1e-3;
+  const Eigen::Vector3d gyro_bias(0.002, -0.001, 0.003), acc_bias(0.03, 0.02, -0.04);
+  for (int i = 0; i * dt <= duration + 1e-9; ++i) {
+    const double t = i * dt;
+    const Rigid3d pose = TrueWorldFromCam(t);
+    const Eigen::Vector3d omega =
+        LogSO3(Eigen::Quaterniond(TrueWorldFromCam(t - h).rotation.transpose() *
+                                  TrueWorldFromCam(t + h).rotation)) /
+        (2 * h);
+    const Eigen::Vector3d a_world = (TrueWorldFromCam(t + h).translation -
+                                     2.0 * pose.translation + TrueWorldFromCam(t - h).translation) /
+                                    (h * h);
+    Eigen::Vector3d wn, an;
+    for (int j = 0; j < 3; ++j) {
+      wn(j) = unit(rng) * noise.gyro_noise_density / std::sqrt(dt);
+      an(j) = unit(rng) * noise.acc_noise_density / std::sqrt(dt);
+    }
+    tracker->AddImu(t, omega + gyro_bias + wn,
+                    pose.rotation.transpose() * (a_world - g_world) + acc_bias + an);
+  }
+}
+
+TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
+  // 10 s lit (the IMU initialises after 1 s; the rest pins its biases down), 10 s with no feature
+  // at all (lamp out: 200 frames, 10 m driven), 2 s lit again. Camera-only the tracker is lost after recently_lost_frames; with the
+  // IMU every dark frame is INERTIAL, its position within 3 sigma of the truth by the
+  // uncertainty it reports, and tracking resumes in the same map.
+  const Scene scene;
+  Tracker tracker(Options(true, /*lines=*/false));
+  FeedTrueImu(22.0, &tracker);
+  std::vector<TrackResult> results;
+  for (int k = 0; k < 440; ++k) {
+    const bool blind = k >= 200 && k < 400;
+    results.push_back(tracker.Track(Render(scene, k, 0.5, blind)));
+  }
+  for (int k = 0; k < 200; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+  EXPECT_TRUE(results[45].imu_initialised);
+  for (int k = 200; k < 400; ++k) {
+    EXPECT_EQ(results[k].state, TrackingState::kInertial) << k;
+    EXPECT_TRUE(results[k].imu_initialised) << k;
+  }
+  const TrackResult& last_dark = results[399];
+  const double error = CenterError(last_dark, 399);
+  EXPECT_LT(error, 3.0 * last_dark.position_sigma_m)
+      << "error " << error << " m, sigma " << last_dark.position_sigma_m << " m";
+  EXPECT_LT(last_dark.position_sigma_m, 1.0);  // the lost bound: 10 % of the 10 m driven
+  EXPECT_GT(last_dark.position_sigma_m, results[200].position_sigma_m);
+  // Lit again 10 m on, where the map never reached: the first lit frame becomes a keyframe at
+  // the IMU's pose (INERTIAL), the next ones track on its points, no further off than the IMU
+  // had drifted.
+  EXPECT_EQ(results[400].state, TrackingState::kInertial);
+  EXPECT_TRUE(results[400].keyframe);
+  for (int k = 405; k < 440; ++k) {
+    EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+    EXPECT_LT(CenterError(results[k], k), error + 0.05) << k;
+  }
+  EXPECT_EQ(tracker.num_maps(), 1);
+  EXPECT_GE(tracker.stats().inertial_frames, 200);
+  EXPECT_LE(tracker.stats().inertial_frames, 205);
+  const Tracker::InertialReport report = tracker.inertial_report();
+  EXPECT_TRUE(report.has_imu);
+  EXPECT_GT(report.first_init_s, 0.9);
+  EXPECT_LT(report.first_init_s, 2.0);
+  EXPECT_LT((report.gyro_bias - Eigen::Vector3d(0.002, -0.001, 0.003)).norm(), 1e-3);
 }
 
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {

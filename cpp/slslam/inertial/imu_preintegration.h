@@ -3,8 +3,12 @@
 // first-order Jacobians with respect to the gyroscope and accelerometer biases, so a bias update
 // corrects the increments without integrating the samples again.
 //
-// Frames: the IMU frame is the body frame B; the world frame W has z up and gravity
-// g_W = (0, 0, -gravity_mps2). Increments are expressed in B at the first sample (B_i):
+// One implementation for the LiDAR-inertial smoother and the visual-inertial tracker.
+//
+// Frames: the IMU frame is the body frame B; in the world frame W gravity is g_W, by default
+// (0, 0, -gravity_mps2) (z up, the LiDAR module's world) or any vector given to Predict (the
+// visual maps' worlds are not gravity-aligned). Increments are expressed in B at the first
+// sample (B_i):
 //   delta_R = R_WBi^T R_WBj
 //   delta_v = R_WBi^T (v_j - v_i - g dt)
 //   delta_p = R_WBi^T (p_j - p_i - v_i dt - g dt^2 / 2)
@@ -13,7 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-namespace slslam::lidar {
+namespace slslam {
 
 // Continuous-time IMU noise (Kalibr / EuRoC sensor.yaml conventions).
 struct ImuNoiseOptions {
@@ -70,8 +74,11 @@ class ImuPreintegration {
   Eigen::Vector3d CorrectedDeltaV(const ImuBias& bias) const;
   Eigen::Vector3d CorrectedDeltaP(const ImuBias& bias) const;
 
-  // State at the end of the integrated interval from the state at its start.
+  // State at the end of the integrated interval from the state at its start (gravity_world()).
   NavState Predict(const NavState& start, const ImuBias& bias) const;
+  // The same under the gravity vector g_world [m/s^2] of another world frame.
+  NavState Predict(const NavState& start, const ImuBias& bias,
+                   const Eigen::Vector3d& g_world) const;
 
  private:
   ImuBias bias_hat_;
@@ -91,4 +98,4 @@ class ImuPreintegration {
 // Right Jacobian of SO(3) at w: Exp(w + d) ~= Exp(w) Exp(Jr(w) d).
 Eigen::Matrix3d RightJacobianSO3(const Eigen::Vector3d& w);
 
-}  // namespace slslam::lidar
+}  // namespace slslam

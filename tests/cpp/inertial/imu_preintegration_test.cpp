@@ -1,6 +1,6 @@
 // IMU preintegration against a known smooth motion: the increments match the integrated truth,
 // and the bias Jacobians match finite differences of re-integrated increments.
-#include "slslam/lidar/imu_preintegration.h"
+#include "slslam/inertial/imu_preintegration.h"
 
 #include <cmath>
 #include <vector>
@@ -9,7 +9,7 @@
 
 #include "slslam/geometry/rotation.h"
 
-namespace slslam::lidar {
+namespace slslam {
 namespace {
 
 const Eigen::Vector3d kGravity(0.0, 0.0, -9.81);
@@ -142,4 +142,4 @@ TEST(ImuPreintegration, CovarianceGrowsWithTimeAndBadInputThrows) {
 }
 
 }  // namespace
-}  // namespace slslam::lidar
+}  // namespace slslam

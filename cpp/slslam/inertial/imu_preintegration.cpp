@@ -1,11 +1,11 @@
-#include "slslam/lidar/imu_preintegration.h"
+#include "slslam/inertial/imu_preintegration.h"
 
 #include <cmath>
 
 #include "slslam/core/check.h"
 #include "slslam/geometry/rotation.h"
 
-namespace slslam::lidar {
+namespace slslam {
 
 void ImuNoiseOptions::Check() const {
   SLSLAM_CHECK(gyro_noise_density >= 0 && std::isfinite(gyro_noise_density),
@@ -91,8 +91,12 @@ Eigen::Vector3d ImuPreintegration::CorrectedDeltaP(const ImuBias& bias) const {
 }
 
 NavState ImuPreintegration::Predict(const NavState& start, const ImuBias& bias) const {
+  return Predict(start, bias, gravity_world());
+}
+
+NavState ImuPreintegration::Predict(const NavState& start, const ImuBias& bias,
+                                    const Eigen::Vector3d& g) const {
   const Eigen::Matrix3d R_i = start.R_world_body.toRotationMatrix();
-  const Eigen::Vector3d g = gravity_world();
   NavState end;
   end.R_world_body = Eigen::Quaterniond(R_i * CorrectedDeltaR(bias)).normalized();
   end.v_world_body = start.v_world_body + g * dt_s_ + R_i * CorrectedDeltaV(bias);
@@ -101,4 +105,4 @@ NavState ImuPreintegration::Predict(const NavState& start, const ImuBias& bias) 
   return end;
 }
 
-}  // namespace slslam::lidar
+}  // namespace slslam

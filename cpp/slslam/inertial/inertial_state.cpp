@@ -1,0 +1,179 @@
+#include "slslam/inertial/inertial_state.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "slslam/core/check.h"
+#include "slslam/geometry/rotation.h"
+
+namespace slslam {
+
+double InertialState::PositionSigma() const {
+  return std::sqrt(std::max(0.0, covariance.block<3, 3>(3, 3).trace()));
+}
+
+Matrix18d PropagationJacobian(const InertialState& start, const ImuPreintegration& pre) {
+  const Eigen::Matrix3d R_i = start.nav.R_world_body.toRotationMatrix();
+  const Eigen::Matrix3d dR = pre.CorrectedDeltaR(start.bias);
+  const Eigen::Vector3d dv = pre.CorrectedDeltaV(start.bias);
+  const Eigen::Vector3d dp = pre.CorrectedDeltaP(start.bias);
+  const double dt = pre.dt_s();
+  // R_j = R_i Exp(dtheta_i) dR Exp(J_Rg dbg)      -> dtheta_j = dR^T dtheta_i + J_Rg dbg
+  // v_j = v_i + g dt + R_i Exp(dtheta_i) dv(b)   -> dv_j = dv_i - R_i [dv]x dtheta_i + R_i J_v db
+  // p_j = p_i + v_i dt + g dt^2/2 + R_i Exp(dtheta_i) dp(b)
+  // and dg enters the velocity by dt and the position by dt^2 / 2.
+  Matrix18d A = Matrix18d::Identity();
+  A.block<3, 3>(0, 0) = dR.transpose();
+  A.block<3, 3>(0, 9) = pre.dR_dbg();
+  A.block<3, 3>(3, 0) = -R_i * Skew(dp);
+  A.block<3, 3>(3, 6) = Eigen::Matrix3d::Identity() * dt;
+  A.block<3, 3>(3, 9) = R_i * pre.dp_dbg();
+  A.block<3, 3>(3, 12) = R_i * pre.dp_dba();
+  A.block<3, 3>(6, 0) = -R_i * Skew(dv);
+  A.block<3, 3>(6, 9) = R_i * pre.dv_dbg();
+  A.block<3, 3>(6, 12) = R_i * pre.dv_dba();
+  A.block<3, 3>(3, 15) = 0.5 * dt * dt * Eigen::Matrix3d::Identity();
+  A.block<3, 3>(6, 15) = dt * Eigen::Matrix3d::Identity();
+  return A;
+}
+
+InertialState Propagate(const InertialState& start, const ImuPreintegration& pre) {
+  InertialState end;
+  end.nav = pre.Predict(start.nav, start.bias, start.g_world);
+  end.bias = start.bias;
+  end.g_world = start.g_world;
+  const Matrix18d A = PropagationJacobian(start, pre);
+  // The increments' own noise, (dtheta, dv, dp) in B_i, into (dtheta_j, dp, dv) of the state:
+  // dtheta_j is right-perturbed at the end, the increments' at their own end (the same frame).
+  const Eigen::Matrix3d R_i = start.nav.R_world_body.toRotationMatrix();
+  Eigen::Matrix<double, 18, 9> B = Eigen::Matrix<double, 18, 9>::Zero();
+  B.block<3, 3>(0, 0) = Eigen::Matrix3d::Identity();
+  B.block<3, 3>(6, 3) = R_i;
+  B.block<3, 3>(3, 6) = R_i;
+  end.covariance = A * start.covariance * A.transpose() + B * pre.covariance() * B.transpose();
+  const ImuNoiseOptions& noise = pre.noise();
+  end.covariance.block<3, 3>(9, 9).diagonal().array() +=
+      noise.gyro_random_walk * noise.gyro_random_walk * pre.dt_s();
+  end.covariance.block<3, 3>(12, 12).diagonal().array() +=
+      noise.acc_random_walk * noise.acc_random_walk * pre.dt_s();
+  end.covariance = 0.5 * (end.covariance + end.covariance.transpose()).eval();
+  return end;
+}
+
+Vector6d LeftTangent(const Rigid3d& a, const Rigid3d& b) {
+  const Eigen::Matrix3d dR = a.rotation * b.rotation.transpose();
+  Vector6d d;
+  d.tail<3>() = LogSO3(Eigen::Quaterniond(dR));
+  d.head<3>() = a.translation - dR * b.translation;
+  return d;
+}
+
+Rigid3d LeftPlus(const Vector6d& d, const Rigid3d& b) {
+  const Eigen::Matrix3d dR = ExpSO3(d.tail<3>());
+  return Rigid3d(dR * b.rotation, dR * b.translation + d.head<3>());
+}
+
+Rigid3d CamFromWorld(const NavState& nav, const Rigid3d& body_from_cam) {
+  const Rigid3d world_from_body(nav.R_world_body.toRotationMatrix(), nav.p_world_body);
+  return (world_from_body * body_from_cam).Inverse();
+}
+
+Matrix6d CamTangentFromBodyError(const NavState& nav, const Rigid3d& body_from_cam) {
+  // cam_from_world = cam_from_body * body_from_world. With R_wb -> R_wb Exp(dtheta) and
+  // p_wb -> p_wb + dp: R_cw -> Exp(-R_cb dtheta) R_cw, and t_cw moves by
+  // rho = R_cb [t_bc]x dtheta - R_cw dp beyond the rotation's own Exp(omega) t_cw.
+  const Eigen::Matrix3d R_cb = body_from_cam.rotation.transpose();
+  const Eigen::Matrix3d R_cw = R_cb * nav.R_world_body.toRotationMatrix().transpose();
+  Matrix6d G = Matrix6d::Zero();
+  G.block<3, 3>(0, 0) = R_cb * Skew(body_from_cam.translation);
+  G.block<3, 3>(0, 3) = -R_cw;
+  G.block<3, 3>(3, 0) = -R_cb;
+  return G;
+}
+
+Matrix6d CameraPosePriorInformation(const InertialState& state, const Rigid3d& body_from_cam) {
+  const Matrix6d G = CamTangentFromBodyError(state.nav, body_from_cam);
+  const Matrix6d cov = G * state.covariance.topLeftCorner<6, 6>() * G.transpose();
+  return cov.ldlt().solve(Matrix6d::Identity());
+}
+
+bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& information,
+                           const Rigid3d& body_from_cam, InertialState* state) {
+  if (!information.allFinite()) return false;
+  const Eigen::LDLT<Matrix6d> info(information);
+  if (info.info() != Eigen::Success || !(info.vectorD().minCoeff() > 0.0)) return false;
+  const Matrix6d G = CamTangentFromBodyError(state->nav, body_from_cam);
+  const Matrix6d G_inv = G.inverse();
+  // The estimate's difference from the state's pose, in the body error (dtheta, dp).
+  const Vector6d tangent = LeftTangent(cam_from_world, CamFromWorld(state->nav, body_from_cam));
+  const Vector6d d_a = G_inv * tangent;
+  const Matrix6d cov_post = G_inv * info.solve(Matrix6d::Identity()) * G_inv.transpose();
+
+  constexpr int kRest = 12;  // velocity, biases, gravity
+  const Matrix18d& P = state->covariance;
+  const Matrix6d P_aa = P.topLeftCorner<6, 6>();
+  const Eigen::LDLT<Matrix6d> P_aa_ldlt(P_aa);
+  if (P_aa_ldlt.info() != Eigen::Success || !(P_aa_ldlt.vectorD().minCoeff() > 0.0)) return false;
+  const Eigen::Matrix<double, kRest, 6> K =
+      P_aa_ldlt.solve(P.block<6, kRest>(0, 6)).transpose();  // P_ra P_aa^-1 (P symmetric)
+  const Eigen::Matrix<double, kRest, 1> d_r = K * d_a;
+  Matrix18d updated;
+  updated.topLeftCorner<6, 6>() = cov_post;
+  updated.block<kRest, 6>(6, 0) = K * cov_post;
+  updated.block<6, kRest>(0, 6) = updated.block<kRest, 6>(6, 0).transpose();
+  updated.bottomRightCorner<kRest, kRest>() = P.bottomRightCorner<kRest, kRest>() -
+                                              K * P.block<6, kRest>(0, 6) +
+                                              K * cov_post * K.transpose();
+  state->covariance = 0.5 * (updated + updated.transpose());
+
+  const Rigid3d world_from_body = cam_from_world.Inverse() * body_from_cam.Inverse();
+  state->nav.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
+  state->nav.p_world_body = world_from_body.translation;
+  state->nav.v_world_body += d_r.head<3>();
+  state->bias.gyro += d_r.segment<3>(3);
+  state->bias.acc += d_r.segment<3>(6);
+  state->g_world += d_r.tail<3>();
+  return true;
+}
+
+void ImuBuffer::Add(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2) {
+  Require(std::isfinite(t_s) && gyro_radps.allFinite() && acc_mps2.allFinite(),
+          "IMU sample is not finite");
+  SLSLAM_CHECK(samples_.empty() || t_s > samples_.back().t_s,
+               "IMU samples must come in increasing time: ", t_s, " s after ",
+               samples_.back().t_s, " s");
+  samples_.push_back({t_s, gyro_radps, acc_mps2});
+}
+
+bool ImuBuffer::Preintegrate(double t0_s, double t1_s, double max_sample_gap_s,
+                             ImuPreintegration* out) const {
+  if (samples_.empty() || !(t1_s > t0_s) || samples_.front().t_s > t0_s ||
+      samples_.back().t_s < t1_s - max_sample_gap_s) {
+    return false;
+  }
+  // The last sample at or before t0 (binary search: the buffer holds seconds of samples).
+  size_t lo = 0, hi = samples_.size();
+  while (hi - lo > 1) {
+    const size_t mid = (lo + hi) / 2;
+    (samples_[mid].t_s <= t0_s ? lo : hi) = mid;
+  }
+  double t = t0_s;
+  for (size_t k = lo; k < samples_.size() && t < t1_s; ++k) {
+    const double next = k + 1 < samples_.size() ? samples_[k + 1].t_s : t1_s;
+    if (next - samples_[k].t_s > max_sample_gap_s) return false;
+    const double end = std::min(next, t1_s);
+    if (end > t) out->Integrate(samples_[k].gyro, samples_[k].acc, end - t);
+    t = end;
+  }
+  return t >= t1_s;
+}
+
+void ImuBuffer::DropBefore(double t_s) {
+  // Keep the last sample at or before t_s: it is held over t_s.
+  while (samples_.size() >= 2 && samples_[1].t_s <= t_s) samples_.pop_front();
+}
+
+}  // namespace slslam

@@ -1,0 +1,102 @@
+// The inertial state of a camera-IMU rig between frames: the body's navigation state, the IMU
+// biases and their joint covariance, carried from one frame to the next by a preintegrated IMU
+// interval (imu_preintegration.h) and corrected by a camera pose (the visual-inertial tracker's
+// per-frame estimate, tracking/inertial_estimator.h).
+//
+// Frames: world = the frame the state is expressed in (a visual map's world: gravity is the
+// vector g_world in it, not necessarily along -z); body = the IMU frame; cam = the rectified left
+// camera, with body_from_cam the camera-IMU extrinsics (Kalibr's T_cam_imu inverted).
+//
+// Error state (18): dtheta (rotation, right-perturbed in the body frame:
+// R_world_body = R_hat Exp(dtheta)), dp and dv (world frame, additive), dbg and dba (additive),
+// dg (gravity in the world, additive), in this order. Gravity is part of the state because the
+// worlds it is used in are not gravity-aligned: the initialisation's estimate of its direction
+// is corrected as the camera goes on (a constant accelerometer bias cannot absorb a tilt of
+// gravity once the body turns). A camera pose's error is the pose manifold's left tangent
+// (optimization/manifolds.h: cam_from_world = Exp(rho, omega) * cam_from_world_hat).
+#pragma once
+
+#include <deque>
+
+#include <Eigen/Core>
+
+#include "slslam/core/rigid3.h"
+#include "slslam/inertial/imu_preintegration.h"
+
+namespace slslam {
+
+using Matrix18d = Eigen::Matrix<double, 18, 18>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+struct InertialState {
+  NavState nav;   ///< body in the world
+  ImuBias bias;   ///< [rad/s], [m/s^2]
+  Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the world [m/s^2]
+  Matrix18d covariance = Matrix18d::Zero();  ///< of the error state above
+
+  /// Position standard deviation: sqrt of the trace of the dp block [m].
+  double PositionSigma() const;
+};
+
+// The state after the interval `pre` (integrated from the sample times of the start state, with
+// any linearisation bias: the increments are corrected to `start.bias`), under the state's
+// gravity.
+// The covariance is propagated through the first-order error dynamics of the increments
+// (Forster et al. 2017) plus the bias random walk of `pre.noise()` over the interval.
+InertialState Propagate(const InertialState& start, const ImuPreintegration& pre);
+
+// The 18 x 18 Jacobian of Propagate's error state at the end w.r.t. the one at the start (what
+// the covariance is propagated with; a gtest compares it to finite differences).
+Matrix18d PropagationJacobian(const InertialState& start, const ImuPreintegration& pre);
+
+// The left tangent d = (rho, omega) with a = Exp(d) * b (the pose manifold's Minus), and its
+// inverse.
+Vector6d LeftTangent(const Rigid3d& a, const Rigid3d& b);
+Rigid3d LeftPlus(const Vector6d& d, const Rigid3d& b);
+
+// cam_from_world of the camera on a body at `nav`.
+Rigid3d CamFromWorld(const NavState& nav, const Rigid3d& body_from_cam);
+
+// The 6 x 6 Jacobian of the camera pose's left tangent (rho, omega) w.r.t. the body error
+// (dtheta, dp) at `nav` (invertible: the two are the same 6 degrees of freedom).
+Matrix6d CamTangentFromBodyError(const NavState& nav, const Rigid3d& body_from_cam);
+
+// Conditions the state on a camera pose estimate: `cam_from_world` with the information
+// `information` (6 x 6, of the pose's left tangent, as the pose optimiser reports it) is the
+// posterior of the state's rotation and position given the images and the state's own marginal
+// prior on them (the tracker's visual-inertial pose optimisation), so the rotation and position
+// are replaced by it and the velocity and biases move through their cross-covariance with them.
+// False (state unchanged) when the information is not positive definite.
+bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& information,
+                           const Rigid3d& body_from_cam, InertialState* state);
+
+// The marginal of the state's rotation and position as a prior on the camera pose: its
+// information in the left tangent (for the pose optimiser).
+Matrix6d CameraPosePriorInformation(const InertialState& state, const Rigid3d& body_from_cam);
+
+// IMU samples in time order, each held until the next one's time.
+class ImuBuffer {
+ public:
+  // Throws std::invalid_argument on a time not after the last one or a non-finite value.
+  void Add(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
+  // Integrates the samples over [t0_s, t1_s] (the first sample at or before t0_s; partial
+  // intervals at both ends) into `out`, whose bias_hat and noise are kept. False when the
+  // samples do not cover the interval or two are further apart than max_sample_gap_s.
+  bool Preintegrate(double t0_s, double t1_s, double max_sample_gap_s,
+                    ImuPreintegration* out) const;
+  // Forgets samples no longer needed for intervals starting at or after t_s.
+  void DropBefore(double t_s);
+  bool empty() const { return samples_.empty(); }
+  double last_s() const { return samples_.empty() ? -1e300 : samples_.back().t_s; }
+  size_t size() const { return samples_.size(); }
+
+ private:
+  struct Sample {
+    double t_s;
+    Eigen::Vector3d gyro, acc;
+  };
+  std::deque<Sample> samples_;
+};
+
+}  // namespace slslam

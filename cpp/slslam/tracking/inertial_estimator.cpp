@@ -1,0 +1,295 @@
+#include "slslam/tracking/inertial_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Cholesky>
+
+#include "slslam/core/check.h"
+
+namespace slslam {
+
+namespace {
+
+// Initial standard deviations of the state's error after an initialisation: the pose is the
+// camera's (about a centimetre and half a degree after a few frames of stereo), velocity and
+// biases what the initialisation's fit leaves of a few seconds of motion.
+constexpr double kInitRotationSigmaRad = 0.01;
+constexpr double kInitPositionSigmaM = 0.01;
+constexpr double kInitVelocitySigmaMps = 0.05;
+constexpr double kInitGyroBiasSigmaRadps = 0.002;
+constexpr double kInitAccBiasSigmaMps2 = 0.1;
+// ... and of gravity's direction: about half a degree (the accelerometer bias's share at rest).
+constexpr double kInitGravitySigmaMps2 = 0.1;
+// Poses the initialisation uses are at least this far apart [s] (20 Hz at most).
+constexpr double kInitPoseSpacingS = 0.05;
+// An initialisation that failed is tried again after this much more camera time [s].
+constexpr double kInitRetryS = 0.25;
+
+// The initial covariance, gravity's uncertainty across its direction only (its magnitude is
+// known).
+Matrix18d InitialCovariance(const Eigen::Vector3d& g_world) {
+  Eigen::Matrix<double, 18, 1> sigma;
+  sigma << Eigen::Vector3d::Constant(kInitRotationSigmaRad),
+      Eigen::Vector3d::Constant(kInitPositionSigmaM), Eigen::Vector3d::Constant(kInitVelocitySigmaMps),
+      Eigen::Vector3d::Constant(kInitGyroBiasSigmaRadps),
+      Eigen::Vector3d::Constant(kInitAccBiasSigmaMps2), Eigen::Vector3d::Zero();
+  Matrix18d P = sigma.cwiseAbs2().asDiagonal();
+  const Eigen::Vector3d u = g_world.normalized();
+  P.bottomRightCorner<3, 3>() = kInitGravitySigmaMps2 * kInitGravitySigmaMps2 *
+                                (Eigen::Matrix3d::Identity() - u * u.transpose());
+  return P;
+}
+
+}  // namespace
+
+ImuNoiseOptions InertialOptions::Noise() const {
+  ImuNoiseOptions noise;
+  noise.gyro_noise_density = gyro_noise_density;
+  noise.acc_noise_density = acc_noise_density;
+  noise.gyro_random_walk = gyro_random_walk;
+  noise.acc_random_walk = acc_random_walk;
+  noise.gravity_mps2 = gravity_mps2;
+  return noise;
+}
+
+InertialInitOptions InertialOptions::Init() const {
+  InertialInitOptions init;
+  init.gravity_mps2 = gravity_mps2;
+  init.gravity_tolerance_mps2 = gravity_tolerance_mps2;
+  return init;
+}
+
+InertialEstimator::InertialEstimator(const InertialOptions& options)
+    : options_(options), noise_(options.Noise()) {
+  options_.Check();
+}
+
+void InertialEstimator::AddImu(double t_imu_s, const Eigen::Vector3d& gyro_radps,
+                               const Eigen::Vector3d& acc_mps2) {
+  imu_.Add(t_imu_s, gyro_radps, acc_mps2);
+}
+
+bool InertialEstimator::PropagateState(double t_s, InertialState* out) const {
+  if (!initialised_) return false;
+  if (!(t_s > state_t_s_)) {
+    *out = state_;
+    return t_s == state_t_s_;
+  }
+  ImuPreintegration pre(state_.bias, noise_);
+  if (!imu_.Preintegrate(state_t_s_ - options_.time_offset_s, t_s - options_.time_offset_s,
+                         options_.max_sample_gap_s, &pre)) {
+    return false;
+  }
+  *out = slslam::Propagate(state_, pre);
+  return true;
+}
+
+bool InertialEstimator::Predict(double t_s, InertialState* out) const {
+  return PropagateState(t_s, out);
+}
+
+bool InertialEstimator::PosePriorAt(double t_s, PosePrior* prior) const {
+  InertialState predicted;
+  if (!PropagateState(t_s, &predicted)) return false;
+  prior->mean = CamFromWorld(predicted.nav, options_.body_from_cam);
+  prior->information = CameraPosePriorInformation(predicted, options_.body_from_cam);
+  return prior->information.allFinite();
+}
+
+void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
+                                      const Matrix6d& information, bool with_prior) {
+  if (report_.first_pose_s < 0.0) report_.first_pose_s = t_s;
+  const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
+  if (!window_.empty() && !(t_s > window_.back().t_s)) return;  // (a frame given twice)
+  window_.push_back({t_s, world_from_body});
+  while (window_.size() > 2 && t_s - window_[1].t_s >= options_.window_s) window_.pop_front();
+  imu_.DropBefore(window_.front().t_s - options_.time_offset_s);
+  if (!initialised_) {
+    TryInitialise(/*refine=*/false);
+    return;
+  }
+  InertialState predicted;
+  if (!PropagateState(t_s, &predicted)) {  // samples missing: start again from this pose
+    Reset();
+    window_.push_back({t_s, world_from_body});
+    return;
+  }
+  const Rigid3d predicted_cam = CamFromWorld(predicted.nav, options_.body_from_cam);
+  bool conditioned = false;
+  if (!information.isZero(0.0)) {
+    // The posterior of the pose given the prediction and the images, with the images'
+    // information scaled (visual_information_scale).
+    const Matrix6d prior = CameraPosePriorInformation(predicted, options_.body_from_cam);
+    const double s = options_.visual_information_scale;
+    const Vector6d d = LeftTangent(cam_from_world, predicted_cam);
+    // Information of the images alone, and the images' estimate times it (in the tangent at the
+    // prediction): from the optimiser's posterior (prior + images) when it had the prior.
+    const Matrix6d visual = with_prior ? Matrix6d(information - prior) : information;
+    const Vector6d visual_times_d = with_prior ? Vector6d(information * d) : Vector6d(visual * d);
+    const Matrix6d posterior = prior + s * visual;
+    const Eigen::LDLT<Matrix6d> ldlt(posterior);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && posterior.allFinite()) {
+      const Vector6d d_post = ldlt.solve(s * visual_times_d);
+      conditioned = ConditionOnCameraPose(LeftPlus(d_post, predicted_cam), posterior,
+                                          options_.body_from_cam, &predicted);
+      // (the magnitude is known: only the direction is corrected)
+      if (conditioned) predicted.g_world = predicted.g_world.normalized() * options_.gravity_mps2;
+    }
+  }
+  if (!conditioned) {
+    // A pose without an uncertainty (relocalised): taken as it is, velocity and biases kept.
+    predicted.nav.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
+    predicted.nav.p_world_body = world_from_body.translation;
+    const Matrix18d kept = predicted.covariance;
+    predicted.covariance = InitialCovariance(predicted.g_world);
+    predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
+  }
+  state_ = predicted;
+  state_t_s_ = t_s;
+  last_visual_s_ = t_s;
+  last_visual_p_ = state_.nav.p_world_body;
+  driven_m_ = 0.0;
+  if (!refined_ && t_s - init_s_ >= options_.refine_after_s) TryInitialise(/*refine=*/true);
+}
+
+bool InertialEstimator::Propagate(double t_s) {
+  InertialState next;
+  if (!PropagateState(t_s, &next)) return false;
+  driven_m_ += (next.nav.p_world_body - state_.nav.p_world_body).norm();
+  state_ = next;
+  state_t_s_ = std::max(state_t_s_, t_s);
+  return true;
+}
+
+bool InertialEstimator::Trustworthy() const {
+  if (!initialised_) return false;
+  const double bound =
+      std::max(options_.lost_sigma_min_m, options_.lost_sigma_fraction * driven_m_);
+  return state_.PositionSigma() <= bound && seconds_without_vision() <= options_.max_gap_s;
+}
+
+void InertialEstimator::ChangeWorld(const Rigid3d& new_from_old) {
+  const Eigen::Matrix3d& R = new_from_old.rotation;
+  for (TimedPose& pose : window_) pose.world_from_body = new_from_old * pose.world_from_body;
+  last_visual_p_ = new_from_old * last_visual_p_;
+  if (!initialised_) return;
+  state_.nav.R_world_body = Eigen::Quaterniond(R * state_.nav.R_world_body.toRotationMatrix());
+  state_.nav.p_world_body = new_from_old * state_.nav.p_world_body;
+  state_.nav.v_world_body = R * state_.nav.v_world_body;
+  state_.g_world = R * state_.g_world;
+  // dtheta is in the body frame and the biases in the IMU's: dp, dv and dg rotate.
+  Matrix18d C = Matrix18d::Identity();
+  C.block<3, 3>(3, 3) = R;
+  C.block<3, 3>(6, 6) = R;
+  C.block<3, 3>(15, 15) = R;
+  state_.covariance = C * state_.covariance * C.transpose();
+}
+
+void InertialEstimator::Reset() {
+  if (initialised_) bias_start_ = state_.bias;
+  initialised_ = false;
+  refined_ = false;
+  window_.clear();
+  last_attempt_s_ = -1e300;
+}
+
+void InertialEstimator::TryInitialise(bool refine) {
+  if (window_.size() < 3) return;
+  const double t_last = window_.back().t_s;
+  if (t_last - window_.front().t_s < options_.min_window_s) return;
+  if (!refine && t_last - last_attempt_s_ < kInitRetryS) return;
+  last_attempt_s_ = t_last;
+  std::vector<Rigid3d> poses;
+  std::vector<double> times;
+  for (const TimedPose& pose : window_) {
+    if (times.empty() || pose.t_s - times.back() >= kInitPoseSpacingS) {
+      poses.push_back(pose.world_from_body);
+      times.push_back(pose.t_s);
+    }
+  }
+  if (times.back() != t_last) {  // the newest pose replaces the last one kept (closer than that)
+    poses.back() = window_.back().world_from_body;
+    times.back() = t_last;
+  }
+  if (poses.size() < 3) return;
+  double path_m = 0.0;
+  for (size_t k = 1; k < poses.size(); ++k) {
+    path_m += (poses[k].translation - poses[k - 1].translation).norm();
+  }
+  if (refine && path_m < options_.refine_min_path_m) return;
+  const ImuBias start = refine ? state_.bias : bias_start_;
+  std::vector<ImuPreintegration> pre;
+  pre.reserve(poses.size() - 1);
+  for (size_t k = 0; k + 1 < poses.size(); ++k) {
+    pre.emplace_back(start, noise_);
+    if (!imu_.Preintegrate(times[k] - options_.time_offset_s, times[k + 1] - options_.time_offset_s,
+                           options_.max_sample_gap_s, &pre.back())) {
+      report_.last_failure = "IMU samples missing between tracked frames";
+      return;
+    }
+  }
+  const InertialInitResult r = InitialiseInertial(poses, pre, options_.Init());
+  if (!r.success) {
+    report_.last_failure = r.reason;
+    return;
+  }
+  report_.last_failure.clear();
+  if (refine) {
+    state_.g_world = r.g_world;
+    refined_ = true;
+    ++report_.refinements;
+    state_.bias = r.bias;
+    state_.nav.v_world_body = r.v_world.back();
+    return;
+  }
+  state_.nav.R_world_body = Eigen::Quaterniond(poses.back().rotation).normalized();
+  state_.nav.p_world_body = poses.back().translation;
+  state_.nav.v_world_body = r.v_world.back();
+  state_.bias = r.bias;
+  state_.g_world = r.g_world;
+  state_.covariance = InitialCovariance(r.g_world);
+  state_t_s_ = times.back();
+  last_visual_s_ = state_t_s_;
+  last_visual_p_ = state_.nav.p_world_body;
+  driven_m_ = 0.0;
+  initialised_ = true;
+  init_s_ = state_t_s_;
+  ++report_.initialisations;
+  if (report_.first_init_s < 0.0) report_.first_init_s = state_t_s_;
+}
+
+void InertialOptions::Check() const {
+  Require(body_from_cam.rotation.allFinite() && body_from_cam.translation.allFinite(),
+          "tracking.imu.body_from_cam is not finite");
+  const double det = body_from_cam.rotation.determinant();
+  SLSLAM_CHECK(std::abs(det - 1.0) < 1e-6 &&
+                   (body_from_cam.rotation * body_from_cam.rotation.transpose() -
+                    Eigen::Matrix3d::Identity())
+                           .norm() < 1e-6,
+               "tracking.imu.body_from_cam: the rotation is not orthonormal (det ", det, ")");
+  CheckInRange("tracking.imu.time_offset_s", time_offset_s, -10.0, 10.0);
+  CheckInRange("tracking.imu.gyro_noise_density", gyro_noise_density, 0.0, 1.0);
+  CheckInRange("tracking.imu.acc_noise_density", acc_noise_density, 0.0, 1.0);
+  CheckInRange("tracking.imu.gyro_random_walk", gyro_random_walk, 0.0, 1.0);
+  CheckInRange("tracking.imu.acc_random_walk", acc_random_walk, 0.0, 1.0);
+  SLSLAM_CHECK(gravity_mps2 > 0.0 && gravity_mps2 < 20.0, "tracking.imu.gravity_mps2 must be in (0, 20), got ",
+               gravity_mps2);
+  CheckAboveInRange("tracking.imu.gravity_tolerance_mps2", gravity_tolerance_mps2, 0.0, 100.0);
+  CheckInRange("tracking.imu.window_s", window_s, 0.1, 1000.0);
+  CheckInRange("tracking.imu.min_window_s", min_window_s, 0.05, 1000.0);
+  SLSLAM_CHECK(min_window_s <= window_s, "tracking.imu.window_s (", window_s,
+               ") must not be below tracking.imu.min_window_s (", min_window_s, ")");
+  CheckInRange("tracking.imu.refine_after_s", refine_after_s, 0.0, 1e6);
+  CheckInRange("tracking.imu.refine_min_path_m", refine_min_path_m, 0.0, 1e6);
+  CheckAboveInRange("tracking.imu.max_sample_gap_s", max_sample_gap_s, 0.0, 10.0);
+  CheckInRange("tracking.imu.lost_sigma_fraction", lost_sigma_fraction, 0.0, 10.0);
+  CheckInRange("tracking.imu.lost_sigma_min_m", lost_sigma_min_m, 0.0, 1e6);
+  CheckInRange("tracking.imu.max_gap_s", max_gap_s, 0.0, 1e6);
+  CheckInRange("tracking.imu.weak_update_min_inliers", weak_update_min_inliers, 0, 100000);
+  CheckInRange("tracking.imu.keyframe_interval_s", keyframe_interval_s, 0.0, 1e6);
+  CheckInRange("tracking.imu.visual_information_scale", visual_information_scale, 1e-6, 1e6);
+}
+
+}  // namespace slslam

@@ -1,0 +1,137 @@
+// The IMU in tracking: visual-inertial initialisation from the first seconds of tracked stereo
+// poses, then an inertial state (pose, velocity, biases, covariance; inertial/inertial_state.h)
+// carried from frame to frame by the preintegrated IMU, which predicts each frame's pose and
+// gives the frame's pose optimisation a prior (the inertial factor to the previous frame,
+// marginalised onto the new pose), and is conditioned on the optimised pose again. A frame the
+// camera cannot track keeps the propagated pose and its growing covariance (state INERTIAL);
+// the tracker is lost when the position's standard deviation passes a fraction of the distance
+// driven since the last visual fix (or an absolute floor), not after a fixed time.
+//
+// Frames: world = the active map's world (not gravity-aligned: gravity is estimated in it);
+// body = the IMU frame; cam = the rectified left camera, body_from_cam the extrinsics. Times are
+// the camera's; an IMU sample's time is shifted by time_offset_s onto it.
+#pragma once
+
+#include <deque>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "slslam/core/rigid3.h"
+#include "slslam/inertial/inertial_initialization.h"
+#include "slslam/inertial/inertial_state.h"
+#include "slslam/optimization/pose_optimizer.h"
+
+namespace slslam {
+
+struct InertialOptions {
+  Rigid3d body_from_cam;           ///< the left camera in the IMU frame
+  double time_offset_s = 0.0;      ///< t_cam = t_imu + time_offset_s [s]
+  // IMU noise (Kalibr / EuRoC sensor.yaml units).
+  double gyro_noise_density = 1.6968e-4;  ///< [rad/s/sqrt(Hz)]
+  double acc_noise_density = 2.0e-3;      ///< [m/s^2/sqrt(Hz)]
+  double gyro_random_walk = 1.9393e-5;    ///< [rad/s^2/sqrt(Hz)]
+  double acc_random_walk = 3.0e-3;        ///< [m/s^3/sqrt(Hz)]
+  double gravity_mps2 = 9.81;             ///< expected magnitude of gravity [m/s^2]
+  double gravity_tolerance_mps2 = 0.5;  ///< initialisation refused further off [m/s^2]
+  double window_s = 3.0;      ///< tracked poses the initialisation uses, before the last [s]
+  double min_window_s = 1.0;  ///< the initialisation needs poses spanning at least this [s]
+  double refine_after_s = 10.0;  ///< initialisation run again this long after the first [s]
+  double refine_min_path_m = 1.0;  ///< ... over a window in which the body moved this far [m]
+  double max_sample_gap_s = 0.05;  ///< IMU samples further apart than this: no propagation [s]
+  /// Lost when the position's standard deviation passes this fraction of the distance driven
+  /// since the last frame the camera tracked ...
+  double lost_sigma_fraction = 0.1;
+  double lost_sigma_min_m = 0.3;  ///< ... or this, whichever is larger [m]
+  double max_gap_s = 60.0;        ///< and at the latest after this long without vision [s]
+  /// A frame the camera does not track (fewer than the tracker's min_inliers) still corrects the
+  /// state with its pose optimisation when it keeps this many inliers (0: never) [-]
+  int weak_update_min_inliers = 8;
+  /// An INERTIAL frame with stereo points for a map (as one that starts a map) becomes a keyframe
+  /// at the IMU's pose when the last keyframe is this old, so that the map goes on through a
+  /// stretch the local map does not cover (0: never) [s]
+  double keyframe_interval_s = 0.5;
+  /// The pose optimiser's information scaled by this before it corrects the state (the
+  /// observations' pixel sigmas are optimistic: matches correlate, the map has its own error) [-]
+  double visual_information_scale = 0.25;
+
+  ImuNoiseOptions Noise() const;
+  InertialInitOptions Init() const;
+  void Check() const;
+};
+
+class InertialEstimator {
+ public:
+  explicit InertialEstimator(const InertialOptions& options);
+
+  // One IMU sample at t_imu_s [s] (increasing; else std::invalid_argument).
+  void AddImu(double t_imu_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
+
+  // The state propagated to camera time t_s from the last one, without keeping it; false when
+  // not initialised or the samples do not cover the interval.
+  bool Predict(double t_s, InertialState* out) const;
+  // The prior that prediction gives the pose optimiser at t_s (false as Predict).
+  bool PosePriorAt(double t_s, PosePrior* prior) const;
+
+  // A pose the camera estimated at t_s. `information` (left tangent): the pose optimiser's,
+  // computed with the prior of PosePriorAt(t_s) when `with_prior`, without it otherwise (it is
+  // then fused with the prediction); zero: a pose without an uncertainty (relocalised), taken as
+  // it is. Before initialisation the pose joins the initialisation window and may complete it.
+  void AddVisualPose(double t_s, const Rigid3d& cam_from_world, const Matrix6d& information,
+                     bool with_prior);
+  // The frame at t_s keeps the propagated state (the camera contributed nothing). False when it
+  // cannot be propagated (not initialised, samples missing): the caller then forgets the state.
+  bool Propagate(double t_s);
+  // Whether the propagated state is still worth a pose (the lost rule above).
+  bool Trustworthy() const;
+
+  // The world moved (loop correction, merge): the state follows, new_from_old mapping old world
+  // coordinates to new ones.
+  void ChangeWorld(const Rigid3d& new_from_old);
+  // Forgets the state and the initialisation window (lost; another map's world). The biases are
+  // kept as the next initialisation's start.
+  void Reset();
+
+  bool initialised() const { return initialised_; }
+  const InertialState& state() const { return state_; }
+  double state_time_s() const { return state_t_s_; }
+  Rigid3d cam_from_world() const { return CamFromWorld(state_.nav, options_.body_from_cam); }
+  const Eigen::Vector3d& g_world() const { return state_.g_world; }
+  double seconds_without_vision() const { return state_t_s_ - last_visual_s_; }
+
+  // For the run's report (metrics.json).
+  struct Report {
+    double first_init_s = -1.0;  ///< camera time of the first successful initialisation [s]
+    double first_pose_s = -1.0;  ///< camera time of the first pose it was given [s]
+    int initialisations = 0;     ///< successful (after a reset too), refinements not counted
+    int refinements = 0;
+    std::string last_failure;    ///< the last initialisation attempt's reason, if it failed
+  };
+  const Report& report() const { return report_; }
+
+ private:
+  void TryInitialise(bool refine);
+  bool PropagateState(double t_s, InertialState* out) const;
+
+  InertialOptions options_;
+  ImuNoiseOptions noise_;
+  ImuBuffer imu_;
+  struct TimedPose {
+    double t_s;
+    Rigid3d world_from_body;
+  };
+  std::deque<TimedPose> window_;  ///< tracked poses, the last window_s of them
+  bool initialised_ = false;
+  double init_s_ = -1.0;          ///< when the state was last initialised [s]
+  bool refined_ = false;
+  double last_attempt_s_ = -1e300;
+  InertialState state_;
+  double state_t_s_ = 0.0;
+  ImuBias bias_start_;             ///< the next initialisation's linearisation point
+  double last_visual_s_ = 0.0;     ///< camera time of the last visual correction [s]
+  Eigen::Vector3d last_visual_p_ = Eigen::Vector3d::Zero();  ///< body position then [m]
+  double driven_m_ = 0.0;          ///< path of the propagated state since then [m]
+  Report report_;
+};
+
+}  // namespace slslam

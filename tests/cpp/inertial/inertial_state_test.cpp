@@ -1,0 +1,196 @@
+// The inertial state's propagation and camera-pose conditioning: Jacobians against finite
+// differences, the propagated covariance against Monte Carlo runs of a noisy IMU, and the sample
+// buffer's intervals.
+#include "slslam/inertial/inertial_state.h"
+
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "synthetic_motion.h"
+
+namespace slslam {
+namespace {
+
+using test::SyntheticMotion;
+
+// The error-state difference (dtheta, dp, dv, dbg, dba, dg) of `b` from `a`.
+Eigen::Matrix<double, 18, 1> ErrorBetween(const InertialState& a, const InertialState& b) {
+  Eigen::Matrix<double, 18, 1> e;
+  e.segment<3>(0) = LogSO3(a.nav.R_world_body.conjugate() * b.nav.R_world_body);
+  e.segment<3>(3) = b.nav.p_world_body - a.nav.p_world_body;
+  e.segment<3>(6) = b.nav.v_world_body - a.nav.v_world_body;
+  e.segment<3>(9) = b.bias.gyro - a.bias.gyro;
+  e.segment<3>(12) = b.bias.acc - a.bias.acc;
+  e.segment<3>(15) = b.g_world - a.g_world;
+  return e;
+}
+
+InertialState Perturbed(const InertialState& s, int axis, double eps) {
+  InertialState out = s;
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  d(axis % 3) = eps;
+  switch (axis / 3) {
+    case 0:
+      out.nav.R_world_body = (s.nav.R_world_body * ExpQuaternion(d)).normalized();
+      break;
+    case 1: out.nav.p_world_body += d; break;
+    case 2: out.nav.v_world_body += d; break;
+    case 3: out.bias.gyro += d; break;
+    case 4: out.bias.acc += d; break;
+    default: out.g_world += d; break;
+  }
+  return out;
+}
+
+TEST(InertialState, PropagationJacobianMatchesFiniteDifferences) {
+  const SyntheticMotion motion;
+  ImuBias bias;
+  bias.gyro = {0.01, -0.02, 0.005};
+  bias.acc = {0.05, 0.1, -0.08};
+  const ImuPreintegration pre = motion.Preintegrate(0.4, 0.9, 400.0, bias, bias);
+  InertialState start;
+  start.nav = motion.Nav(0.4);
+  start.bias = bias;
+  start.g_world = motion.g_world;
+  const Matrix18d A = PropagationJacobian(start, pre);
+  const InertialState end = Propagate(start, pre);
+  const double eps = 1e-6;
+  for (int axis = 0; axis < 18; ++axis) {
+    const InertialState moved = Propagate(Perturbed(start, axis, eps), pre);
+    const Eigen::Matrix<double, 18, 1> numeric = ErrorBetween(end, moved) / eps;
+    EXPECT_LT((numeric - A.col(axis)).norm(), 1e-4 * std::max(1.0, A.col(axis).norm()))
+        << "axis " << axis << "\nnumeric " << numeric.transpose() << "\nanalytic "
+        << A.col(axis).transpose();
+  }
+  // The propagated state follows the true motion (noise-free samples, the bias known).
+  EXPECT_LT((end.nav.p_world_body - motion.Position(0.9)).norm(), 1e-3);
+  EXPECT_LT((end.nav.v_world_body - motion.Velocity(0.9)).norm(), 5e-3);  // first order at 400 Hz
+}
+
+TEST(InertialState, CameraTangentJacobianMatchesFiniteDifferences) {
+  const SyntheticMotion motion;
+  const NavState nav = motion.Nav(1.3);
+  const Rigid3d body_from_cam(ExpSO3(Eigen::Vector3d(1.5, -0.1, 0.2)),
+                              Eigen::Vector3d(0.05, -0.02, 0.1));
+  const Matrix6d G = CamTangentFromBodyError(nav, body_from_cam);
+  const Rigid3d cam = CamFromWorld(nav, body_from_cam);
+  const double eps = 1e-7;
+  for (int axis = 0; axis < 6; ++axis) {
+    InertialState s;
+    s.nav = nav;
+    const Rigid3d moved = CamFromWorld(Perturbed(s, axis, eps).nav, body_from_cam);
+    const Eigen::Matrix3d dR = moved.rotation * cam.rotation.transpose();
+    Vector6d tangent;
+    tangent.tail<3>() = LogSO3(Eigen::Quaterniond(dR));
+    tangent.head<3>() = moved.translation - dR * cam.translation;
+    EXPECT_LT((tangent / eps - G.col(axis)).norm(), 1e-5 * std::max(1.0, G.col(axis).norm()))
+        << "axis " << axis;
+  }
+  EXPECT_GT(std::abs(G.determinant()), 1e-6);
+}
+
+TEST(InertialState, CovarianceMatchesMonteCarloOfANoisyImu) {
+  // 1 s of a moving body at 200 Hz with white noise at 50x EuRoC's densities: the spread of the
+  // integrated end states matches the propagated covariance (rotation, position, velocity).
+  const SyntheticMotion motion;
+  ImuNoiseOptions noise;
+  noise.gyro_noise_density *= 50.0;
+  noise.acc_noise_density *= 50.0;
+  noise.gyro_random_walk = 0.0;
+  noise.acc_random_walk = 0.0;
+  InertialState start;
+  start.nav = motion.Nav(0.0);
+  start.g_world = motion.g_world;
+  const ImuPreintegration clean = motion.Preintegrate(0.0, 1.0, 200.0, {}, {}, noise);
+  const InertialState mean = Propagate(start, clean);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const int trials = 400;
+  const double dt = 1.0 / 200.0;
+  Eigen::Matrix<double, 9, 9> sample = Eigen::Matrix<double, 9, 9>::Zero();
+  for (int trial = 0; trial < trials; ++trial) {
+    ImuPreintegration pre({}, noise);
+    for (int k = 0; k < 200; ++k) {
+      const double t = (k + 0.5) * dt;
+      Eigen::Vector3d wn, an;
+      for (int i = 0; i < 3; ++i) {
+        wn(i) = unit(rng) * noise.gyro_noise_density / std::sqrt(dt);
+        an(i) = unit(rng) * noise.acc_noise_density / std::sqrt(dt);
+      }
+      pre.Integrate(motion.Gyro(t) + wn, motion.Accelerometer(t) + an, dt);
+    }
+    const Eigen::Matrix<double, 9, 1> e =
+        ErrorBetween(mean, Propagate(start, pre)).head<9>();
+    sample += e * e.transpose() / trials;
+  }
+  for (int block = 0; block < 3; ++block) {
+    const double predicted = mean.covariance.block<3, 3>(3 * block, 3 * block).trace();
+    const double measured = sample.block<3, 3>(3 * block, 3 * block).trace();
+    EXPECT_NEAR(measured / predicted, 1.0, 0.2) << "block " << block;
+  }
+  EXPECT_NEAR(mean.PositionSigma(), std::sqrt(mean.covariance.block<3, 3>(3, 3).trace()), 1e-12);
+}
+
+TEST(InertialState, ACameraPoseCorrectsTheVelocityThroughTheCrossCovariance) {
+  const SyntheticMotion motion;
+  const Rigid3d body_from_cam(ExpSO3(Eigen::Vector3d(-1.2, 0.0, 0.3)),
+                              Eigen::Vector3d(0.1, 0.0, -0.05));
+  InertialState start;
+  start.nav = motion.Nav(1.0);
+  start.nav.v_world_body += Eigen::Vector3d(0.3, -0.2, 0.1);  // a velocity 0.39 m/s off
+  start.g_world = motion.g_world;
+  start.covariance.diagonal() << Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(1e-6),
+      Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(1e-6),
+      Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(1e-6);
+  const ImuPreintegration pre = motion.Preintegrate(1.0, 1.5, 200.0, {});
+  InertialState state = Propagate(start, pre);
+  const double error_before = (state.nav.v_world_body - motion.Velocity(1.5)).norm();
+  const Rigid3d truth = CamFromWorld(motion.Nav(1.5), body_from_cam);
+  Matrix6d information = 1e8 * Matrix6d::Identity();
+  ASSERT_TRUE(ConditionOnCameraPose(truth, information, body_from_cam, &state));
+  EXPECT_LT((state.nav.p_world_body - motion.Position(1.5)).norm(), 1e-6);
+  const double error_after = (state.nav.v_world_body - motion.Velocity(1.5)).norm();
+  EXPECT_GT(error_before, 0.3);
+  EXPECT_LT(error_after, 0.1 * error_before);
+  EXPECT_LT(state.PositionSigma(), 1e-3);
+  // The prior it gives the pose optimiser is the inverse of the pose block's covariance.
+  const Matrix6d prior = CameraPosePriorInformation(state, body_from_cam);
+  EXPECT_TRUE(prior.allFinite());
+  EXPECT_GT(prior.diagonal().minCoeff(), 1e5);
+  // An information that is not positive definite changes nothing.
+  const InertialState kept = state;
+  EXPECT_FALSE(ConditionOnCameraPose(truth, Matrix6d::Zero(), body_from_cam, &state));
+  EXPECT_EQ(state.nav.v_world_body, kept.nav.v_world_body);
+}
+
+TEST(ImuBuffer, PreintegratesPartialIntervalsAndRefusesGaps) {
+  ImuBuffer buffer;
+  ImuPreintegration direct;
+  for (int k = 0; k <= 100; ++k) {
+    const double t = 0.01 * k;
+    const Eigen::Vector3d w(0.1, 0.2 * k / 100.0, -0.1), a(0.5, 9.81, -0.2 * k / 100.0);
+    buffer.Add(t, w, a);
+    if (t >= 0.2 - 1e-12 && t < 0.7 - 1e-12) direct.Integrate(w, a, 0.01);
+  }
+  ImuPreintegration from_buffer;
+  ASSERT_TRUE(buffer.Preintegrate(0.2, 0.7, 0.05, &from_buffer));
+  EXPECT_NEAR(from_buffer.dt_s(), 0.5, 1e-12);
+  EXPECT_LT((from_buffer.delta_p() - direct.delta_p()).norm(), 1e-9);
+  ImuPreintegration partial;
+  ASSERT_TRUE(buffer.Preintegrate(0.205, 0.3, 0.05, &partial));
+  EXPECT_NEAR(partial.dt_s(), 0.095, 1e-12);
+  ImuPreintegration refused;
+  EXPECT_FALSE(buffer.Preintegrate(-0.1, 0.3, 0.05, &refused));  // before the first sample
+  EXPECT_FALSE(buffer.Preintegrate(0.9, 1.2, 0.05, &refused));   // past the last one
+  EXPECT_FALSE(buffer.Preintegrate(0.2, 0.7, 0.005, &refused));  // samples 10 ms apart
+  EXPECT_THROW(buffer.Add(0.5, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()),
+               std::invalid_argument);
+  buffer.DropBefore(0.5);
+  EXPECT_FALSE(buffer.Preintegrate(0.2, 0.7, 0.05, &refused));
+  EXPECT_TRUE(buffer.Preintegrate(0.5, 0.7, 0.05, &refused));
+}
+
+}  // namespace
+}  // namespace slslam
