@@ -52,9 +52,10 @@ class Range:
     """The values a numeric option may take: a finite interval, each end closed or open.
 
     Written in interval notation, ``Range.parse("(0, 1]")``; the bound of an integer option also
-    keeps it inside C++ ``int``, so no value reaches the core that it cannot hold. Positive real
-    options take a practical lower bound (e.g. ``[0.01, 1000]`` px) rather than ``(0, ...]``: the
-    core stores many as ``float``, where 1e-300 is 0 and fails its own check.
+    keeps it inside C++ ``int``, so no value reaches the core that it cannot hold. A mirrored
+    option's range is the one its C++ ``Check()`` enforces (tests/python/test_config.py probes
+    both ends of each); a positive value the core stores as ``float`` and that underflows to 0
+    there (below 1e-38) is still refused, by the core's check.
     """
 
     low: float
@@ -311,10 +312,10 @@ class DynamicCellConfig:
     ``DynamicCellOptions`` (``TrackerOptions.dynamic``; ``enabled`` is ``dynamic_cells``)."""
 
     enabled: bool = _dynamic_cells("enabled")
-    cell_size_px: int = _dynamic_cells("cell_size_px", "[4, 4096]")  # cell side [px]
-    sigma_px: float = _dynamic_cells("sigma_px", "[0.1, 1000]")  # Gaussian width of G(d) [px]
+    cell_size_px: int = _dynamic_cells("cell_size_px", "[4, 65536]")  # cell side [px]
+    sigma_px: float = _dynamic_cells("sigma_px", "(0, 1000000]")  # Gaussian width of G(d) [px]
     # weight of the current frame in the temporal smoothing
-    alpha: float = _dynamic_cells("alpha", "[0.01, 1]")
+    alpha: float = _dynamic_cells("alpha", "(0, 1]")
     # l: a cell below this weight is invalid (with its 8 neighbours)
     threshold: float = _dynamic_cells("threshold", "[0, 1]")
     # matches a cell needs in a frame to count as evidence (fewer: the cell counts as static)
@@ -357,7 +358,7 @@ class LoopClosingConfig:
     # global bundle adjustment over points and lines after a loop / merge
     global_ba: bool = _loop_closing("global_ba")
     # weighted inliers (points + lines) of the candidate's local map a loop needs
-    min_inliers: float = _loop_closing("min_inliers", "[1, 100000]")
+    min_inliers: float = _loop_closing("min_inliers", "(0, 100000]")
     # consecutive keyframes whose verified loop transforms must agree
     consistency: int = _loop_closing("consistency", "[1, 100]")
     # same map: largest correction as a share of the path driven since the loop keyframe (a
@@ -393,24 +394,24 @@ class ImuConfig:
     # the initialisation needs tracked poses spanning at least this [s] (at most window_s)
     min_window_s: float = _imu("min_window_s", "[0.05, 1000]")
     # the initialisation runs again this long after the first [s] ...
-    refine_after_s: float = _imu("refine_after_s", "[0, 1e6]")
+    refine_after_s: float = _imu("refine_after_s", "[0, 1000000]")
     # ... over a window in which the body moved at least this far [m]
-    refine_min_path_m: float = _imu("refine_min_path_m", "[0, 1e6]")
+    refine_min_path_m: float = _imu("refine_min_path_m", "[0, 1000000]")
     # IMU samples further apart than this: no propagation across the hole [s]
     max_sample_gap_s: float = _imu("max_sample_gap_s", "(0, 10]")
     # lost when the position sigma passes this fraction of the distance driven since the last
     # frame the camera tracked ...
     lost_sigma_fraction: float = _imu("lost_sigma_fraction", "[0, 10]")
-    lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1e6]")  # ... or this floor [m]
-    max_gap_s: float = _imu("max_gap_s", "[0, 1e6]")  # and after this long without vision [s]
+    lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1000000]")  # ... or this floor [m]
+    max_gap_s: float = _imu("max_gap_s", "[0, 1000000]")  # and after this long without vision [s]
     # a frame not tracked (fewer than min_inliers) still corrects the state with this many
     # inliers (0: never)
     weak_update_min_inliers: int = _imu("weak_update_min_inliers", "[0, 100000]")
     # an INERTIAL frame with stereo points for a map becomes a keyframe at the IMU's pose when the
     # last keyframe is this old: the map goes on where it did not reach (0: never) [s]
-    keyframe_interval_s: float = _imu("keyframe_interval_s", "[0, 1e6]")
+    keyframe_interval_s: float = _imu("keyframe_interval_s", "[0, 1000000]")
     # the pose optimiser's information is scaled by this before it corrects the state
-    visual_information_scale: float = _imu("visual_information_scale", "[1e-6, 1e6]")
+    visual_information_scale: float = _imu("visual_information_scale", "[1e-06, 1000000]")
 
     def relations_error(self, where: str) -> str | None:
         """The C++ check between two keys (InertialOptions::Check), as a message naming
@@ -444,38 +445,38 @@ class TrackingConfig:
     # frames/s offline at 3 than at 1; a live camera's frames are taken as they come either way)
     pipeline_frames_ahead: int = _option(3, "[1, 64]")
     # stereo points a frame needs to start a map
-    min_init_points: int = _tracking("min_init_points", "[3, 100000]")
+    min_init_points: int = _tracking("min_init_points", "[3, 1000000]")
     # fewer inliers after motion-only BA: the frame is LOST
-    min_inliers: int = _tracking("min_inliers", "[3, 100000]")
+    min_inliers: int = _tracking("min_inliers", "[3, 1000000]")
     # guided matching window [px] (doubled on a retry)
-    search_radius_px: float = _tracking("search_radius_px", "[1, 10000]")
+    search_radius_px: float = _tracking("search_radius_px", "(0, 100000]")
     # best / second best inside the guided-matching window
-    match_ratio: float = _tracking("match_ratio", "[0.01, 1]")
+    match_ratio: float = _tracking("match_ratio", "(0, 1]")
     # guided matching bound for ORB [Hamming bits]
-    max_distance_binary: float = _tracking("max_distance_binary", "[1, 256]")
+    max_distance_binary: float = _tracking("max_distance_binary", "(0, 256]")
     # guided matching bound for SuperPoint [L2] (unit descriptors: at most 2)
-    max_distance_float: float = _tracking("max_distance_float", "[0.01, 2]")
+    max_distance_float: float = _tracking("max_distance_float", "(0, 1000000]")
     # map line to frame segment: midpoint distance to the predicted line [px], angle [rad], LBD
     # distance [bits]
-    line_search_px: float = _tracking("line_search_px", "[0.1, 10000]")
-    line_max_angle_rad: float = _tracking("line_max_angle_rad", "[0.001, 3.14]")
-    line_max_lbd: float = _tracking("line_max_lbd", "[1, 256]")
+    line_search_px: float = _tracking("line_search_px", "(0, 100000]")
+    line_max_angle_rad: float = _tracking("line_max_angle_rad", "(0, 3.14159265]")
+    line_max_lbd: float = _tracking("line_max_lbd", "(0, 256]")
     # a keyframe at least this often [frames]
-    keyframe_max_frames: int = _tracking("keyframe_max_frames", "[1, 1e6]")
+    keyframe_max_frames: int = _tracking("keyframe_max_frames", "[1, 1000000000]")
     # no keyframe sooner than this after the last while tracking is strong [frames]
-    keyframe_min_frames: int = _tracking("keyframe_min_frames", "[0, 1000]")
+    keyframe_min_frames: int = _tracking("keyframe_min_frames", "[0, 1000000000]")
     # ... in a noisy (dark, smoothed) frame instead [frames] (-1: keyframe_min_frames)
-    keyframe_min_frames_noisy: int = _tracking("keyframe_min_frames_noisy", "[-1, 1000]")
+    keyframe_min_frames_noisy: int = _tracking("keyframe_min_frames_noisy", "[-1, 1000000000]")
     # ... nor sooner than this [s] (a gap in time, the same at any camera rate; 0: none)
-    keyframe_min_interval_s: float = _tracking("keyframe_min_interval_s", "[0, 1000]")
+    keyframe_min_interval_s: float = _tracking("keyframe_min_interval_s", "[0, 1000000]")
     # tracked / reference keyframe points below: keyframe
-    keyframe_track_ratio: float = _tracking("keyframe_track_ratio", "[0.01, 1]")
+    keyframe_track_ratio: float = _tracking("keyframe_track_ratio", "(0, 1]")
     # fewer tracked points: keyframe
-    keyframe_min_inliers: int = _tracking("keyframe_min_inliers", "[0, 100000]")
+    keyframe_min_inliers: int = _tracking("keyframe_min_inliers", "[0, 1000000000]")
     # "close" stereo points for the rule above: depth below this many baselines
-    close_depth_baselines: float = _tracking("close_depth_baselines", "[0.1, 1e6]")
+    close_depth_baselines: float = _tracking("close_depth_baselines", "(0, 1000000]")
     # covisible keyframes in the local map and local BA
-    local_keyframes: int = _tracking("local_keyframes", "[1, 1000]")
+    local_keyframes: int = _tracking("local_keyframes", "[1, 10000]")
     # local mapping also makes points from pairs of keyframes, out of the keypoints stereo left
     # without a match (flat, ambiguous along the row, far), from their detected positions; false:
     # points from stereo only (measured: at 1 degree, without them XFeat + lines drifted half as
@@ -485,13 +486,13 @@ class TrackingConfig:
     # ... and only where the two rays meet at this angle at least [deg]
     triangulation_min_parallax_deg: float = _tracking("triangulation_min_parallax_deg", "[0, 180]")
     # weight of line terms against point terms in both BAs
-    line_weight: float = _tracking("line_weight", "[0, 1e6]")
+    line_weight: float = _tracking("line_weight", "[0, 1000000]")
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
-    line_angle_weight: float = _tracking("line_angle_weight", "[0, 1e6]")
+    line_angle_weight: float = _tracking("line_angle_weight", "[0, 1000000]")
     # local BA: each line's pull towards its value at the start of each pass [1/rad] (0: none);
     # with local_ba_dogleg a local BA with lines takes about 40 % less time, but the drift moved
     # both ways over three seeds (benchmarks/README.md, 2026-11-27 f), so off
-    local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1e6]")
+    local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1000000]")
     # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
     # no linear solve); needs local_ba_line_prior_weight > 0
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
@@ -514,7 +515,7 @@ class TrackingConfig:
         "local_ba_line_min_information_per_rad2", "[0, 1e12]"
     )
     # stereo depths beyond this many baselines are unused
-    max_depth_baselines: float = _tracking("max_depth_baselines", "[1, 1e6]")
+    max_depth_baselines: float = _tracking("max_depth_baselines", "(0, 1000000]")
     # stereo points without right-image keypoints: the point front end runs on the left image
     # only and each keypoint's patch is searched along its row of the right image (half the
     # network's work for a learned front end); false: keypoints on both images, matched by
@@ -535,13 +536,13 @@ class TrackingConfig:
     # and LBD. Applies with right_lines_on_keyframes; false: every frame's lines
     lines_on_demand: bool = _tracking("lines_on_demand")
     # point inliers below which the next frame is tracked with its lines (lines_on_demand) [-]
-    lines_on_demand_inliers: int = _tracking("lines_on_demand_inliers", "[0, 1000000]")
+    lines_on_demand_inliers: int = _tracking("lines_on_demand_inliers", "[0, 1000000000]")
     # images noisier than this (Immerkaer's estimate, gray levels) reach line detection, line
     # descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px, as ORB's detection
     # image (0: never)
     denoise_above_noise: float = _tracking("denoise_above_noise", "[0, 255]")
     # keypoint measurement sigma [px]
-    point_sigma_px: float = _tracking("point_sigma_px", "[0.01, 1000]")
+    point_sigma_px: float = _tracking("point_sigma_px", "(0, 10000]")
     # half size of the patch each map point keeps from the keyframe that made it: later matches
     # are aligned to it (scaled by the point's change of depth) instead of taking the detected
     # keypoint position as it is [px]; 0: off
@@ -550,14 +551,14 @@ class TrackingConfig:
     # image (false: only the points made from stereo in the tracker's keyframes have one)
     triangulated_point_patches: bool = _tracking("triangulated_point_patches")
     # an alignment that moves the keypoint further than this is not taken [px]
-    track_refine_max_px: float = _tracking("track_refine_max_px", "[0.1, 10000]")
+    track_refine_max_px: float = _tracking("track_refine_max_px", "(0, 100000]")
     # in a frame smoothed as noisy with at least unaligned_min_aligned matches aligned to their
     # map points' patches, the matches that could not be aligned enter the motion-only BA with
     # their sigma times this (detected keypoints follow a small image motion only in part; see
     # benchmarks/README.md) [-]; 1: all alike
     unaligned_sigma_factor: float = _tracking("unaligned_sigma_factor", "[1, 1000]")
     # aligned matches a noisy frame needs for unaligned_sigma_factor to apply [-]
-    unaligned_min_aligned: int = _tracking("unaligned_min_aligned", "[0, 1000000]")
+    unaligned_min_aligned: int = _tracking("unaligned_min_aligned", "[0, 1000000000]")
     # ... and while the camera turned by at most this between the last two frames (a turn on the
     # spot weighs all matches alike) [deg per frame]
     unaligned_max_turn_deg_per_frame: float = _tracking(
@@ -568,10 +569,10 @@ class TrackingConfig:
     # (semi-direct, as SVO between keyframes), and the point front end runs only on the frames
     # the tracker hands back (keyframes, weak tracking, after this many) [frames]; 0: every
     # frame's keypoints are detected
-    projected_max_frames: int = _tracking("projected_max_frames", "[0, 1000000]")
+    projected_max_frames: int = _tracking("projected_max_frames", "[0, 1000000000]")
     # point inliers the frame before must have held, and a projected frame must hold, else it
     # is tracked on detected keypoints [-]
-    projection_min_inliers: int = _tracking("projection_min_inliers", "[0, 1000000]")
+    projection_min_inliers: int = _tracking("projection_min_inliers", "[0, 1000000000]")
     # search radius of the shift common to all projected points (the prediction's rotation
     # error) [px]
     projection_search_px: int = _tracking("projection_search_px", "[0, 64]")
@@ -579,7 +580,7 @@ class TrackingConfig:
     projection_cell_px: int = _tracking("projection_cell_px", "[1, 1000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
     # over-weighted lines, see benchmarks/README.md)
-    line_sigma_px: float = _tracking("line_sigma_px", "[0.01, 1000]")
+    line_sigma_px: float = _tracking("line_sigma_px", "(0, 10000]")
     # LSD runs on the image scaled by this (segments mapped back; OpenCV's LBD at full
     # resolution, ours on the scaled image)
     line_detection_scale: float = _lines("line_detection_scale", "[0.1, 1]")
@@ -595,14 +596,14 @@ class TrackingConfig:
     max_lines: int = _lines("max_lines", "[0, 100000]")
     # a line inlier counts as this many point inliers when deciding LOST, keyframes and a new map
     # (0: points only)
-    line_inlier_weight: float = _tracking("line_inlier_weight", "[0, 100]")
+    line_inlier_weight: float = _tracking("line_inlier_weight", "[0, 1000000]")
     # frames of RECENTLY_LOST (wider window, decaying velocity, relocalisation into the active
     # map) before LOST, where the pose is frozen [frames]
-    recently_lost_frames: int = _tracking("recently_lost_frames", "[0, 100000]")
+    recently_lost_frames: int = _tracking("recently_lost_frames", "[0, 1000000000]")
     # per-frame factor on the predicted motion while recently lost
     lost_velocity_decay: float = _tracking("lost_velocity_decay", "[0, 1]")
     # guided-matching window factor while recently lost
-    lost_search_scale: float = _tracking("lost_search_scale", "[1, 100]")
+    lost_search_scale: float = _tracking("lost_search_scale", "[1, 1000]")
     # lost: the motion before the loss, along which the local map is tried, is the mean per-frame
     # motion over this many frames (1: the last frame's; one frame's jitter extrapolated over a
     # blackout of 20 frames re-entered a repeated roadway 0.9 m off; benchmarks/README.md,
@@ -617,10 +618,10 @@ class TrackingConfig:
     lost_reentry_confirm_m: float = _tracking("lost_reentry_confirm_m", "[0, 100]")
     # lost: frames that could start a map which must fail to come back into the old maps before
     # a new map starts (black frames do not count) [frames]
-    new_map_after_lost_frames: int = _tracking("new_map_after_lost_frames", "[0, 100000]")
+    new_map_after_lost_frames: int = _tracking("new_map_after_lost_frames", "[0, 1000000000]")
     # weighted inliers below this: a keyframe every weak_keyframe_frames (thin tracking)
-    weak_keyframe_inliers: int = _tracking("weak_keyframe_inliers", "[0, 100000]")
-    weak_keyframe_frames: int = _tracking("weak_keyframe_frames", "[1, 100000]")  # [frames]
+    weak_keyframe_inliers: int = _tracking("weak_keyframe_inliers", "[0, 1000000000]")
+    weak_keyframe_frames: int = _tracking("weak_keyframe_frames", "[1, 1000000000]")  # [frames]
     relocalisation: bool = True  # bag-of-words relocalisation when lost (needs a vocabulary)
     # BoW vocabulary file; null: the one shipped for ORB (learned descriptors need their own,
     # made with `slslam vocab train`)

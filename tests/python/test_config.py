@@ -1,5 +1,6 @@
 import dataclasses
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -410,3 +411,82 @@ def test_triangulation_keys_reach_the_core():
     changed = _core_options(camera, dataclasses.replace(Config(), tracking=tracking))
     assert not changed.mapping.triangulation.points
     assert changed.mapping.triangulation.min_parallax_deg == 5.0
+
+
+def _range_probes(rng, integer: bool) -> tuple[list, list]:
+    """(values the range refuses, values it takes) at both of its ends."""
+    step = 1 if integer else max(1e-6, 1e-4 * max(abs(rng.low), abs(rng.high), 1.0))
+    bad = [
+        rng.low if rng.low_open else rng.low - step,
+        rng.high if rng.high_open else rng.high + step,
+    ]
+    good = [
+        rng.low + step if rng.low_open else rng.low,
+        rng.high - step if rng.high_open else rng.high,
+    ]
+    if integer:
+        bad, good = [int(v) for v in bad], [int(v) for v in good]
+    return bad, good
+
+
+#: Ends of a Python range that the C++ check refuses only together with another key's default
+#: (a relation between two keys, checked in Python too: relations_error).
+_RELATED_ENDS = {
+    ("imu", "window_s", "good", 0.1),  # below min_window_s' default (1.0)
+    ("imu", "min_window_s", "good", 1000.0),  # above window_s' default (3.0)
+}
+
+
+def test_every_python_range_is_the_cpp_check():
+    """One source of bounds: for every mirrored key with a range, the values just outside each
+    end are refused by the C++ options' check and the ends (or just inside an open end) are
+    taken, so Python refuses a YAML value exactly when C++ would."""
+    from slslam.config import (
+        DYNAMIC_CELLS_TO_CORE,
+        IMU_TO_CORE,
+        LOOP_CLOSING_TO_CORE,
+        TRACKING_TO_CORE,
+    )
+    from slslam.tracking.tracker import _core_options, _set_core
+
+    camera = SimpleNamespace(
+        fx=458.0,
+        fy=458.0,
+        cx=375.5,
+        cy=239.5,
+        width=752,
+        height=480,
+        baseline_m=0.11,
+        T_body_cam=np.eye(4),
+    )
+    config = Config()
+    mismatches, probed = [], 0
+    for label, section, table in (
+        ("tracking", config.tracking, TRACKING_TO_CORE),
+        ("loop_closing", config.tracking.loop_closing, LOOP_CLOSING_TO_CORE),
+        ("imu", config.tracking.imu, IMU_TO_CORE),
+        ("dynamic_cells", config.features.dynamic_cells, DYNAMIC_CELLS_TO_CORE),
+    ):
+        for f in dataclasses.fields(section):
+            rng = f.metadata.get("range")
+            if rng is None or f.name not in table:
+                continue
+            integer = isinstance(getattr(section, f.name), int)
+            bad, good = _range_probes(rng, integer)
+            for kind, values in (("bad", bad), ("good", good)):
+                for value in values:
+                    if (label, f.name, kind, value) in _RELATED_ENDS:
+                        continue
+                    options = _core_options(camera, config)
+                    for path in table[f.name]:
+                        _set_core(options, path, value)
+                    try:
+                        options.check()
+                        taken = True
+                    except ValueError:
+                        taken = False
+                    probed += 1
+                    if taken != (kind == "good"):
+                        mismatches.append(f"{label}.{f.name} = {value} ({kind} in Python {rng})")
+    assert probed >= 100
+    assert not mismatches, "\n".join(mismatches)

@@ -1004,3 +1004,43 @@ def test_the_noisy_keyframe_gap_applies_to_noisy_frames_only(sim_loop, tmp_path)
     poses_short, keyframes_short = run(bright, 3)
     assert keyframes_short == keyframes_off
     assert np.array_equal(poses_short, poses_off)
+
+
+def test_with_the_imu_a_featureless_stretch_longer_than_the_old_bridge_stays_one_map(tmp_path):
+    """End to end on the simulated junction (light 0.5) with every light out for 3 s from 4 s on:
+    60 frames without a single feature, longer than the 2 s the earlier IMU bridge carried. With
+    the simulator's IMU (imu0/) the tracker initialises after about 1 s, carries the dark frames
+    (INERTIAL) on its propagated state and comes back into the one map: every frame after
+    initialisation posed, one map; metrics.json and frames.csv report the IMU's part."""
+    data = tmp_path / "seq"
+    Simulator(
+        SimOptions(
+            preset="junction",
+            lidar=False,
+            blackout=True,
+            blackout_s=3.0,
+            blackout_at_s=4.0,
+            light=0.5,
+            frames=200,
+        )
+    ).write(data, progress=False)
+    summary = run_sequence(data, tmp_path / "run", config("orb", lines=True), progress=False)
+    m, results = summary.metrics, summary.results
+    assert m["imu"]["has_imu"] and m["imu"]["initialised"], m["imu"]
+    assert 0.5 <= m["imu"]["init_after_s"] <= 2.0, m["imu"]
+    assert m["posed_ratio_after_init"] == 1.0 and m["lost_frames"] == 0
+    assert m["maps"] == 1
+    t0 = results[0].timestamp  # (the simulator's clock starts at 1000 s)
+    dark = [r for r in results if 4.05 <= r.timestamp - t0 < 6.95]
+    assert len(dark) >= 55 and all(r.state == "INERTIAL" for r in dark)
+    # The frames after the blackout are the camera's again.
+    assert all(r.state == "OK" for r in results if r.timestamp - t0 >= 7.5)
+    rows = (tmp_path / "run" / "frames.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    sigma = [float(row.split(",")[header.index("position_sigma_m")]) for row in rows[1:]]
+    imu = [int(row.split(",")[header.index("imu")]) for row in rows[1:]]
+    assert imu[0] == 0 and imu[-1] == 1
+    # Dead reckoning: the position's uncertainty grows through the dark and shrinks after it.
+    dark_idx = [i for i, r in enumerate(results) if 4.05 <= r.timestamp - t0 < 6.95]
+    assert sigma[dark_idx[-1]] > 5 * sigma[dark_idx[0]] and sigma[-1] < sigma[dark_idx[-1]]
+    assert m["ape"]["rmse"] < 0.15

@@ -43,18 +43,14 @@ void LoopClosingOptions::Check() const {
                "tracking.loop_closing.ransac_error_px must be > 0, got ", ransac_error_px);
   SLSLAM_CHECK(ransac_iterations >= 1, "tracking.loop_closing.ransac_iterations must be >= 1");
   SLSLAM_CHECK(min_pnp_inliers >= 4, "tracking.loop_closing.min_pnp_inliers must be >= 4");
-  SLSLAM_CHECK(std::isfinite(min_inliers) && min_inliers > 0.0,
-               "tracking.loop_closing.min_inliers must be > 0, got ", min_inliers);
-  SLSLAM_CHECK(consistency >= 1, "tracking.loop_closing.consistency must be >= 1, got ",
-               consistency);
+  CheckAboveInRange("tracking.loop_closing.min_inliers", min_inliers, 0.0, 100000.0);
+  CheckInRange("tracking.loop_closing.consistency", consistency, 1, 100);
   SLSLAM_CHECK(std::isfinite(agree_m) && agree_m > 0.0,
                "tracking.loop_closing.agree_m must be > 0");
   SLSLAM_CHECK(std::isfinite(agree_rad) && agree_rad > 0.0,
                "tracking.loop_closing.agree_rad must be > 0");
-  SLSLAM_CHECK(std::isfinite(max_correction_ratio) && max_correction_ratio >= 0.0,
-               "tracking.loop_closing.max_correction_ratio must be >= 0");
-  SLSLAM_CHECK(std::isfinite(max_correction_floor_m) && max_correction_floor_m >= 0.0,
-               "tracking.loop_closing.max_correction_floor_m must be >= 0");
+  CheckInRange("tracking.loop_closing.max_correction_ratio", max_correction_ratio, 0.0, 1.0);
+  CheckInRange("tracking.loop_closing.max_correction_floor_m", max_correction_floor_m, 0.0, 1000.0);
   SLSLAM_CHECK(std::isfinite(max_correction_rad) && max_correction_rad > 0.0,
                "tracking.loop_closing.max_correction_rad must be > 0");
   SLSLAM_CHECK(strong_covisibility >= 1, "tracking.loop_closing.strong_covisibility must be >= 1");

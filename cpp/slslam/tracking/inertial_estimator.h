@@ -45,8 +45,10 @@ struct InertialOptions {
   double lost_sigma_min_m = 0.3;  ///< ... or this, whichever is larger [m]
   double max_gap_s = 60.0;        ///< and at the latest after this long without vision [s]
   /// A frame the camera does not track (fewer than the tracker's min_inliers) still corrects the
-  /// state with its pose optimisation when it keeps this many inliers (0: never) [-]
-  int weak_update_min_inliers = 8;
+  /// state with its pose optimisation when it keeps this many inliers (0: never). Off: on smooth
+  /// shotcrete the few matches are sensor noise and pull the state away from the truth faster
+  /// than the IMU alone drifts (benchmarks/hard_cases.py) [-]
+  int weak_update_min_inliers = 0;
   /// An INERTIAL frame with stereo points for a map (as one that starts a map) becomes a keyframe
   /// at the IMU's pose when the last keyframe is this old, so that the map goes on through a
   /// stretch the local map does not cover (0: never) [s]
