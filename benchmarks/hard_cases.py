@@ -1,5 +1,5 @@
 """Issue 62's hard simulated cases: smooth shotcrete, a stop and a turn on the spot in it, and a
-headlamp blackout longer than the IMU bridge; the tracker on each, camera only by default.
+headlamp blackout of 4 s; the tracker on each, camera only by default.
 
     python benchmarks/hard_cases.py [--cases shotcrete_l100 shotcrete_l015_dust
         shotcrete_branch blackout_long] [--configs orb_lines,xfeat_lines] [--imu]
@@ -14,8 +14,8 @@ junction at light 0.5 (blackout_long). Each is simulated (seed 0, no LiDAR) with
 needs to get through its hard part and a little beyond, once, into --data-dir.
 
 Configurations as in tracking_recovery.py: ORB + lines (orb_lines, `slslam run --orb`), XFeat +
-lines (xfeat_lines, `slslam run --xfeat`), ... Camera only unless --imu (then the IMU bridge
-runs, as `slslam run` does by default on the simulator's imu0/).
+lines (xfeat_lines, `slslam run --xfeat`), ... Camera only unless --imu (then the IMU is coupled
+in, as `slslam run` does by default on the simulator's imu0/).
 
 Per run, besides tracking_recovery.py's table: the hard part's frames (the robot inside the
 shotcrete stretch, or the lights out), the share of them with a camera pose (OK, RELOCALISED,
@@ -99,7 +99,7 @@ def hard_part(out: Path, hard: np.ndarray) -> dict:
 def hard_table(results: dict) -> str:
     head = (
         "| case | configuration | hard frames (first-last) | camera-posed in hard part "
-        "| IMU-bridged in it | keypoints inside / outside | maps | ATE RMSE [m] |"
+        "| IMU-carried in it | keypoints inside / outside | maps | ATE RMSE [m] |"
     )
     lines = [head, "|" + "---|" * 8]
     for case, runs in results.items():
@@ -119,9 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--cases", nargs="+", default=CASES, choices=CASES)
     parser.add_argument("--configs", default="orb_lines,xfeat_lines")
-    parser.add_argument(
-        "--imu", action="store_true", help="let the IMU bridge run (default: camera only)"
-    )
+    parser.add_argument("--imu", action="store_true", help="use the IMU (default: camera only)")
     parser.add_argument(
         "--frames-scale",
         type=float,

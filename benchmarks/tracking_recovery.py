@@ -17,7 +17,7 @@ Configurations, each with its front end's preset (python/slslam/presets/): ORB +
 i.e. plain OpenCV ORB detection as before it (orb_lines_plain); ORB points only (orb).
 
 Per run: frames with an estimated pose after the first initialisation (OK, RELOCALISED, NEW_MAP,
-INERTIAL), relocalisations, new maps after a loss, frames the IMU bridged (the simulator writes
+INERTIAL), relocalisations, new maps after a loss, frames the IMU carried (the simulator writes
 imu0/, used by default; ``--set tracking.imu.enabled=false`` for camera only), frames and
 seconds without an estimate, maps, ATE RMSE over every estimated frame (evo, SE3 alignment of
 the whole run) in metres and as a share of the path driven, median keypoints per frame (whole
@@ -94,7 +94,8 @@ SEQUENCES = {
         "spin_deg": 360.0,
         "spin_duration_s": 6.0,
     },
-    # a 4 s blackout (twice the IMU bridge's 2 s) from t = 8 s on the junction at light 0.5
+    # a 4 s blackout (twice the 2 s the earlier IMU bridge carried) from t = 8 s on the junction
+    # at light 0.5
     "blackout_long": {
         "preset": "junction",
         "light": 0.5,
@@ -173,7 +174,7 @@ def summarise(out: Path, metrics: dict) -> dict:
 def table(results: dict) -> str:
     head = (
         "| sequence | configuration | frames | posed after init | relocalisations | new maps "
-        "| IMU-bridged frames | lost frames | maps | ATE RMSE [m] | ATE % of path "
+        "| IMU-carried frames | lost frames | maps | ATE RMSE [m] | ATE % of path "
         "| keypoints (hard stretch) | keyframes | ms/frame |"
     )
     lines = [head, "|" + "---|" * 14]

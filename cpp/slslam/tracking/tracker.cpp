@@ -511,6 +511,15 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
   return result;
 }
 
+namespace {
+// A frame handed back before anything changed: it comes again with detected keypoints.
+TrackResult HandedBack() {
+  TrackResult handed_back;
+  handed_back.needs_keypoints = true;
+  return handed_back;
+}
+}  // namespace
+
 TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   TrackResult result;
   Require(!frame->left_lines_pending || (complete_left_lines_ && *complete_left_lines_),
@@ -530,12 +539,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   // given with its keypoints is tracked on them: the caller decides which frames are detected
   // (Python's Tracker._detect_ahead, the same way in a pipeline and one frame at a time).
   const bool project = frame->keypoints_pending && CanProject(*frame);
-  const auto refuse_projection = []() {
-    TrackResult handed_back;
-    handed_back.needs_keypoints = true;
-    return handed_back;
-  };
-  if (frame->keypoints_pending && !project) return refuse_projection();
+  if (frame->keypoints_pending && !project) return HandedBack();
   // A loop correction or a merge may have moved the last pose (a merge into another map's
   // world): the prediction starts from where it is now.
   FollowCorrections();
@@ -558,26 +562,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
        last_point_inliers_ < options_.lines_on_demand_inliers)) {
     frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
   }
-  if (atlas_.size() == 0) {  // not initialised yet
-    const auto start = Clock::now();
-    if (options_.localise_only) {
-      throw std::runtime_error("localise-only mode needs a loaded map (the atlas is empty)");
-    }
-    if (StartMap(frame, predicted)) {
-      result.state = TrackingState::kOk;
-      result.keyframe = true;
-      mode_ = Mode::kTracking;
-      SetPose(predicted, /*update_velocity=*/false);
-      RecordFrame(*frame, /*keyframe=*/true);
-      InertialPose(*frame, predicted, Matrix6d::Zero(), /*with_prior=*/false);
-    } else {
-      result.state = TrackingState::kNotInitialized;
-    }
-    result.cam_from_world = predicted;
-    result.map_index = active_;
-    result.mapping_ms = Ms(start);
-    return result;
-  }
+  if (atlas_.size() == 0) return FirstFrame(frame, predicted, std::move(result));  // not initialised yet
 
   LocalTracking tracking;
   bool tracked = false, relocalised = false;
@@ -630,7 +615,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     track_local_map(scale, /*points_visible=*/true);
     tracked = tracking.pose.success && tracking.weighted_inliers >= options_.min_inliers;
     if (project && (!tracked || tracking.pose.point_inliers < options_.projection_min_inliers)) {
-      return refuse_projection();
+      return HandedBack();
     }
     if (!tracked && frame->left_lines_pending) {
       // lines_on_demand: its points alone do not track it; again with its lines (both passes
@@ -673,145 +658,190 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   result.optimisation_ms = tracking.optimisation_ms;
 
   if (tracked || relocalised) {
-    std::vector<int> point_match(frame->NumKeypoints(), -1);
-    std::vector<int> line_match(frame->NumLines(), -1);
-    bool make_keyframe = false, want_keyframe = false;
-    bool velocity_known = mode_ == Mode::kTracking;
-    {
-      // (the live map: merged into another meanwhile in threaded mode, see LockActiveMap)
+    return TrackedFrame(frame, std::move(result), std::move(tracking), relocalised, project,
+                        std::move(valid), have_prior ? &prior : nullptr);
+  }
+  return NotTracked(frame, std::move(result), local_pose, have_prior, predicted);
+}
+
+TrackResult Tracker::FirstFrame(std::shared_ptr<const StereoFrame>& frame,
+                                const Rigid3d& predicted, TrackResult result) {
+  const auto start = Clock::now();
+  if (options_.localise_only) {
+    throw std::runtime_error("localise-only mode needs a loaded map (the atlas is empty)");
+  }
+  if (StartMap(frame, predicted)) {
+    result.state = TrackingState::kOk;
+    result.keyframe = true;
+    mode_ = Mode::kTracking;
+    SetPose(predicted, /*update_velocity=*/false);
+    RecordFrame(*frame, /*keyframe=*/true);
+    InertialPose(*frame, predicted, Matrix6d::Zero(), /*with_prior=*/false);
+  } else {
+    result.state = TrackingState::kNotInitialized;
+  }
+  result.cam_from_world = predicted;
+  result.map_index = active_;
+  result.mapping_ms = Ms(start);
+  return result;
+}
+
+TrackResult Tracker::TrackedFrame(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
+                                  LocalTracking tracking, bool relocalised, bool project,
+                                  std::vector<bool> valid, const PosePrior* prior) {
+  // (tracked by the local map, or relocalised: exactly one of the two)
+  std::vector<int> point_match(frame->NumKeypoints(), -1);
+  std::vector<int> line_match(frame->NumLines(), -1);
+  bool make_keyframe = false, want_keyframe = false;
+  bool velocity_known = mode_ == Mode::kTracking;
+  {
+    // (the live map: merged into another meanwhile in threaded mode, see LockActiveMap)
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    // A keyframe takes detected keypoints (new points for the map): a frame on projected ones
+    // that would become one is handed back (below), before anything changed.
+    want_keyframe = project && !options_.localise_only &&
+                    AcceptTracking(*frame, map, tracking, &point_match, &line_match,
+                                   /*decide_only=*/true, /*projected=*/true);
+    if (!want_keyframe) {
+      // The last pose moves too when it was in the world the estimate was made in; otherwise
+      // (a merge meanwhile) the motion between the two is unknown.
+      const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
+      Rigid3d* estimate = &tracking.pose.cam_from_world;
+      if (move_last ? FollowAnchor(map, {estimate, &last_cam_from_world_})
+                    : FollowAnchor(map, {estimate})) {
+        if (move_last) seen_epoch_ = map.correction_epoch();
+        velocity_known = velocity_known && move_last;
+      }
+      point_match.assign(frame->NumKeypoints(), -1);
+      make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match,
+                                     /*decide_only=*/false, project) &&
+                      !project;
+    }
+  }
+  if (want_keyframe) return HandedBack();
+  projected_run_ = project ? projected_run_ + 1 : 0;
+  result.projected_keypoints = project ? frame->NumKeypoints() : 0;
+  if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
+    KeyframeWithLines(frame, &result, &tracking, &line_match, valid, prior);
+  }
+  last_point_inliers_ = tracking.pose.point_inliers;
+  if (dynamic_) {
+    // Thin tracking (low texture, dark, dust) masks nothing: its sparse frame-to-frame
+    // evidence is noise-dominated, and every keypoint counts there (measured on the junction
+    // with flicker, dust and a blackout: masking there lost 33 frames and split the map). The
+    // weights still follow the evidence, so a mover seen while tracking is thin is masked as
+    // soon as tracking is strong again.
+    dynamic_masks_ = !relocalised && tracking.weighted_inliers >= options_.weak_keyframe_inliers;
+    if (!relocalised) UpdateDynamicCells(*frame, tracking.pose.cam_from_world);
+    if (relocalised) dynamic_->Reset();  // relocalised: the cells start afresh from here
+    valid.clear();
+    if (dynamic_masks_) valid = dynamic_->KeypointMask(frame->keypoints.uv);
+    previous_frame_ = frame;
+    previous_cam_from_world_ = tracking.pose.cam_from_world;
+  }
+  result.state = relocalised ? TrackingState::kRelocalised : TrackingState::kOk;
+  result.cam_from_world = tracking.pose.cam_from_world;
+  result.map_index = active_;
+  // After a loss the velocity is unknown: start again from rest.
+  SetPose(tracking.pose.cam_from_world, /*update_velocity=*/velocity_known);
+  // (a relocalised pose has no information: the state takes it as it is)
+  InertialPose(*frame, tracking.pose.cam_from_world,
+               relocalised ? Matrix6d::Zero() : Matrix6d(tracking.pose.information),
+               prior != nullptr && !relocalised);
+  mode_ = Mode::kTracking;
+  lost_count_ = 0;
+  lost_map_candidates_ = 0;
+  if (options_.localise_only) {
+    // No keyframes are made: the reference keyframe (centre of the local map) moves to the
+    // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    const Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    std::map<int, int> seen;
+    for (int pid : point_match) {
+      auto p = pid >= 0 ? map.point(pid) : nullptr;
+      if (!p) continue;
+      for (const auto& [kf_id, idx] : p->observations) {
+        (void)idx;
+        ++seen[kf_id];
+      }
+    }
+    int best = 0;
+    for (const auto& [kf_id, count] : seen) {
+      if (count > best) {
+        best = count;
+        last_keyframe_ = kf_id;
+      }
+    }
+  }
+  if (make_keyframe && !options_.localise_only) {
+    const auto start = Clock::now();
+    frame = WithRefinedKeypoints(std::move(frame), tracking);
+    if (options_.use_lines) frame = WithStereoLines(std::move(frame));
+    InsertKeyFrame(frame, tracking.pose.cam_from_world, point_match, line_match, valid);
+    result.keyframe = true;
+    result.mapping_ms = Ms(start);
+  }
+  RecordFrame(*frame, result.keyframe);
+  return result;
+}
+
+void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, TrackResult* result_out,
+                                LocalTracking* tracking_out, std::vector<int>* line_match_out,
+                                const std::vector<bool>& valid_in, const PosePrior* prior) {
+  TrackResult& result = *result_out;
+  LocalTracking& tracking = *tracking_out;
+  std::vector<int>& line_match = *line_match_out;
+  const std::vector<bool>& valid = valid_in;
+  // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
+  // from the pose its points gave, and the pose is optimised again with them. The keyframe
+  // keeps its points' matches from the first tracking (the second, pulled by the lines,
+  // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/README.md
+  // 2026-11-27 h); its keypoints are refined as the second tracking aligned them (below),
+  // and it is made either way. The local map is copied again in the world the estimate is
+  // in (the anchor's): when a correction or a merge landed since (threaded mode), the
+  // keyframe goes in without matched lines rather than mix two worlds.
+  frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
+  line_match.assign(frame->NumLines(), -1);
+  const Rigid3d points_pose = tracking.pose.cam_from_world;
+  LocalMapSnapshot local;
+  bool same_world = false;
+  {
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    same_world = anchor_.map == &map && anchor_.epoch == map.correction_epoch();
+    if (same_world) {
+      local = SnapshotLocalMap(*frame, map, last_keyframe_, points_pose,
+                               /*points_visible=*/false);
+    }
+  }
+  if (same_world) {
+    LocalTracking with_lines =
+        TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_,
+                      prior);
+    result.matching_ms += with_lines.matching_ms;
+    result.optimisation_ms += with_lines.optimisation_ms;
+    if (with_lines.pose.success && with_lines.weighted_inliers >= options_.min_inliers) {
       const std::unique_lock<Mutex> lock = LockActiveMap();
       Map& map = atlas_.map(active_);
       map.mutex().AssertHeld();  // locked by LockActiveMap
-      // A keyframe takes detected keypoints (new points for the map): a frame on projected ones
-      // that would become one is handed back (below), before anything changed.
-      want_keyframe = project && !options_.localise_only &&
-                      AcceptTracking(*frame, map, tracking, &point_match, &line_match,
-                                     /*decide_only=*/true, /*projected=*/true);
-      if (!want_keyframe) {
-        // The last pose moves too when it was in the world the estimate was made in; otherwise
-        // (a merge meanwhile) the motion between the two is unknown.
-        const bool move_last = anchor_.map == &map && anchor_.epoch == seen_epoch_;
-        Rigid3d* estimate = &tracking.pose.cam_from_world;
-        if (move_last ? FollowAnchor(map, {estimate, &last_cam_from_world_})
-                      : FollowAnchor(map, {estimate})) {
-          if (move_last) seen_epoch_ = map.correction_epoch();
-          velocity_known = velocity_known && move_last;
-        }
-        point_match.assign(frame->NumKeypoints(), -1);
-        make_keyframe = AcceptTracking(*frame, map, tracking, &point_match, &line_match,
-                                       /*decide_only=*/false, project) &&
-                        !project;
-      }
+      AcceptLines(map, with_lines, &line_match);
+      tracking = std::move(with_lines);
+      result.matched_points = static_cast<int>(tracking.point_ids.size());
+      result.matched_lines = static_cast<int>(tracking.line_ids.size());
+      result.inlier_points = tracking.pose.point_inliers;
+      result.inlier_lines = tracking.pose.line_inliers;
+      result.weighted_inliers = tracking.weighted_inliers;
     }
-    if (want_keyframe) return refuse_projection();
-    projected_run_ = project ? projected_run_ + 1 : 0;
-    result.projected_keypoints = project ? frame->NumKeypoints() : 0;
-    if (make_keyframe && !options_.localise_only && frame->left_lines_pending) {
-      // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
-      // from the pose its points gave, and the pose is optimised again with them. The keyframe
-      // keeps its points' matches from the first tracking (the second, pulled by the lines,
-      // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/README.md
-      // 2026-11-27 h); its keypoints are refined as the second tracking aligned them (below),
-      // and it is made either way. The local map is copied again in the world the estimate is
-      // in (the anchor's): when a correction or a merge landed since (threaded mode), the
-      // keyframe goes in without matched lines rather than mix two worlds.
-      frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
-      line_match.assign(frame->NumLines(), -1);
-      const Rigid3d points_pose = tracking.pose.cam_from_world;
-      LocalMapSnapshot local;
-      bool same_world = false;
-      {
-        const std::unique_lock<Mutex> lock = LockActiveMap();
-        Map& map = atlas_.map(active_);
-        map.mutex().AssertHeld();  // locked by LockActiveMap
-        same_world = anchor_.map == &map && anchor_.epoch == map.correction_epoch();
-        if (same_world) {
-          local = SnapshotLocalMap(*frame, map, last_keyframe_, points_pose,
-                                   /*points_visible=*/false);
-        }
-      }
-      if (same_world) {
-        LocalTracking with_lines =
-            TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_,
-                          have_prior ? &prior : nullptr);
-        result.matching_ms += with_lines.matching_ms;
-        result.optimisation_ms += with_lines.optimisation_ms;
-        if (with_lines.pose.success && with_lines.weighted_inliers >= options_.min_inliers) {
-          const std::unique_lock<Mutex> lock = LockActiveMap();
-          Map& map = atlas_.map(active_);
-          map.mutex().AssertHeld();  // locked by LockActiveMap
-          AcceptLines(map, with_lines, &line_match);
-          tracking = std::move(with_lines);
-          result.matched_points = static_cast<int>(tracking.point_ids.size());
-          result.matched_lines = static_cast<int>(tracking.line_ids.size());
-          result.inlier_points = tracking.pose.point_inliers;
-          result.inlier_lines = tracking.pose.line_inliers;
-          result.weighted_inliers = tracking.weighted_inliers;
-        }
-      }
-    }
-    last_point_inliers_ = tracking.pose.point_inliers;
-    if (dynamic_) {
-      // Thin tracking (low texture, dark, dust) masks nothing: its sparse frame-to-frame
-      // evidence is noise-dominated, and every keypoint counts there (measured on the junction
-      // with flicker, dust and a blackout: masking there lost 33 frames and split the map). The
-      // weights still follow the evidence, so a mover seen while tracking is thin is masked as
-      // soon as tracking is strong again.
-      dynamic_masks_ = tracked && tracking.weighted_inliers >= options_.weak_keyframe_inliers;
-      if (tracked) UpdateDynamicCells(*frame, tracking.pose.cam_from_world);
-      if (!tracked) dynamic_->Reset();  // relocalised: the cells start afresh from here
-      valid.clear();
-      if (dynamic_masks_) valid = dynamic_->KeypointMask(frame->keypoints.uv);
-      previous_frame_ = frame;
-      previous_cam_from_world_ = tracking.pose.cam_from_world;
-    }
-    result.state = relocalised ? TrackingState::kRelocalised : TrackingState::kOk;
-    result.cam_from_world = tracking.pose.cam_from_world;
-    result.map_index = active_;
-    // After a loss the velocity is unknown: start again from rest.
-    SetPose(tracking.pose.cam_from_world, /*update_velocity=*/velocity_known);
-    // (a relocalised pose has no information: the state takes it as it is)
-    InertialPose(*frame, tracking.pose.cam_from_world,
-                 relocalised ? Matrix6d::Zero() : Matrix6d(tracking.pose.information),
-                 have_prior && !relocalised);
-    mode_ = Mode::kTracking;
-    lost_count_ = 0;
-    lost_map_candidates_ = 0;
-    if (options_.localise_only) {
-      // No keyframes are made: the reference keyframe (centre of the local map) moves to the
-      // keyframe that observes most of this frame's inlier points (ORB-SLAM's local keyframes).
-      const std::unique_lock<Mutex> lock = LockActiveMap();
-      const Map& map = atlas_.map(active_);
-      map.mutex().AssertHeld();  // locked by LockActiveMap
-      std::map<int, int> seen;
-      for (int pid : point_match) {
-        auto p = pid >= 0 ? map.point(pid) : nullptr;
-        if (!p) continue;
-        for (const auto& [kf_id, idx] : p->observations) {
-          (void)idx;
-          ++seen[kf_id];
-        }
-      }
-      int best = 0;
-      for (const auto& [kf_id, count] : seen) {
-        if (count > best) {
-          best = count;
-          last_keyframe_ = kf_id;
-        }
-      }
-    }
-    if (make_keyframe && !options_.localise_only) {
-      const auto start = Clock::now();
-      frame = WithRefinedKeypoints(std::move(frame), tracking);
-      if (options_.use_lines) frame = WithStereoLines(std::move(frame));
-      InsertKeyFrame(frame, tracking.pose.cam_from_world, point_match, line_match, valid);
-      result.keyframe = true;
-      result.mapping_ms = Ms(start);
-    }
-    RecordFrame(*frame, result.keyframe);
-    return result;
   }
+}
 
+TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
+                                const PoseOptimizerResult& local_pose, bool have_prior,
+                                const Rigid3d& predicted) {
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
   anchor_ = Anchor{};
   last_point_inliers_ = 0;

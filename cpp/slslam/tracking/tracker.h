@@ -419,6 +419,22 @@ class Tracker {
   // Track's work on one frame; `frame` is replaced by a completed copy when the frame takes its
   // left lines on demand (lines_on_demand).
   TrackResult TrackFrame(std::shared_ptr<const StereoFrame>& frame);
+  // TrackFrame's states: the first frame of the run (a map starts or not), a frame tracked by the
+  // local map or relocalised (its keyframe decision, the dynamic cells, the inertial state), and
+  // a frame the camera did not track (INERTIAL, RECENTLY_LOST, LOST or a new map).
+  TrackResult FirstFrame(std::shared_ptr<const StereoFrame>& frame, const Rigid3d& predicted,
+                         TrackResult result);
+  TrackResult TrackedFrame(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
+                           LocalTracking tracking, bool relocalised, bool project,
+                           std::vector<bool> valid, const PosePrior* prior);
+  TrackResult NotTracked(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
+                         const PoseOptimizerResult& local_pose, bool have_prior,
+                         const Rigid3d& predicted);
+  // lines_on_demand: a keyframe tracked on its points takes its lines, matched to the local map
+  // from that pose, and the pose is optimised again with them (TrackedFrame's part).
+  void KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, TrackResult* result,
+                         LocalTracking* tracking, std::vector<int>* line_match,
+                         const std::vector<bool>& valid, const PosePrior* prior);
   bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
   static int StereoPoints(const StereoFrame& frame);  ///< keypoints with a stereo depth
   /// StartMap's first check: at least min(min_init_points, 15) stereo points (a lit frame)

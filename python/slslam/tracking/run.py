@@ -616,7 +616,7 @@ def _give_imu(sequence, config: Config, tracker: Tracker) -> None:
     tracker.add_imu(t, samples["gyro"], samples["acc"])
     if len(t) > 1:
         rate = (len(t) - 1) / (t[-1] - t[0])
-        log.info("IMU: %d samples at %.0f Hz bridge short visual outages", len(t), rate)
+        log.info("IMU: %d samples at %.0f Hz, coupled into tracking (tracking.imu)", len(t), rate)
 
 
 def _show(viewer, show: Callable, *args):
