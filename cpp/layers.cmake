@@ -12,10 +12,12 @@
 #   map           keyframes, points, lines, covisibility, map files
 #   optimization  Ceres problems: pose, bundle adjustment, pose graph
 #   mapping       local mapping, triangulation, loop closing, the atlas
-#   tracking      stereo matching, the stereo front end, the tracker
+#   tracking      stereo matching, the stereo front end, the tracker, the inertial estimator
+#   pipeline      the per-frame session over the tracker (what slslam._core's TrackerCore binds)
 #   sim           the roadway simulator's renderer (beside the SLAM layers)
 #   lidar         LiDAR registration and LiDAR-inertial SLAM (beside; needs PCL)
-set(SLSLAM_LAYERS core features geometry inertial place map optimization mapping tracking sim lidar)
+set(SLSLAM_LAYERS core features geometry inertial place map optimization mapping tracking pipeline sim
+                  lidar)
 set(SLSLAM_LAYER_DEPS_core "")
 set(SLSLAM_LAYER_DEPS_features core)
 set(SLSLAM_LAYER_DEPS_geometry core)
@@ -25,6 +27,7 @@ set(SLSLAM_LAYER_DEPS_map core features geometry place)
 set(SLSLAM_LAYER_DEPS_optimization core geometry inertial)
 set(SLSLAM_LAYER_DEPS_mapping map optimization)
 set(SLSLAM_LAYER_DEPS_tracking mapping)
+set(SLSLAM_LAYER_DEPS_pipeline tracking)
 set(SLSLAM_LAYER_DEPS_sim core)
 set(SLSLAM_LAYER_DEPS_lidar core geometry inertial)
 

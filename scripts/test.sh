@@ -25,9 +25,8 @@ if [[ "${SLSLAM_SKIP_THREAD_SAFETY:-0}" != "1" ]]; then
   bash scripts/thread_safety.sh
 fi
 
-echo "[slslam] lint: ruff check, ruff format --check"
-"$PYTHON" -m ruff check python tests benchmarks
-"$PYTHON" -m ruff format --check python tests benchmarks
+# ruff, clang-format and mypy (scripts/lint.sh)
+bash scripts/lint.sh
 
 echo "[slslam] Python tests"
 "$PYTHON" -m pytest tests/python "$@"

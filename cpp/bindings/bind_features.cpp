@@ -3,10 +3,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings/image_conversion.h"
+#include "slslam/features/dense_sampling.h"
 #include "slslam/features/descriptor_matcher.h"
 #include "slslam/features/dynamic_cell_filter.h"
 #include "slslam/features/grid_limit.h"
-#include "slslam/features/dense_sampling.h"
 #include "slslam/features/non_max_suppression.h"
 #include "slslam/features/orb_extractor.h"
 

@@ -77,7 +77,7 @@ Array3 ToArray(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 Eigen::Vector3d ToVector(const Array3& a) { return {a[0], a[1], a[2]}; }
 
 template <typename T>
-auto Vector3Property(Eigen::Vector3d T::* member) {
+auto Vector3Property(Eigen::Vector3d T::*member) {
   return std::make_pair([member](const T& self) { return ToArray(self.*member); },
                         [member](T& self, const Array3& a) { self.*member = ToVector(a); });
 }

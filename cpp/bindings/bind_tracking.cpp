@@ -1,9 +1,8 @@
 // slslam._core tracking: the stereo point-line tracker with local mapping. Python hands over the
 // images and the point features (SuperPoint runs in Python through onnxruntime, ORB in C++);
 // line extraction, stereo matching, tracking and mapping run here with the GIL released.
-#include <chrono>
 #include <memory>
-#include <mutex>
+#include <vector>
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -14,6 +13,7 @@
 #include "slslam/core/check.h"
 #include "slslam/features/line_extractor.h"
 #include "slslam/features/orb_extractor.h"
+#include "slslam/pipeline/tracker_session.h"
 #include "slslam/tracking/stereo_frontend.h"
 #include "slslam/tracking/tracker.h"
 
@@ -36,298 +36,122 @@ Keypoints MakeKeypoints(const PixelArray& uv, const py::array& descriptors, cons
   return k;
 }
 
-// One frame through the session: the tracker's result, the front end's stage times and the
-// number of left-image line segments (flat, so each field binds as it is).
-struct FrameOutput : TrackResult, StereoFrontendTiming {
-  int lines = 0;
-};
-
-// A left image's lines extracted ahead (TrackerCore.extract_left_lines), opaque to Python.
-struct LeftLines {
-  LineFeatures features;
-  double extraction_ms = 0.0;
-};
-
-// A frame whose stereo matching ran ahead of the tracker (TrackerCore.prepare), opaque to
-// Python: the frame, the images it was built from (copies) and the lines extracted beside it.
-struct PreparedFrame {
-  const void* session = nullptr;  // the TrackerSession that prepared it (and tracks it)
-  cv::Mat left, right, left_used, right_used;
-  std::shared_ptr<StereoFrame> frame;
-  std::shared_ptr<LeftLines> left_lines;
-  StereoFrontendTiming timing;
-  bool used = false;  // tracked (under the session's lock): a frame is tracked once
-  bool denoised = false;  // the caller smoothed the images (StereoFrontend::Build's denoised)
-};
-
-// The tracker plus the per-frame steps that precede it in C++ (lines, stereo matching).
-// The tracker's options with the line front end's descriptor kind (for map files).
-TrackerOptions WithLineDescriptor(TrackerOptions options, LineDescriptor descriptor) {
-  options.line_descriptor = descriptor;
-  return options;
+// The map and the counters as the dict slslam.Tracker.map reads.
+py::dict MapDict(const SessionMap& session) {
+  const MapExport& m = session.map;
+  const LocalMappingStats& s = session.mapping;
+  const TrackingStats& t = session.tracking;
+  const Tracker::InertialReport& imu = session.imu;
+  const LoopClosingStats& loops = session.loops;
+  py::dict out;
+  out["points"] = m.points;
+  out["lines"] = m.lines;
+  out["point_map"] = m.point_map;
+  out["line_map"] = m.line_map;
+  out["keyframes"] = m.keyframes;
+  out["maps"] = session.maps;
+  out["keyframes_processed"] = s.keyframes_processed;
+  out["keyframes_culled"] = s.keyframes_culled;
+  out["points_culled"] = s.points_culled;
+  out["lines_culled"] = s.lines_culled;
+  out["points_triangulated"] = s.points_triangulated;
+  out["lines_triangulated"] = s.lines_triangulated;
+  out["local_mapping_ms"] = s.total_ba_ms;
+  out["local_ba_interrupted"] = s.ba_interrupted;
+  out["local_ba_solve_ms"] = s.ba_solve_ms;
+  out["local_ba_iterations"] = s.ba_iterations;
+  out["local_ba_rejected_steps"] = s.ba_rejected_steps;
+  out["inertial_frames"] = t.inertial_frames;
+  out["inertial_weak_updates"] = t.inertial_weak_updates;
+  out["inertial_keyframes"] = t.inertial_keyframes;
+  py::dict imu_out;
+  imu_out["has_imu"] = imu.has_imu;
+  imu_out["initialised"] = imu.initialised;
+  imu_out["first_pose_s"] = imu.first_pose_s;
+  imu_out["first_init_s"] = imu.first_init_s;
+  imu_out["initialisations"] = imu.initialisations;
+  imu_out["refinements"] = imu.refinements;
+  imu_out["last_failure"] = imu.last_failure;
+  imu_out["gyro_bias_radps"] = imu.gyro_bias;
+  imu_out["acc_bias_mps2"] = imu.acc_bias;
+  imu_out["g_world_mps2"] = imu.g_world;
+  out["imu"] = imu_out;
+  out["relocalisations"] = t.relocalisations;
+  out["relocalisation_attempts"] = t.relocalisation_attempts;
+  out["maps_started"] = t.maps_started;
+  out["line_frames"] = t.line_frames;
+  out["loop_keyframes_checked"] = loops.keyframes_checked;
+  out["loop_candidates_verified"] = loops.candidates_verified;
+  out["loops_detected"] = loops.loops_detected;
+  out["loops_rejected"] = loops.loops_rejected;
+  out["loops_accepted"] = loops.loops_accepted;
+  out["merges"] = loops.merges;
+  out["global_ba_runs"] = loops.global_ba_runs;
+  out["loop_closing_ms"] = loops.loop_ms;
+  out["global_ba_ms"] = loops.global_ba_ms;
+  out["global_ba_lock_ms"] = loops.global_ba_lock_ms;
+  out["global_ba_cancelled"] = loops.global_ba_cancelled;
+  out["welding_ba_runs"] = loops.welding_ba_runs;
+  out["welding_ba_ms"] = loops.welding_ba_ms;
+  py::list loop_events;
+  for (const LoopEvent& e : session.loop_events) {
+    py::dict d;
+    d["frame_index"] = e.frame_index;
+    d["candidate_frame_index"] = e.candidate_frame_index;
+    d["merge"] = e.merge;
+    d["correction_m"] = e.correction_m;
+    loop_events.append(d);
+  }
+  out["loop_events"] = loop_events;
+  return out;
 }
 
-class TrackerSession {
- public:
-  TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines)
-      : tracker_(WithLineDescriptor(options, lines.descriptor)),
-        frontend_({options.rig, options.stereo, lines, options.use_lines,
-                   options.right_lines_on_keyframes,
-                   options.use_lines && options.right_lines_on_keyframes &&
-                       options.lines_on_demand,
-                   options.denoise_above_noise}) {}
-
-  FrameOutput Track(int index, double timestamp, const py::array& left_image,
-                    const py::array& right_image, const PixelArray& left_uv,
-                    const py::array& left_descriptors, const PixelArray& right_uv,
-                    const py::array& right_descriptors,
-                    const std::shared_ptr<LeftLines>& left_lines, bool noisy, bool denoised) {
-    return TrackPrepared(*Prepare(index, timestamp, left_image, right_image, left_uv,
-                                  left_descriptors, right_uv, right_descriptors, left_lines,
-                                  /*keypoints_pending=*/false, noisy, denoised));
-  }
-
-  // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
-  // session's lock: it reads no state of the tracker, so a pipeline's worker runs it for frame
-  // k + 1 while the core tracks frame k. The images are copied (the frame outlives the arrays).
-  std::shared_ptr<PreparedFrame> Prepare(int index, double timestamp,
-                                         const py::array& left_image,
-                                         const py::array& right_image, const PixelArray& left_uv,
-                                         const py::array& left_descriptors,
-                                         const PixelArray& right_uv,
-                                         const py::array& right_descriptors,
-                                         const std::shared_ptr<LeftLines>& left_lines,
-                                         bool keypoints_pending, bool noisy,
-                                         bool denoised) const {
-    const cv::Mat left = WrapGray(left_image, "left image");
-    const cv::Mat right = WrapGray(right_image, "right image");
-    const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
-    const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
-    auto p = std::make_shared<PreparedFrame>();
-    p->session = this;
-    p->left_lines = left_lines;
-    p->denoised = denoised;
-    py::gil_scoped_release release;
-    p->left = left.clone();
-    p->right = right.clone();
-    // lines_on_demand: lines extracted ahead are the completer's to hand over if the tracker
-    // asks (the same lines it would extract: only the time differs).
-    const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
-    p->frame = frontend_.Build(index, timestamp, p->left, p->right, kl, kr, &p->timing,
-                               frontend_.options().left_lines_on_demand ? nullptr : ahead,
-                               &p->left_used, &p->right_used, denoised);
-    if (keypoints_pending) {
-      SLSLAM_CHECK(kl.size() == 0 && kr.size() == 0,
-                   "a frame prepared with keypoints_pending has no keypoints (", kl.size(), " / ",
-                   kr.size(), " given)");
-      p->frame->keypoints_pending = true;
-    }
-    p->frame->noisy = noisy;
-    return p;
-  }
-
-  // Track's second part: the tracker (and local mapping) on a prepared frame, one call at a
-  // time and in frame order.
-  FrameOutput TrackPrepared(PreparedFrame& p) {
-    SLSLAM_CHECK(p.session == this, "a prepared frame is tracked by the TrackerCore that "
-                 "prepared it (its rig and options)");
-    FrameOutput out;
-    static_cast<StereoFrontendTiming&>(out) = p.timing;
-    const LineFeatures* ahead = p.left_lines ? &p.left_lines->features : nullptr;
-    if (p.left_lines) out.line_extraction_ms = p.left_lines->extraction_ms;
-    {
-      py::gil_scoped_release release;
-      std::lock_guard<std::mutex> lock(mutex_);  // one call at a time from any Python thread
-      SLSLAM_CHECK(!p.used, "a prepared frame is tracked once");
-      p.used = true;
-      // (right_lines_on_keyframes: the right image's lines when the tracker needs them)
-      const Tracker::StereoLineCompleter complete = [&](StereoFrame* f) {
-        frontend_.CompleteStereoLines(p.right, f, p.denoised);
-      };
-      // (lines_on_demand: the left image's lines when the tracker needs them)
-      const Tracker::StereoLineCompleter complete_left = [&](StereoFrame* f) {
-        frontend_.CompleteLeftLines(p.left, f, ahead, p.denoised);
-      };
-      static_cast<TrackResult&>(out) = tracker_.Track(p.frame, complete, p.left_used,
-                                                      complete_left, p.right_used);
-      out.lines = out.frame_lines;
-      if (!ahead) out.line_extraction_ms += out.left_lines_ms;
-    }
-    return out;
-  }
-
-  // The left image's lines, as Track would extract them, on the calling thread without the
-  // session's lock (beside the point front end, or beside Track of the previous frame).
-  std::shared_ptr<LeftLines> ExtractLeftLines(const py::array& left_image, bool denoised) const {
-    const cv::Mat left = WrapGray(left_image, "left image");
-    auto out = std::make_shared<LeftLines>();
-    py::gil_scoped_release release;
-    const auto start = std::chrono::steady_clock::now();
-    out->features = frontend_.ExtractLeftLines(left, denoised);
-    out->extraction_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
-    return out;
-  }
-
-  // IMU samples (N timestamps [s], N x 3 gyro [rad/s], N x 3 specific force [m/s^2]) for the
-  // bridge through visual outages; before the frames they precede.
-  void AddImu(const Eigen::VectorXd& t_s, const Eigen::Matrix<double, Eigen::Dynamic, 3>& gyro,
-              const Eigen::Matrix<double, Eigen::Dynamic, 3>& acc) {
-    SLSLAM_CHECK(gyro.rows() == t_s.size() && acc.rows() == t_s.size(), "IMU samples: ",
-                 t_s.size(), " timestamps, ", gyro.rows(), " gyro rows, ", acc.rows(),
-                 " accelerometer rows");
-    py::gil_scoped_release release;
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (Eigen::Index i = 0; i < t_s.size(); ++i) {
-      tracker_.AddImu(t_s[i], gyro.row(i).transpose(), acc.row(i).transpose());
+// The trajectory as arrays (index, timestamp, map_index, cam_from_world rotation, translation).
+py::dict TrajectoryDict(const std::vector<FramePose>& poses) {
+  const auto n = static_cast<py::ssize_t>(poses.size());
+  py::array_t<int> index(n), map_index(n);
+  py::array_t<double> timestamp(n);
+  py::array_t<double> R_cw({n, py::ssize_t{3}, py::ssize_t{3}});
+  py::array_t<double> t_cw({n, py::ssize_t{3}});
+  auto idx = index.mutable_unchecked<1>();
+  auto mi = map_index.mutable_unchecked<1>();
+  auto ts = timestamp.mutable_unchecked<1>();
+  auto R = R_cw.mutable_unchecked<3>();
+  auto t = t_cw.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const FramePose& f = poses[i];
+    idx(i) = f.index;
+    mi(i) = f.map_index;
+    ts(i) = f.timestamp;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R(i, r, c) = f.cam_from_world.rotation(r, c);
+      t(i, r) = f.cam_from_world.translation(r);
     }
   }
+  py::dict out;
+  out["index"] = index;
+  out["timestamp"] = timestamp;
+  out["map_index"] = map_index;
+  out["cam_from_world_rotation"] = R_cw;
+  out["cam_from_world_translation"] = t_cw;
+  return out;
+}
 
-  py::dict Map(bool settle) {
-    MapExport m;
-    LocalMappingStats s;
-    int maps = 0;
-    TrackingStats t;
-    Tracker::InertialReport imu;
-    LoopClosingStats loops;
-    std::vector<LoopEvent> events;
-    {
-      py::gil_scoped_release release;
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (settle) tracker_.Flush();
-      m = tracker_.ExportMap();
-      s = tracker_.mapping_stats();
-      maps = tracker_.live_maps();
-      t = tracker_.stats();
-      imu = tracker_.inertial_report();
-      loops = tracker_.loop_stats();
-      events = tracker_.loop_events();
-    }
-    py::dict out;
-    out["points"] = m.points;
-    out["lines"] = m.lines;
-    out["point_map"] = m.point_map;
-    out["line_map"] = m.line_map;
-    out["keyframes"] = m.keyframes;
-    out["maps"] = maps;
-    out["keyframes_processed"] = s.keyframes_processed;
-    out["keyframes_culled"] = s.keyframes_culled;
-    out["points_culled"] = s.points_culled;
-    out["lines_culled"] = s.lines_culled;
-    out["points_triangulated"] = s.points_triangulated;
-    out["lines_triangulated"] = s.lines_triangulated;
-    out["local_mapping_ms"] = s.total_ba_ms;
-    out["local_ba_interrupted"] = s.ba_interrupted;
-    out["local_ba_solve_ms"] = s.ba_solve_ms;
-    out["local_ba_iterations"] = s.ba_iterations;
-    out["local_ba_rejected_steps"] = s.ba_rejected_steps;
-    out["inertial_frames"] = t.inertial_frames;
-    out["inertial_weak_updates"] = t.inertial_weak_updates;
-    out["inertial_keyframes"] = t.inertial_keyframes;
-    py::dict imu_out;
-    imu_out["has_imu"] = imu.has_imu;
-    imu_out["initialised"] = imu.initialised;
-    imu_out["first_pose_s"] = imu.first_pose_s;
-    imu_out["first_init_s"] = imu.first_init_s;
-    imu_out["initialisations"] = imu.initialisations;
-    imu_out["refinements"] = imu.refinements;
-    imu_out["last_failure"] = imu.last_failure;
-    imu_out["gyro_bias_radps"] = imu.gyro_bias;
-    imu_out["acc_bias_mps2"] = imu.acc_bias;
-    imu_out["g_world_mps2"] = imu.g_world;
-    out["imu"] = imu_out;
-    out["relocalisations"] = t.relocalisations;
-    out["relocalisation_attempts"] = t.relocalisation_attempts;
-    out["maps_started"] = t.maps_started;
-    out["line_frames"] = t.line_frames;
-    out["loop_keyframes_checked"] = loops.keyframes_checked;
-    out["loop_candidates_verified"] = loops.candidates_verified;
-    out["loops_detected"] = loops.loops_detected;
-    out["loops_rejected"] = loops.loops_rejected;
-    out["loops_accepted"] = loops.loops_accepted;
-    out["merges"] = loops.merges;
-    out["global_ba_runs"] = loops.global_ba_runs;
-    out["loop_closing_ms"] = loops.loop_ms;
-    out["global_ba_ms"] = loops.global_ba_ms;
-    out["global_ba_lock_ms"] = loops.global_ba_lock_ms;
-    out["global_ba_cancelled"] = loops.global_ba_cancelled;
-    out["welding_ba_runs"] = loops.welding_ba_runs;
-    out["welding_ba_ms"] = loops.welding_ba_ms;
-    py::list loop_events;
-    for (const LoopEvent& e : events) {
-      py::dict d;
-      d["frame_index"] = e.frame_index;
-      d["candidate_frame_index"] = e.candidate_frame_index;
-      d["merge"] = e.merge;
-      d["correction_m"] = e.correction_m;
-      loop_events.append(d);
-    }
-    out["loop_events"] = loop_events;
-    return out;
-  }
-
-  void SaveMap(const std::string& path, const std::string& version) {
-    py::gil_scoped_release release;
-    std::lock_guard<std::mutex> lock(mutex_);
-    tracker_.SaveMap(path, version);
-  }
-
-  void LoadMap(const std::string& path) {
-    py::gil_scoped_release release;
-    std::lock_guard<std::mutex> lock(mutex_);
-    tracker_.LoadMap(path);
-  }
-
-  // Every estimated frame pose in the final (loop-corrected, merged) map.
-  py::dict Trajectory() {
-    std::vector<FramePose> poses;
-    {
-      py::gil_scoped_release release;
-      std::lock_guard<std::mutex> lock(mutex_);
-      tracker_.Flush();
-      poses = tracker_.Trajectory();
-    }
-    const auto n = static_cast<py::ssize_t>(poses.size());
-    py::array_t<int> index(n), map_index(n);
-    py::array_t<double> timestamp(n);
-    py::array_t<double> R_cw({n, py::ssize_t{3}, py::ssize_t{3}});
-    py::array_t<double> t_cw({n, py::ssize_t{3}});
-    auto idx = index.mutable_unchecked<1>();
-    auto mi = map_index.mutable_unchecked<1>();
-    auto ts = timestamp.mutable_unchecked<1>();
-    auto R = R_cw.mutable_unchecked<3>();
-    auto t = t_cw.mutable_unchecked<2>();
-    for (py::ssize_t i = 0; i < n; ++i) {
-      const FramePose& f = poses[i];
-      idx(i) = f.index;
-      mi(i) = f.map_index;
-      ts(i) = f.timestamp;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(i, r, c) = f.cam_from_world.rotation(r, c);
-        t(i, r) = f.cam_from_world.translation(r);
-      }
-    }
-    py::dict out;
-    out["index"] = index;
-    out["timestamp"] = timestamp;
-    out["map_index"] = map_index;
-    out["cam_from_world_rotation"] = R_cw;
-    out["cam_from_world_translation"] = t_cw;
-    return out;
-  }
-
-  void Flush() {
-    py::gil_scoped_release release;
-    std::lock_guard<std::mutex> lock(mutex_);
-    tracker_.Flush();
-  }
-
- private:
-  Tracker tracker_;  // first: its option checks (named by YAML key) run before the front end's
-  StereoFrontend frontend_;
-  std::mutex mutex_;
-};
+// TrackerSession::Prepare from numpy arrays: converted under the GIL, built without it.
+std::shared_ptr<PreparedFrame> PrepareFromArrays(
+    const TrackerSession& session, int index, double timestamp, const py::array& left_image,
+    const py::array& right_image, const PixelArray& left_uv, const py::array& left_descriptors,
+    const PixelArray& right_uv, const py::array& right_descriptors,
+    const std::shared_ptr<LeftLines>& left_lines, bool keypoints_pending, bool noisy,
+    bool denoised) {
+  const cv::Mat left = WrapGray(left_image, "left image");
+  const cv::Mat right = WrapGray(right_image, "right image");
+  const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
+  const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
+  py::gil_scoped_release release;
+  return session.Prepare(index, timestamp, left, right, kl, kr, left_lines, keypoints_pending,
+                         noisy, denoised);
+}
 
 }  // namespace
 
@@ -436,8 +260,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("keyframe_interval_s", &InertialOptions::keyframe_interval_s)
       .def_readwrite("visual_information_scale", &InertialOptions::visual_information_scale)
       .def_property(
-          "T_body_cam",
-          [](const InertialOptions& o) { return o.body_from_cam.ToMatrix4(); },
+          "T_body_cam", [](const InertialOptions& o) { return o.body_from_cam.ToMatrix4(); },
           [](InertialOptions& o, const Eigen::Matrix4d& T) {
             o.body_from_cam = Rigid3d::FromMatrix4(T);
           },
@@ -521,8 +344,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("line_sigma_px", &TrackerOptions::line_sigma_px)
       .def_readwrite("line_inlier_weight", &TrackerOptions::line_inlier_weight)
       .def_readwrite("recently_lost_frames", &TrackerOptions::recently_lost_frames)
-      .def_readwrite("lost_reentry_min_point_ratio",
-                     &TrackerOptions::lost_reentry_min_point_ratio)
+      .def_readwrite("lost_reentry_min_point_ratio", &TrackerOptions::lost_reentry_min_point_ratio)
       .def_readwrite("lost_reentry_confirm_m", &TrackerOptions::lost_reentry_confirm_m)
       .def_readwrite("new_map_after_lost_frames", &TrackerOptions::new_map_after_lost_frames)
       .def_readwrite("lost_velocity_decay", &TrackerOptions::lost_velocity_decay)
@@ -609,12 +431,11 @@ void BindTracking(py::module_& m) {
 
   py::class_<PreparedFrame, std::shared_ptr<PreparedFrame>>(
       m, "PreparedFrame", "A frame whose stereo matching ran ahead (TrackerCore.prepare).")
-      .def_property_readonly(
-          "stereo_matching_ms", [](const PreparedFrame& p) { return p.timing.stereo_matching_ms; });
+      .def_property_readonly("stereo_matching_ms",
+                             [](const PreparedFrame& p) { return p.timing.stereo_matching_ms; });
   py::class_<LeftLines, std::shared_ptr<LeftLines>>(
       m, "LeftLines", "A left image's lines extracted ahead (TrackerCore.extract_left_lines).")
-      .def_property_readonly("count",
-                             [](const LeftLines& l) { return l.features.segments.size(); })
+      .def_property_readonly("count", [](const LeftLines& l) { return l.features.segments.size(); })
       .def_readonly("extraction_ms", &LeftLines::extraction_ms);
 
   py::class_<TrackerSession>(m, "TrackerCore",
@@ -623,16 +444,30 @@ void BindTracking(py::module_& m) {
              return std::make_unique<TrackerSession>(options, lines);
            }),
            py::arg("options"), py::arg("lines") = LineExtractorOptions{})
-      .def("track", &TrackerSession::Track, py::arg("index"), py::arg("timestamp"),
-           py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
-           py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           py::arg("left_lines") = nullptr, py::arg("noisy") = false, py::arg("denoised") = false,
-           "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
-           "image's lines from extract_left_lines on this left image (None: extracted here). "
-           "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). "
-           "denoised: both images come from smooth_if_noisy at the options' "
-           "denoise_above_noise (slslam.Tracker's own), so they are not checked again.")
-      .def("prepare", &TrackerSession::Prepare, py::arg("index"), py::arg("timestamp"),
+      .def(
+          "track",
+          [](TrackerSession& session, int index, double timestamp, const py::array& left_image,
+             const py::array& right_image, const PixelArray& left_uv,
+             const py::array& left_descriptors, const PixelArray& right_uv,
+             const py::array& right_descriptors, const std::shared_ptr<LeftLines>& left_lines,
+             bool noisy, bool denoised) {
+            const std::shared_ptr<PreparedFrame> p =
+                PrepareFromArrays(session, index, timestamp, left_image, right_image, left_uv,
+                                  left_descriptors, right_uv, right_descriptors, left_lines,
+                                  /*keypoints_pending=*/false, noisy, denoised);
+            py::gil_scoped_release release;
+            return session.TrackPrepared(*p);
+          },
+          py::arg("index"), py::arg("timestamp"), py::arg("left_image"), py::arg("right_image"),
+          py::arg("left_uv"), py::arg("left_descriptors"), py::arg("right_uv"),
+          py::arg("right_descriptors"), py::arg("left_lines") = nullptr, py::arg("noisy") = false,
+          py::arg("denoised") = false,
+          "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
+          "image's lines from extract_left_lines on this left image (None: extracted here). "
+          "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). "
+          "denoised: both images come from smooth_if_noisy at the options' "
+          "denoise_above_noise (slslam.Tracker's own), so they are not checked again.")
+      .def("prepare", &PrepareFromArrays, py::arg("index"), py::arg("timestamp"),
            py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
            py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
            py::arg("left_lines") = nullptr, py::arg("keypoints_pending") = false,
@@ -643,28 +478,57 @@ void BindTracking(py::module_& m) {
            "given; tracking.projected_max_frames): the tracker places the map's points in the "
            "frame, or returns needs_keypoints. noisy, denoised: as track's.")
       .def("track_prepared", &TrackerSession::TrackPrepared, py::arg("frame"),
+           py::call_guard<py::gil_scoped_release>(),
            "track's second part on a frame from prepare (once, in frame order): the tracker and "
            "local mapping; returns its FrameOutput.")
-      .def("extract_left_lines", &TrackerSession::ExtractLeftLines, py::arg("left_image"),
-           py::arg("denoised") = false,
-           "The left image's lines as track extracts them (smoothed when noisy), without the "
-           "session's lock: for a thread beside the point front end. Needs use_lines and "
-           "right_lines_on_keyframes. denoised: as track's.")
+      .def(
+          "extract_left_lines",
+          [](const TrackerSession& session, const py::array& left_image, bool denoised) {
+            const cv::Mat left = WrapGray(left_image, "left image");
+            py::gil_scoped_release release;
+            return session.ExtractLeftLines(left, denoised);
+          },
+          py::arg("left_image"), py::arg("denoised") = false,
+          "The left image's lines as track extracts them (smoothed when noisy), without the "
+          "session's lock: for a thread beside the point front end. Needs use_lines and "
+          "right_lines_on_keyframes. denoised: as track's.")
       .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
-           "IMU samples (body frame) for the bridge through visual outages, before the frames "
-           "they precede.")
-      .def("map", &TrackerSession::Map, py::arg("settle") = true,
-           "Points and lines; settle: first waits for local mapping (and applies an overlapped "
-           "local BA), else the map as it stands.")
+           py::call_guard<py::gil_scoped_release>(),
+           "IMU samples (body frame, on the IMU's clock) for the visual-inertial tracking, before "
+           "the frames they precede.")
+      .def(
+          "map",
+          [](TrackerSession& session, bool settle) {
+            SessionMap map;
+            {
+              py::gil_scoped_release release;
+              map = session.Map(settle);
+            }
+            return MapDict(map);
+          },
+          py::arg("settle") = true,
+          "Points and lines; settle: first waits for local mapping (and applies an overlapped "
+          "local BA), else the map as it stands.")
       .def("save_map", &TrackerSession::SaveMap, py::arg("path"), py::arg("version"),
+           py::call_guard<py::gil_scoped_release>(),
            "Writes every live map (versioned binary, checksummed); waits for mapping.")
       .def("load_map", &TrackerSession::LoadMap, py::arg("path"),
+           py::call_guard<py::gil_scoped_release>(),
            "Loads a saved atlas before the first frame; tracking starts by relocalising in it.")
-      .def("trajectory", &TrackerSession::Trajectory,
-           "Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and "
-           "_translation arrays) in the "
-           "final map: after loop correction, merges and bundle adjustment.")
-      .def("flush", &TrackerSession::Flush);
+      .def(
+          "trajectory",
+          [](TrackerSession& session) {
+            std::vector<FramePose> poses;
+            {
+              py::gil_scoped_release release;
+              poses = session.Trajectory();
+            }
+            return TrajectoryDict(poses);
+          },
+          "Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and "
+          "_translation arrays) in the "
+          "final map: after loop correction, merges and bundle adjustment.")
+      .def("flush", &TrackerSession::Flush, py::call_guard<py::gil_scoped_release>());
 }
 
 }  // namespace slslam::bindings

@@ -1681,7 +1681,7 @@ class TrackerCore:
         ...
     def add_imu(self, t_s: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], gyro: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], acc: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> None:
         """
-        IMU samples (body frame) for the bridge through visual outages, before the frames they precede.
+        IMU samples (body frame, on the IMU's clock) for the visual-inertial tracking, before the frames they precede.
         """
     def extract_left_lines(self, left_image: numpy.ndarray, denoised: bool = False) -> LeftLines:
         """

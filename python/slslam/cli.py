@@ -12,7 +12,7 @@ import sys
 import threading
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 from rich.console import Console
@@ -21,6 +21,9 @@ from rich.table import Table
 
 from slslam._version import __version__
 from slslam.errors import InputError, SlslamError
+
+if TYPE_CHECKING:
+    from slslam.sim.sequence import Preset
 
 app = typer.Typer(
     name="slslam",
@@ -354,10 +357,10 @@ def sim_command(
 
     _check_output_folder(out)
     options = SimOptions(
-        preset=preset,
+        preset=cast("Preset", preset),  # SimOptions checks it against PRESETS
         frames=frames,
         light=light,
-        dust=dust,  # type: ignore[arg-type]
+        dust=dust,
         flicker=flicker,
         blackout=blackout,
         blackout_s=blackout_duration,

@@ -27,7 +27,7 @@ import types
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import yaml
 
@@ -39,6 +39,11 @@ from slslam.features.orb import OrbOptions
 from slslam.features.superpoint import ENV_MODEL, SuperPointOptions
 from slslam.features.xfeat import XFeatOptions
 from slslam.yaml_io import MAX_YAML_BYTES, read_yaml, short_repr
+
+if TYPE_CHECKING:
+    from slslam.features.orb import Orb
+    from slslam.features.superpoint import SuperPoint
+    from slslam.features.xfeat import XFeat
 
 log = logging.getLogger(__name__)
 
@@ -200,28 +205,31 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
         "welding_keyframes",
     )
 }
-IMU_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("use_imu",)} | {
-    name: (f"imu.{name}",)
-    for name in (
-        "time_offset_s",
-        "gyro_noise_density",
-        "acc_noise_density",
-        "gyro_random_walk",
-        "acc_random_walk",
-        "gravity_mps2",
-        "gravity_tolerance_mps2",
-        "window_s",
-        "min_window_s",
-        "refine_after_s",
-        "refine_min_path_m",
-        "max_sample_gap_s",
-        "lost_sigma_fraction",
-        "lost_sigma_min_m",
-        "max_gap_s",
-        "weak_update_min_inliers",
-        "keyframe_interval_s",
-        "visual_information_scale",
-    )
+IMU_TO_CORE: dict[str, tuple[str, ...]] = {
+    "enabled": ("use_imu",),
+    **{
+        name: (f"imu.{name}",)
+        for name in (
+            "time_offset_s",
+            "gyro_noise_density",
+            "acc_noise_density",
+            "gyro_random_walk",
+            "acc_random_walk",
+            "gravity_mps2",
+            "gravity_tolerance_mps2",
+            "window_s",
+            "min_window_s",
+            "refine_after_s",
+            "refine_min_path_m",
+            "max_sample_gap_s",
+            "lost_sigma_fraction",
+            "lost_sigma_min_m",
+            "max_gap_s",
+            "weak_update_min_inliers",
+            "keyframe_interval_s",
+            "visual_information_scale",
+        )
+    },
 }
 LINES_TO_CORE: dict[str, tuple[str, ...]] = {
     "line_detection_scale": ("detection_scale",),
@@ -229,16 +237,19 @@ LINES_TO_CORE: dict[str, tuple[str, ...]] = {
     "line_descriptor": ("descriptor",),
     "max_lines": ("max_lines",),
 }
-DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {"enabled": ("dynamic_cells",)} | {
-    name: (f"dynamic.{name}",)
-    for name in (
-        "cell_size_px",
-        "sigma_px",
-        "alpha",
-        "threshold",
-        "min_matches",
-        "sigma_median_ratio",
-    )
+DYNAMIC_CELLS_TO_CORE: dict[str, tuple[str, ...]] = {
+    "enabled": ("dynamic_cells",),
+    **{
+        name: (f"dynamic.{name}",)
+        for name in (
+            "cell_size_px",
+            "sigma_px",
+            "alpha",
+            "threshold",
+            "min_matches",
+            "sigma_median_ratio",
+        )
+    },
 }
 GRID_TO_CORE: dict[str, tuple[str, ...]] = {
     "cell_size_px": ("cell_size_px",),
@@ -648,7 +659,7 @@ class Config:
     tracking: TrackingConfig = field(default_factory=TrackingConfig)
 
 
-def _build(cls: type, data: Any, where: str, source: Path | None):
+def _build(cls: type, data: Any, where: str, source: Path | None) -> Any:
     """Instantiate dataclass ``cls`` from a mapping, recursing into nested dataclasses."""
     if not isinstance(data, dict):
         raise ConfigError(source, f"'{where}' must be a mapping, got {type(data).__name__}")
@@ -674,7 +685,7 @@ def _build(cls: type, data: Any, where: str, source: Path | None):
 def _convert(hint: Any, value: Any, where: str, source: Path | None) -> Any:
     origin = typing.get_origin(hint)
     if dataclasses.is_dataclass(hint):
-        return _build(hint, value, where, source)
+        return _build(typing.cast(type, hint), value, where, source)
     if origin is Literal:
         if value not in typing.get_args(hint):
             raise ConfigError(
@@ -909,7 +920,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def make_point_frontend(config: FeaturesConfig):
+def make_point_frontend(config: FeaturesConfig) -> Orb | XFeat | SuperPoint:
     """The configured point front end. SuperPoint without weights (no model_path in the config
     and no $SLSLAM_SUPERPOINT_MODEL) falls back to ORB with one warning line; XFeat's weights
     ship with slslam."""

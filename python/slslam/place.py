@@ -230,7 +230,8 @@ class Vocabulary:
     @staticmethod
     def score(a: BowVector, b: BowVector) -> float:
         """L1 similarity 1 - 0.5 |a - b|_1 in [0, 1]."""
-        return _core.Vocabulary.score(a, b)
+        # the stub's Mapping[SupportsInt | SupportsIndex, ...] is invariant in its key: no dict[int]
+        return _core.Vocabulary.score(a, b)  # type: ignore[arg-type]
 
     def __repr__(self) -> str:
         return (

@@ -28,7 +28,7 @@ def set_quiet(quiet: bool) -> None:
 
 
 def progress_bar(
-    iterable: Iterable[T], desc: str, unit: str, enabled: bool = True, **kwargs
+    iterable: Iterable[T] | None, desc: str, unit: str, enabled: bool = True, **kwargs
 ) -> tqdm:
     """A tqdm bar over ``iterable`` on stderr: live on a terminal, one line every
     ``LOG_INTERVAL_S`` seconds otherwise; nothing when ``enabled`` is false or the process is

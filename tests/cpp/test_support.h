@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <functional>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "slslam/core/stereo_rig.h"
 
@@ -45,8 +45,9 @@ Eigen::Matrix<double, Rows, Eigen::Dynamic> NumericJacobian(
 template <typename A, typename B>
 void ExpectClose(const A& analytic, const B& numeric, double rel = 1e-6) {
   const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
-  EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), rel * scale)
-      << "analytic\n" << analytic << "\nnumeric\n" << numeric;
+  EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), rel * scale) << "analytic\n"
+                                                                     << analytic << "\nnumeric\n"
+                                                                     << numeric;
 }
 
 }  // namespace slslam::test

@@ -54,8 +54,8 @@ SLSLAM_AVX2_CLONES void AccumulateTaps(const float* __restrict pixels, int chann
 }  // namespace
 
 DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_height,
-                            int map_width, const PixelArray& uv, int input_height,
-                            int input_width, bool cubic) {
+                            int map_width, const PixelArray& uv, int input_height, int input_width,
+                            bool cubic) {
   SLSLAM_CHECK(map_height > 0 && map_width > 0 &&
                    map.cols() == static_cast<Eigen::Index>(map_height) * map_width,
                "a map of ", map.cols(), " values per channel is not ", map_height, " x ",
@@ -91,8 +91,7 @@ DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_h
     const int first = Taps(x - x0, cubic, wx);
     Taps(y - y0, cubic, wy);
     AccumulateTaps(by_pixel.data(), channels, map_height, map_width, taps,
-                   static_cast<int>(x0) + first, static_cast<int>(y0) + first, wx, wy,
-                   acc.data());
+                   static_cast<int>(x0) + first, static_cast<int>(y0) + first, wx, wy, acc.data());
     for (int c = 0; c < channels; ++c) out(i, c) = static_cast<float>(acc[c]);
   }
   return out;

@@ -15,7 +15,7 @@ using DenseSamples = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen:
 // y = v Hc / (H - 1) - 0.5 on the map; taps outside the map count as zero. Bilinear, or bicubic
 // with Keys' kernel (A = -0.75, PyTorch's). Returns N x C samples (sums in double).
 DenseSamples SampleDenseMap(const Eigen::Ref<const DenseSamples>& map, int map_height,
-                            int map_width, const PixelArray& uv, int input_height,
-                            int input_width, bool cubic);
+                            int map_width, const PixelArray& uv, int input_height, int input_width,
+                            bool cubic);
 
 }  // namespace slslam

@@ -85,8 +85,8 @@ SLSLAM_POPCNT_CLONES int HammingBytes(const uint8_t* x, const uint8_t* y, int by
 }  // namespace
 
 float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
-  SLSLAM_CHECK(a.cols == b.cols && a.type() == b.type(), "descriptors differ in length or type: ",
-               a.cols, " vs ", b.cols, " columns");
+  SLSLAM_CHECK(a.cols == b.cols && a.type() == b.type(),
+               "descriptors differ in length or type: ", a.cols, " vs ", b.cols, " columns");
   SLSLAM_CHECK(i >= 0 && i < a.rows && j >= 0 && j < b.rows, "descriptor rows ", i, " / ", j,
                " outside ", a.rows, " / ", b.rows);
   if (a.type() == CV_8U) {
@@ -142,8 +142,8 @@ Eigen::VectorXi GuidedMatch(
   // (keypoints far outside the image could make a grid larger than the keypoints: a sparse map
   // of the occupied cells then, sorted, as the hash map was)
   const int64_t dense_cells = 4 * static_cast<int64_t>(n_keypoints) + 4096;
-  const bool dense = grid_w > 0 && grid_h > 0 && grid_w <= dense_cells &&
-                     grid_h <= dense_cells && grid_w * grid_h <= dense_cells;
+  const bool dense = grid_w > 0 && grid_h > 0 && grid_w <= dense_cells && grid_h <= dense_cells &&
+                     grid_w * grid_h <= dense_cells;
   std::vector<int> start, members(n_keypoints);
   std::vector<int64_t> occupied;  // sparse: the occupied cells' keys, sorted
   const auto dense_key = [&](int64_t cx, int64_t cy) {

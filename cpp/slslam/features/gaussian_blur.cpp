@@ -64,8 +64,8 @@ SLSLAM_AVX2_CLONES void VerticalPass(const uint16_t* const* rows, int width, con
     const uint16_t* above = rows[2 * k - 1];
     const uint16_t* below = rows[2 * k];
     for (int x = 0; x < width; ++x) {
-      high[x] = static_cast<uint16_t>(
-          high[x] + t * static_cast<uint16_t>((above[x] >> 8) + (below[x] >> 8)));
+      high[x] = static_cast<uint16_t>(high[x] +
+                                      t * static_cast<uint16_t>((above[x] >> 8) + (below[x] >> 8)));
       low[x] = static_cast<uint16_t>(
           low[x] + t * static_cast<uint16_t>((above[x] & 0xff) + (below[x] & 0xff)));
     }

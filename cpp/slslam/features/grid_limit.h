@@ -24,8 +24,9 @@ struct GridLimitOptions {
 };
 
 // Indices (ascending) of the keypoints kept: in every cell the `max_per_cell` with the highest
-// score among its strong keypoints, or among all when it has no strong one (ties: the lower index wins, so the result is deterministic). Keypoints outside the
-// image (u, v not in [0, width) x [0, height)) are dropped.
+// score among its strong keypoints, or among all when it has no strong one (ties: the lower index
+// wins, so the result is deterministic). Keypoints outside the image (u, v not in [0, width) x [0,
+// height)) are dropped.
 std::vector<int> GridLimit(const PixelArray& uv, const Eigen::VectorXf& score, int width,
                            int height, const GridLimitOptions& options = {});
 

@@ -13,10 +13,10 @@ namespace slslam {
 
 namespace {
 
-constexpr int kBands = 9;                 // the paper's m
-constexpr int kSums = 4;                  // per row: normal +, normal -, along +, along -
+constexpr int kBands = 9;                    // the paper's m
+constexpr int kSums = 4;                     // per row: normal +, normal -, along +, along -
 constexpr int kFloats = 2 * kBands * kSums;  // means then deviations: 72
-constexpr int kBytes = 32;                // 256 bits
+constexpr int kBytes = 32;                   // 256 bits
 constexpr float kClip = 0.4f;
 
 // The bits. Measured on true and false segment matches of simulated mine frames (bright and
@@ -31,7 +31,7 @@ constexpr float kClip = 0.4f;
 // the first version (all 8 components of 32 band pairs) 90.5 %, on the frames it was chosen on
 // (seed 5); on held-out frames 96.3 %, OpenCV's descriptor 91.0 % (line_descriptors.py).
 constexpr int kBandPairs = kBands * (kBands - 1) / 2;  // 36
-constexpr std::array<int, 4> kAcross = {0, 1, 4, 5};  // component indices, see Component()
+constexpr std::array<int, 4> kAcross = {0, 1, 4, 5};   // component indices, see Component()
 constexpr std::array<std::array<int, 2>, 12> kWithin = {{{0, 1},
                                                          {1, 4},
                                                          {0, 5},
@@ -74,8 +74,8 @@ void DescribeSegment(const cv::Mat& gx, const cv::Mat& gy, const LineSegment& se
   if (!(length > 1e-3f)) return;
   const Eigen::Vector2f d = delta / length;
   const Eigen::Vector2f n(-d.y(), d.x());
-  const int samples = std::clamp(static_cast<int>(std::ceil(length)) + 1, 2,
-                                 options.max_samples_along);
+  const int samples =
+      std::clamp(static_cast<int>(std::ceil(length)) + 1, 2, options.max_samples_along);
   const float step = length / static_cast<float>(samples - 1);
   const float step_x = step * d.x(), step_y = step * d.y();
   const int cols = gx.cols, image_rows = gx.rows;

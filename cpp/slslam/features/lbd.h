@@ -33,8 +33,8 @@
 namespace slslam {
 
 struct LbdOptions {
-  int band_width_px = 4;       ///< rows per band (the paper's w: 7 at full resolution) [px]
-  int max_samples_along = 64;  ///< points sampled along a segment at most [-], >= 2
+  int band_width_px = 4;            ///< rows per band (the paper's w: 7 at full resolution) [px]
+  int max_samples_along = 64;       ///< points sampled along a segment at most [-], >= 2
   double smoothing_sigma_px = 1.0;  ///< Gaussian on the image before its gradient [px]; 0: none
 
   void Check() const;

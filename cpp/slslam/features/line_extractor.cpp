@@ -118,10 +118,9 @@ LineFeatures ExtractLines(const cv::Mat& image, const LineExtractorOptions& opti
     };
     for (const LineSegment& s : out.segments) scaled.push_back({small(s.start), small(s.end)});
   }
-  out.descriptors =
-      ComputeLineDescriptors(on_detection_image ? detect_on : image,
-                             on_detection_image ? scaled : out.segments, options.descriptor,
-                             options.lbd);
+  out.descriptors = ComputeLineDescriptors(on_detection_image ? detect_on : image,
+                                           on_detection_image ? scaled : out.segments,
+                                           options.descriptor, options.lbd);
   return out;
 }
 

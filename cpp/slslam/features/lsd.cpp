@@ -20,10 +20,10 @@ constexpr std::uint8_t kNoDirection = 0, kFree = 1, kTaken = 2;
 // that a region's neighbours need no bounds test. Pixel (x, y) has index (y + 1) * stride + x + 1.
 struct GradientGrid {
   int stride = 0;
-  std::vector<float> norm;        // LSD's gradient norm, sqrt((gx^2 + gy^2) / 4)
-  std::vector<float> ux, uy;      // unit level-line direction, (-gy, gx) / |g|
+  std::vector<float> norm;    // LSD's gradient norm, sqrt((gx^2 + gy^2) / 4)
+  std::vector<float> ux, uy;  // unit level-line direction, (-gy, gx) / |g|
   std::vector<std::uint8_t> state;
-  std::vector<int> seeds;         // pixels with a direction, largest norm first (pseudo-ordered)
+  std::vector<int> seeds;  // pixels with a direction, largest norm first (pseudo-ordered)
   int Index(int x, int y) const { return (y + 1) * stride + x + 1; }
 };
 
@@ -71,10 +71,10 @@ void ComputeGradient(const cv::Mat& image, double threshold, int n_bins, Gradien
   float max_norm = 0.0f;
   for (int y = 0; y + 1 < h; ++y) {
     const int i = grid->Index(0, y);
-    max_norm = std::max(max_norm, GradientRow(image.ptr<std::uint8_t>(y),
-                                              image.ptr<std::uint8_t>(y + 1), w - 1,
-                                              static_cast<float>(threshold), &grid->norm[i],
-                                              &grid->ux[i], &grid->uy[i], &grid->state[i]));
+    max_norm =
+        std::max(max_norm, GradientRow(image.ptr<std::uint8_t>(y), image.ptr<std::uint8_t>(y + 1),
+                                       w - 1, static_cast<float>(threshold), &grid->norm[i],
+                                       &grid->ux[i], &grid->uy[i], &grid->state[i]));
   }
   // LSD's pseudo-ordering as the paper's reference code (lsd.c) does it: seeds by 1024 bins of
   // norm * n_bins / max (clamped), the highest bin first, row by row within a bin (a counting
@@ -113,8 +113,8 @@ void GrowRegion(GradientGrid* grid, int seed, double cos_tolerance, std::vector<
   struct Step {
     int dx, dy, offset;
   };
-  const Step steps[8] = {{-1, -1, -s - 1}, {-1, 0, -1}, {-1, 1, s - 1}, {0, -1, -s},
-                         {0, 1, s},        {1, -1, -s + 1}, {1, 0, 1},  {1, 1, s + 1}};
+  const Step steps[8] = {{-1, -1, -s - 1}, {-1, 0, -1},     {-1, 1, s - 1}, {0, -1, -s},
+                         {0, 1, s},        {1, -1, -s + 1}, {1, 0, 1},      {1, 1, s + 1}};
   region->clear();
   region->push_back(PixelAt(*grid, seed));
   grid->state[seed] = kTaken;
@@ -139,8 +139,8 @@ void GrowRegion(GradientGrid* grid, int seed, double cos_tolerance, std::vector<
 
 // LSD's rectangle of a region: centre of the gradient-weighted pixels, direction of the inertia's
 // main axis (pointing along the region's mean direction), extent along and across it.
-Rectangle RegionRectangle(const GradientGrid& grid, const std::vector<Pixel>& region,
-                          double sum_x, double sum_y, double cos_tolerance) {
+Rectangle RegionRectangle(const GradientGrid& grid, const std::vector<Pixel>& region, double sum_x,
+                          double sum_y, double cos_tolerance) {
   double weight = 0.0, cx = 0.0, cy = 0.0;
   for (const Pixel& p : region) {
     const double w = grid.norm[p.index];
@@ -192,7 +192,7 @@ bool ReduceRadius(GradientGrid* grid, std::vector<Pixel>* region, double sum_x, 
                   double cos_tolerance, double density_threshold, Rectangle* rect) {
   const Pixel seed = region->front();
   double radius = std::sqrt(std::max(SquaredDistance(seed, rect->x1, rect->y1),
-                                      SquaredDistance(seed, rect->x2, rect->y2)));
+                                     SquaredDistance(seed, rect->x2, rect->y2)));
   while (Density(*region, *rect) < density_threshold) {
     radius *= 0.75;
     const double radius_sq = radius * radius;
@@ -278,8 +278,8 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
   ComputeGradient(image, options.quant / std::sin(tolerance), options.n_bins, &grid);
   // LSD's smallest region worth a segment: the size at which a region of aligned pixels becomes
   // meaningful (NFA 1) among the image's ~(W H)^(5/2) x 11 candidate rectangles.
-  const double log_tests = 2.5 * (std::log10(image.cols) + std::log10(image.rows)) +
-                           std::log10(11.0);
+  const double log_tests =
+      2.5 * (std::log10(image.cols) + std::log10(image.rows)) + std::log10(11.0);
   const double p = options.angle_tolerance_deg / 180.0;
   const std::size_t min_region = static_cast<std::size_t>(-log_tests / std::log10(p));
   // The gradient of (x, y) sits at the centre of its 2 x 2 window; back to the input's pixels.
@@ -292,8 +292,7 @@ std::vector<cv::Vec4f> DetectLsdSegments(const cv::Mat& gray, const LsdOptions& 
     GrowRegion(&grid, seed, cos_tolerance, &region, &sum_x, &sum_y);
     if (region.size() < min_region) continue;  // its pixels stay taken, as in LSD
     Rectangle rect = RegionRectangle(grid, region, sum_x, sum_y, cos_tolerance);
-    if (!Refine(&grid, &region, &sum_x, &sum_y, cos_tolerance, options.density_threshold,
-                &rect)) {
+    if (!Refine(&grid, &region, &sum_x, &sum_y, cos_tolerance, options.density_threshold, &rect)) {
       continue;
     }
     segments.emplace_back(static_cast<float>((rect.x1 + 0.5) * to_input),

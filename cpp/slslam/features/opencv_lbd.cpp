@@ -28,16 +28,16 @@ constexpr int kBands = 9;
 constexpr int kBandRows = 7;
 constexpr int kRows = kBands * kBandRows;  // rows of the support region
 constexpr int kHalfRows = (kRows - 1) / 2;
-constexpr int kLanes = 8;                                    // rows sampled together
+constexpr int kLanes = 8;                                            // rows sampled together
 constexpr int kPaddedRows = (kRows + kLanes - 1) / kLanes * kLanes;  // 64: one spare lane
 constexpr int kFloats = kBands * 8;
 
 // The band pairs each descriptor byte compares, in OpenCV's order: every pair at most 5 bands
 // apart, (0, 6) and (2, 8) excepted and (2, 7), (2, 8), (3, 8) included as it lists them.
-constexpr int kBandPairs[32][2] = {
-    {0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}, {0, 6}, {1, 2}, {1, 3}, {1, 4}, {1, 5}, {1, 6},
-    {2, 3}, {2, 4}, {2, 5}, {2, 6}, {2, 7}, {2, 8}, {3, 4}, {3, 5}, {3, 6}, {3, 7}, {3, 8},
-    {4, 5}, {4, 6}, {4, 7}, {4, 8}, {5, 6}, {5, 7}, {5, 8}, {6, 7}, {6, 8}, {7, 8}};
+constexpr int kBandPairs[32][2] = {{0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}, {0, 6}, {1, 2}, {1, 3},
+                                   {1, 4}, {1, 5}, {1, 6}, {2, 3}, {2, 4}, {2, 5}, {2, 6}, {2, 7},
+                                   {2, 8}, {3, 4}, {3, 5}, {3, 6}, {3, 7}, {3, 8}, {4, 5}, {4, 6},
+                                   {4, 7}, {4, 8}, {5, 6}, {5, 7}, {5, 8}, {6, 7}, {6, 8}, {7, 8}};
 
 // Gaussian weights, computed in double and used as floats as OpenCV does: across the 63 rows
 // (centre 31, sigma 31) and over a band and its neighbours (21 rows, centre 10, sigma 7: OpenCV's
@@ -73,9 +73,9 @@ struct RowSums {
 // One segment's sampling frame: each row's first sample, the step along the row, the image.
 struct Sampling {
   std::array<float, kPaddedRows> x0{}, y0{};
-  float dl0 = 0.0f, dl1 = 0.0f;  // direction (cos, sin)
-  int length = 0;                // samples per row
-  int width = 0, height = 0;     // image size [px]
+  float dl0 = 0.0f, dl1 = 0.0f;             // direction (cos, sin)
+  int length = 0;                           // samples per row
+  int width = 0, height = 0;                // image size [px]
   const std::int16_t* gradients = nullptr;  // (dx, dy) int16 pairs, row-major
 };
 
@@ -95,8 +95,7 @@ void SampleRowsScalar(const Sampling& s, int first_row, RowSums* sums) {
     float pl = 0.0f, nl = 0.0f, po = 0.0f, no = 0.0f;
     for (int w = 0; w < s.length; ++w) {
       const std::int16_t* g =
-          s.gradients +
-          2 * (RoundClamp(y, s.height - 1) * s.width + RoundClamp(x, s.width - 1));
+          s.gradients + 2 * (RoundClamp(y, s.height - 1) * s.width + RoundClamp(x, s.width - 1));
       const float dx = static_cast<float>(g[0]);
       const float dy = static_cast<float>(g[1]);
       const float gl = dx * s.dl0 + dy * s.dl1;
@@ -134,7 +133,7 @@ __attribute__((target("avx2"))) inline __m256i RoundClampAvx2(__m256 v, __m256i 
 // Eight rows at once, each lane the scalar loop's operations in the same order (a multiply then
 // an add, never fused; a masked add of 0 leaves a sum unchanged).
 __attribute__((target("avx2"))) void SampleRowsAvx2(const Sampling& s, int first_row,
-                                                     RowSums* sums) {
+                                                    RowSums* sums) {
   const __m256 dl0 = _mm256_set1_ps(s.dl0), dl1 = _mm256_set1_ps(s.dl1);
   const __m256 do0 = _mm256_set1_ps(-s.dl1), do1 = dl0;
   const __m256 zero = _mm256_setzero_ps();
@@ -207,9 +206,9 @@ std::array<float, kFloats> BandVector(const RowSums& rows) {
       no2[band] += cb * cb * rno2;
     };
     const int band = h / kBandRows, in_band = h % kBandRows;
-    add(band, g.band[in_band + kBandRows]);                                  // its own band
-    if (band - 1 >= 0) add(band - 1, g.band[in_band + 2 * kBandRows]);       // the band above
-    if (band + 1 < kBands) add(band + 1, g.band[in_band]);                   // the band below
+    add(band, g.band[in_band + kBandRows]);                             // its own band
+    if (band - 1 >= 0) add(band - 1, g.band[in_band + 2 * kBandRows]);  // the band above
+    if (band + 1 < kBands) add(band + 1, g.band[in_band]);              // the band below
   }
   std::array<float, kFloats> d{};
   const float inv_n2 = static_cast<float>(1.0 / (kBandRows * 2.0));  // first and last band
@@ -282,8 +281,7 @@ void Describe(const cv::Mat& image, const Segments& segments, bool simd, cv::Mat
                 seg.end.x() <= image.cols - 1.0f && seg.start.y() <= image.rows - 1.0f &&
                 seg.end.y() <= image.rows - 1.0f,
             "LBD needs segments inside the image");
-    const float angle =
-        std::atan2(seg.end.y() - seg.start.y(), seg.end.x() - seg.start.x());
+    const float angle = std::atan2(seg.end.y() - seg.start.y(), seg.end.x() - seg.start.x());
     // cos / sin in float, n = (int) length (the double versions of cos, sin and of the inverse
     // square roots below change the floats in the last bit: the test tells them apart).
     s.dl0 = std::cos(angle);
@@ -327,8 +325,8 @@ namespace {
 // One row of (dx, dy) for the columns [begin, end), given the rows above and below (reflected at
 // the image's edge by the caller). GCC vectorises the interleaved stores at -O3 (the build's).
 SLSLAM_AVX2_CLONES
-void SobelRowInterior(const std::uint8_t* above, const std::uint8_t* row,
-                      const std::uint8_t* below, int begin, int end, std::int16_t* out) {
+void SobelRowInterior(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
+                      int begin, int end, std::int16_t* out) {
   for (int x = begin; x < end; ++x) {
     const int left = above[x - 1] + 2 * row[x - 1] + below[x - 1];
     const int right = above[x + 1] + 2 * row[x + 1] + below[x + 1];
@@ -374,15 +372,13 @@ cv::Mat ComputeOpenCvCompatibleLbd(const cv::Mat& image, const Segments& segment
   return bytes;
 }
 
-cv::Mat ComputeOpenCvCompatibleLbdFloat(const cv::Mat& image, const Segments& segments,
-                                        bool simd) {
+cv::Mat ComputeOpenCvCompatibleLbdFloat(const cv::Mat& image, const Segments& segments, bool simd) {
   cv::Mat floats;
   Describe(image, segments, simd, &floats, nullptr);
   return floats;
 }
 
-cv::Mat ComputeOpenCvLbdReference(const cv::Mat& image, const Segments& segments,
-                                  bool floats) {
+cv::Mat ComputeOpenCvLbdReference(const cv::Mat& image, const Segments& segments, bool floats) {
   namespace ld = cv::line_descriptor;
   if (segments.empty()) return cv::Mat(0, floats ? kFloats : 32, floats ? CV_32F : CV_8U);
   std::vector<ld::KeyLine> keylines(segments.size());

@@ -6,8 +6,8 @@
 #include <numeric>
 #include <vector>
 
-#include <opencv2/features2d.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "slslam/core/check.h"

@@ -30,10 +30,9 @@ Eigen::Matrix<double, 3, 6> PointPoseJacobian(const Eigen::Vector3d& x_c) {
 }  // namespace
 
 bool PointResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
-                   const Eigen::Vector3d& point_w,
-                   const Eigen::Vector2d& observed_px, Eigen::Vector2d* residual,
-                   Eigen::Matrix<double, 2, 6>* d_pose, Eigen::Matrix<double, 2, 3>* d_point,
-                   double min_depth) {
+                   const Eigen::Vector3d& point_w, const Eigen::Vector2d& observed_px,
+                   Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 6>* d_pose,
+                   Eigen::Matrix<double, 2, 3>* d_point, double min_depth) {
   const Eigen::Vector3d x_c = cam_from_world * point_w;
   if (!(x_c.z() > min_depth)) return false;
   *residual = camera.Project(x_c) - observed_px;
@@ -46,10 +45,9 @@ bool PointResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
 }
 
 bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
-                         const Eigen::Vector3d& point_w,
-                         const Eigen::Vector3d& observed, Eigen::Vector3d* residual,
-                         Eigen::Matrix<double, 3, 6>* d_pose, Eigen::Matrix<double, 3, 3>* d_point,
-                         double min_depth) {
+                         const Eigen::Vector3d& point_w, const Eigen::Vector3d& observed,
+                         Eigen::Vector3d* residual, Eigen::Matrix<double, 3, 6>* d_pose,
+                         Eigen::Matrix<double, 3, 3>* d_point, double min_depth) {
   const PinholeCamera& cam = rig.camera;
   const Eigen::Vector3d x_c = cam_from_world * point_w;
   if (!(x_c.z() > min_depth)) return false;
@@ -69,9 +67,8 @@ bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
 }
 
 bool LineResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
-                  const PluckerLine& line_w,
-                  const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px,
-                  double angle_weight, Eigen::Vector3d* residual,
+                  const PluckerLine& line_w, const Eigen::Vector2d& start_px,
+                  const Eigen::Vector2d& end_px, double angle_weight, Eigen::Vector3d* residual,
                   Eigen::Matrix<double, 3, 6>* d_pose, Eigen::Matrix<double, 3, 6>* d_plucker) {
   const PluckerLine line_c = line_w.Transformed(cam_from_world);
   const Eigen::Matrix3d k_line = LineProjectionMatrix(camera);

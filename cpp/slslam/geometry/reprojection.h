@@ -18,17 +18,15 @@ namespace slslam {
 // Residual (u, v) - observed of a point seen by one camera. Returns false (residual and Jacobians
 // untouched) when the point is not in front of the camera (z < min_depth).
 bool PointResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
-                   const Eigen::Vector3d& point_w,
-                   const Eigen::Vector2d& observed_px, Eigen::Vector2d* residual,
-                   Eigen::Matrix<double, 2, 6>* d_pose = nullptr,
+                   const Eigen::Vector3d& point_w, const Eigen::Vector2d& observed_px,
+                   Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 6>* d_pose = nullptr,
                    Eigen::Matrix<double, 2, 3>* d_point = nullptr, double min_depth = 1e-6);
 
 // Residual (u_left, v, u_right) - observed of a point seen by a stereo pair (as ORB-SLAM3's stereo
 // edge): the right coordinate constrains depth.
 bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
-                         const Eigen::Vector3d& point_w,
-                         const Eigen::Vector3d& observed, Eigen::Vector3d* residual,
-                         Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
+                         const Eigen::Vector3d& point_w, const Eigen::Vector3d& observed,
+                         Eigen::Vector3d* residual, Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
                          Eigen::Matrix<double, 3, 3>* d_point = nullptr, double min_depth = 1e-6);
 
 // Line residual for an observed segment x1 -> x2 [px] (SPEC A5):
@@ -40,9 +38,8 @@ bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
 // angle_weight = 0 drops it. Returns false when the projected line is degenerate (the line passes
 // through the camera centre).
 bool LineResidual(const PinholeCamera& camera, const Rigid3d& cam_from_world,
-                  const PluckerLine& line_w,
-                  const Eigen::Vector2d& start_px, const Eigen::Vector2d& end_px,
-                  double angle_weight, Eigen::Vector3d* residual,
+                  const PluckerLine& line_w, const Eigen::Vector2d& start_px,
+                  const Eigen::Vector2d& end_px, double angle_weight, Eigen::Vector3d* residual,
                   Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
                   Eigen::Matrix<double, 3, 6>* d_plucker = nullptr);
 

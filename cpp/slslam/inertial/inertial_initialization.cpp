@@ -61,9 +61,10 @@ struct LinearSystem {
 
 // The normal equations of the position and velocity increment equations, with g = g0 + Bg y
 // (y: the gravity unknowns, 3 with Bg = I, or 2 on the sphere) and the bias prior.
-LinearSystem IncrementSystem(const std::vector<Rigid3d>& T, const std::vector<ImuPreintegration>& pre,
-                             const Eigen::Vector3d& bg, const Eigen::Vector3d& g0,
-                             const Eigen::MatrixXd& Bg, const InertialInitOptions& options) {
+LinearSystem IncrementSystem(const std::vector<Rigid3d>& T,
+                             const std::vector<ImuPreintegration>& pre, const Eigen::Vector3d& bg,
+                             const Eigen::Vector3d& g0, const Eigen::MatrixXd& Bg,
+                             const InertialInitOptions& options) {
   const int n = static_cast<int>(T.size());
   const int ng = static_cast<int>(Bg.cols());
   const int size = 3 * n + ng + 3;

@@ -25,12 +25,12 @@
 namespace slslam {
 
 struct InertialInitOptions {
-  double gravity_mps2 = 9.81;             ///< known magnitude of gravity [m/s^2]
-  double gravity_tolerance_mps2 = 0.5;    ///< unconstrained fit further off: failure [m/s^2]
-  double acc_bias_prior_mps2 = 1.0;       ///< standard deviation of the bias prior [m/s^2]
-  double gyro_bias_prior_radps = 0.1;     ///< standard deviation of the bias prior [rad/s]
-  double pose_sigma_m = 0.01;             ///< position noise of each pose [m]
-  double pose_sigma_rad = 0.002;          ///< rotation noise of each pose [rad]
+  double gravity_mps2 = 9.81;               ///< known magnitude of gravity [m/s^2]
+  double gravity_tolerance_mps2 = 0.5;      ///< unconstrained fit further off: failure [m/s^2]
+  double acc_bias_prior_mps2 = 1.0;         ///< standard deviation of the bias prior [m/s^2]
+  double gyro_bias_prior_radps = 0.1;       ///< standard deviation of the bias prior [rad/s]
+  double pose_sigma_m = 0.01;               ///< position noise of each pose [m]
+  double pose_sigma_rad = 0.002;            ///< rotation noise of each pose [rad]
   double max_rotation_residual_rad = 0.02;  ///< RMS rotation misfit above: failure [rad]
 
   void Check() const;
@@ -38,11 +38,11 @@ struct InertialInitOptions {
 
 struct InertialInitResult {
   bool success = false;
-  std::string reason;                           ///< why not, when success is false
+  std::string reason;                                 ///< why not, when success is false
   Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the world [m/s^2]
   ImuBias bias;
-  std::vector<Eigen::Vector3d> v_world;  ///< velocity of the body at each pose [m/s]
-  double rotation_rms_rad = 0.0;         ///< rotation misfit after the gyro bias [rad]
+  std::vector<Eigen::Vector3d> v_world;     ///< velocity of the body at each pose [m/s]
+  double rotation_rms_rad = 0.0;            ///< rotation misfit after the gyro bias [rad]
   double unconstrained_gravity_mps2 = 0.0;  ///< |g| of step (2) [m/s^2]
 };
 

@@ -139,12 +139,13 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
   return true;
 }
 
-void ImuBuffer::Add(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2) {
+void ImuBuffer::Add(double t_s, const Eigen::Vector3d& gyro_radps,
+                    const Eigen::Vector3d& acc_mps2) {
   Require(std::isfinite(t_s) && gyro_radps.allFinite() && acc_mps2.allFinite(),
           "IMU sample is not finite");
   SLSLAM_CHECK(samples_.empty() || t_s > samples_.back().t_s,
-               "IMU samples must come in increasing time: ", t_s, " s after ",
-               samples_.back().t_s, " s");
+               "IMU samples must come in increasing time: ", t_s, " s after ", samples_.back().t_s,
+               " s");
   samples_.push_back({t_s, gyro_radps, acc_mps2});
 }
 

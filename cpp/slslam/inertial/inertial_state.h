@@ -30,10 +30,10 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 struct InertialState {
-  NavState nav;   ///< body in the world
-  ImuBias bias;   ///< [rad/s], [m/s^2]
+  NavState nav;                                       ///< body in the world
+  ImuBias bias;                                       ///< [rad/s], [m/s^2]
   Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the world [m/s^2]
-  Matrix18d covariance = Matrix18d::Zero();  ///< of the error state above
+  Matrix18d covariance = Matrix18d::Zero();           ///< of the error state above
 
   /// Position standard deviation: sqrt of the trace of the dp block [m].
   double PositionSigma() const;

@@ -11,8 +11,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "slslam/lidar/deskew.h"
 #include "slslam/inertial/imu_preintegration.h"
+#include "slslam/lidar/deskew.h"
 #include "slslam/lidar/lio_smoother.h"
 #include "slslam/lidar/registration.h"
 #include "slslam/lidar/scan_matcher.h"

@@ -186,8 +186,9 @@ std::vector<int> Map::BestCovisible(int id, int n) const {
   if (!kf) return {};
   std::vector<std::pair<int, int>> ranked;
   for (const auto& [other, count] : kf->covisibility) ranked.emplace_back(count, other);
-  std::sort(ranked.begin(), ranked.end(),
-            [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+  std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
   std::vector<int> out;
   for (const auto& [count, other] : ranked) {
     (void)count;

@@ -12,11 +12,11 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "slslam/core/thread_annotations.h"
 #include "slslam/core/rigid3.h"
+#include "slslam/core/thread_annotations.h"
+#include "slslam/features/stereo_frame.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/place/vocabulary.h"
-#include "slslam/features/stereo_frame.h"
 
 namespace slslam {
 
@@ -37,7 +37,7 @@ struct MapPoint {
 
 struct MapLine {
   int id = -1;
-  PluckerLine line;  ///< world frame
+  PluckerLine line;                                 ///< world frame
   Eigen::Vector3d start = Eigen::Vector3d::Zero();  ///< display endpoints, world frame [m]
   Eigen::Vector3d end = Eigen::Vector3d::Zero();
   cv::Mat descriptor;               ///< LBD row from the first observation
@@ -52,8 +52,8 @@ struct KeyFrame {
   int id = -1;
   Rigid3d cam_from_world;  ///< world -> camera (x_c = R x_w + t)
   std::shared_ptr<const StereoFrame> frame;
-  std::vector<int> point_ids;  ///< per keypoint: map point id or -1
-  std::vector<int> line_ids;   ///< per segment: map line id or -1
+  std::vector<int> point_ids;       ///< per keypoint: map point id or -1
+  std::vector<int> line_ids;        ///< per segment: map line id or -1
   std::map<int, int> covisibility;  ///< other keyframe id -> shared map points
   int parent = -1;                  ///< spanning tree parent (-1: root)
   BowVector bow;                    ///< bag of words of the left keypoints (with a vocabulary)
@@ -132,9 +132,7 @@ class Map {
   // Pose of a keyframe, live or culled (through the chain of retired parents); false when the
   // id is unknown to this map.
   bool KeyFramePose(int id, Rigid3d* cam_from_world) const SLSLAM_REQUIRES(mutex_);
-  const std::map<int, RetiredKeyFrame>& retired() const SLSLAM_REQUIRES(mutex_) {
-    return retired_;
-  }
+  const std::map<int, RetiredKeyFrame>& retired() const SLSLAM_REQUIRES(mutex_) { return retired_; }
 
   // Restoring a saved map, or moving entries in from another map of the atlas: entries keep their
   // ids (which must be unused here); the shared counters move past them.

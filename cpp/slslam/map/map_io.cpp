@@ -150,8 +150,8 @@ Front ReadFront(ByteReader* in, uint32_t version, const Where& where) {
   constexpr int kMaxNextId = std::numeric_limits<int>::max() - map_io_detail::kIdHeadroom;
   if (f.ids.next_keyframe > kMaxNextId || f.ids.next_point > kMaxNextId ||
       f.ids.next_line > kMaxNextId) {
-    where.Fail("id counters (", f.ids.next_keyframe, ", ", f.ids.next_point, ", ",
-               f.ids.next_line, ") leave fewer than ", map_io_detail::kIdHeadroom,
+    where.Fail("id counters (", f.ids.next_keyframe, ", ", f.ids.next_point, ", ", f.ids.next_line,
+               ") leave fewer than ", map_io_detail::kIdHeadroom,
                " new ids before int32 overflow (at most ", kMaxNextId, ")");
   }
   f.table.resize(in->Count(kTableEntryBytes, "map count"));

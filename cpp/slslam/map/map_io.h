@@ -71,7 +71,7 @@ struct MapFileHeader {
   /// Descriptor of the keyframes' line segments and the map lines (features/lbd.h); files of
   /// format version 1 read as OpenCV's.
   LineDescriptor line_descriptor = LineDescriptor::kOpenCvLbd;
-  StereoRig rig;               ///< the rectified stereo rig of the frames
+  StereoRig rig;  ///< the rectified stereo rig of the frames
 };
 
 struct LoadedMaps {

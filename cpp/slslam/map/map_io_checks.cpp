@@ -64,7 +64,8 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
     where.Fail("keyframe ", kf, ": frame timestamp ", f.timestamp, " s is not finite or beyond ",
                kMaxTimestampS, " s (int64 nanoseconds)");
   }
-  if (!k.uv.allFinite() || (k.uv.size() > 0 && k.uv.cwiseAbs().maxCoeff() > kMaxImageCoordinatePx)) {
+  if (!k.uv.allFinite() ||
+      (k.uv.size() > 0 && k.uv.cwiseAbs().maxCoeff() > kMaxImageCoordinatePx)) {
     where.Fail("keyframe ", kf, ": a keypoint position is not finite or beyond ",
                kMaxImageCoordinatePx, " px");
   }

@@ -32,10 +32,10 @@ struct LocalMapperOptions {
   int redundant_observers = 3;    ///< keyframe culling: other keyframes that must see a point [-]
   double min_found_ratio = 0.25;  ///< point culling: found / visible below this removes it [-]
   bool cull_keyframes = true;
-  bool triangulate = true;        ///< new points and lines from covisible keyframe pairs
+  bool triangulate = true;  ///< new points and lines from covisible keyframe pairs
   TriangulationOptions triangulation;
-  double point_sigma_px = 1.0;    ///< [px]
-  double line_sigma_px = 3.0;     ///< [px]
+  double point_sigma_px = 1.0;  ///< [px]
+  double line_sigma_px = 3.0;   ///< [px]
   BundleAdjustmentOptions ba;
 
   void Check() const;  ///< mapping_options_check.cpp
@@ -48,11 +48,11 @@ struct LocalMappingStats {
   int lines_culled = 0;
   int points_triangulated = 0;
   int lines_triangulated = 0;
-  double total_ba_ms = 0.0;        ///< local mapping's time, all steps [ms]
-  int ba_interrupted = 0;          ///< local BAs stopped early by InterruptBA (threaded mode)
-  double ba_solve_ms = 0.0;        ///< of total_ba_ms, the local BAs' solves (Ceres) [ms]
-  int ba_iterations = 0;           ///< the local BAs' trust-region steps, both passes [-]
-  int ba_rejected_steps = 0;       ///< of which rejected (BundleAdjustmentReport) [-]
+  double total_ba_ms = 0.0;   ///< local mapping's time, all steps [ms]
+  int ba_interrupted = 0;     ///< local BAs stopped early by InterruptBA (threaded mode)
+  double ba_solve_ms = 0.0;   ///< of total_ba_ms, the local BAs' solves (Ceres) [ms]
+  int ba_iterations = 0;      ///< the local BAs' trust-region steps, both passes [-]
+  int ba_rejected_steps = 0;  ///< of which rejected (BundleAdjustmentReport) [-]
 };
 
 class LocalMapper {

@@ -351,8 +351,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
         event.candidate_frame_index = c->frame->index;
       }
     }
-    event.correction_m =
-        (kf->Center() - verified.match.cam_from_world.Center()).norm();
+    event.correction_m = (kf->Center() - verified.match.cam_from_world.Center()).norm();
     if (event.merge) event.correction_m = 0.0;  // different worlds: no distance to compare
     {
       std::lock_guard<std::mutex> stats_lock(stats_mutex_);

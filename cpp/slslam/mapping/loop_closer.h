@@ -70,9 +70,9 @@ struct LoopClosingOptions {
   /// makes the seam consistent before a background global BA, or without one; sequential mode
   /// with global_ba skips it (the inline global BA follows at once) [-]; 0: no welding BA
   int welding_keyframes = 10;
-  int vocabulary_levels_up = 2;   ///< direct-index level of the keyframes' words
-  double point_sigma_px = 1.0;    ///< global BA point sigma [px] (the tracker sets its own)
-  double line_sigma_px = 3.0;     ///< global BA line sigma [px]
+  int vocabulary_levels_up = 2;  ///< direct-index level of the keyframes' words
+  double point_sigma_px = 1.0;   ///< global BA point sigma [px] (the tracker sets its own)
+  double line_sigma_px = 3.0;    ///< global BA line sigma [px]
   PoseGraphOptions pose_graph;
   BundleAdjustmentOptions global_ba_options;
 
@@ -104,9 +104,8 @@ struct LocalMapMatch {
   std::vector<int> point_ids, keypoints;  ///< inlier pairs (map point, keypoint of the frame)
   std::vector<int> line_ids, segments;    ///< inlier pairs (map line, segment of the frame)
 };
-using LocalMapVerifier =
-    std::function<LocalMapMatch(const StereoFrame& frame, Map& map, int reference_keyframe,
-                                const Rigid3d& cam_from_world)>;
+using LocalMapVerifier = std::function<LocalMapMatch(
+    const StereoFrame& frame, Map& map, int reference_keyframe, const Rigid3d& cam_from_world)>;
 
 // One keyframe's keypoints matched to a keyframe's map points within shared vocabulary nodes
 // (one-to-one, ratio test): (keypoint, map point id) pairs. Caller holds the map's mutex.

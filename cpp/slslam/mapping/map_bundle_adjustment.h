@@ -33,8 +33,7 @@ class MapBundleAdjustment {
   // `max_fixed` have, else its observation is left out. Caller holds the map's lock.
   void AddWindowLandmarks(const Map& map, const std::vector<int>& window,
                           std::unordered_map<int, int>* pose_index, int max_fixed,
-                          double point_sigma_px, double line_sigma_px)
-      SLSLAM_REQUIRES(map.mutex());
+                          double point_sigma_px, double line_sigma_px) SLSLAM_REQUIRES(map.mutex());
 
   BaProblem& problem() { return problem_; }
   const BaProblem& problem() const { return problem_; }

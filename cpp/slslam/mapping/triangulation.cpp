@@ -79,9 +79,7 @@ struct View {
   Eigen::Vector3d center;  ///< in the world [m]
 };
 
-View MakeView(const KeyFrame& kf) {
-  return {&kf, kf.frame.get(), kf.cam_from_world, kf.Center()};
-}
+View MakeView(const KeyFrame& kf) { return {&kf, kf.frame.get(), kf.cam_from_world, kf.Center()}; }
 
 // Index pairs (i in view 1, j in view 2) of free keypoints matched along the epipolar lines.
 std::vector<std::pair<int, int>> MatchAlongEpipolarLines(const View& a, const View& b,
@@ -208,8 +206,8 @@ int TriangulatePoints(Map* map, const View& a, const View& b, const StereoRig& r
     if (options.patch_window_px > 0 && !a.keyframe->left_image.empty()) {
       // (the new keyframe's image around its keypoint: matches in later frames are aligned to
       // it, Tracker::RefineTracks; empty where the patch leaves the image)
-      point->patch = SamplePatch(a.keyframe->left_image, uv_a.x(), uv_a.y(),
-                                 options.patch_window_px);
+      point->patch =
+          SamplePatch(a.keyframe->left_image, uv_a.x(), uv_a.y(), options.patch_window_px);
       if (!point->patch.empty()) point->patch_depth_m = za;
     }
     ++made;

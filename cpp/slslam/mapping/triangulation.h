@@ -24,8 +24,8 @@
 namespace slslam {
 
 struct TriangulationOptions {
-  int neighbours = 10;               ///< covisible keyframes paired with the new one [-]
-  double epipolar_px = 2.0;          ///< largest distance to the epipolar line [px]
+  int neighbours = 10;                ///< covisible keyframes paired with the new one [-]
+  double epipolar_px = 2.0;           ///< largest distance to the epipolar line [px]
   float max_distance_binary = 50.0f;  ///< descriptor bound, ORB (Hamming) [bits]
   float max_distance_float = 0.7f;    ///< descriptor bound, SuperPoint (L2) [-]
   float ratio = 0.8f;                 ///< best / second best descriptor distance [-]
@@ -37,9 +37,9 @@ struct TriangulationOptions {
   /// 0.173 / 0.0171 m (benchmarks/README.md, 2026-11-29 g)
   double min_parallax_deg = 3.0;
   double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
-  double chi2 = 5.991;               ///< reprojection bound in both views (2 dof, 95 %) [-]
-  double sigma_px = 1.0;             ///< keypoint sigma [px]
-  double line_sigma_px = 3.0;        ///< line endpoint distance sigma [px]
+  double chi2 = 5.991;                ///< reprojection bound in both views (2 dof, 95 %) [-]
+  double sigma_px = 1.0;              ///< keypoint sigma [px]
+  double line_sigma_px = 3.0;         ///< line endpoint distance sigma [px]
   /// Points from keyframe pairs. What stereo leaves for them are the keypoints without a
   /// stereo match: flat, ambiguous along their row, or far; paired by descriptor and
   /// triangulated from the detected positions, with no patch to align later matches to
@@ -91,9 +91,9 @@ class EpipolarCandidates {
   void Collect(const Eigen::Vector3d& unit_line, double band_px, std::vector<int>* out);
 
  private:
-  std::vector<int> ids_;                 ///< the ids at finite positions
-  std::vector<double> u_, v_;            ///< their positions [px]
-  std::vector<double> distance_;         ///< scratch: distances to the current line [px]
+  std::vector<int> ids_;          ///< the ids at finite positions
+  std::vector<double> u_, v_;     ///< their positions [px]
+  std::vector<double> distance_;  ///< scratch: distances to the current line [px]
 };
 
 }  // namespace triangulation_detail

@@ -5,12 +5,12 @@
 #include <cmath>
 #include <memory>
 
-#include <Eigen/Eigenvalues>
 #include <ceres/iteration_callback.h>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
+#include <Eigen/Eigenvalues>
 
 #include "slslam/core/check.h"
 #include "slslam/optimization/cost_functions.h"
@@ -54,9 +54,7 @@ struct Parameters {
   double* pose(int i) { return reduced.data() + kPoseSize * i; }
   const double* pose(int i) const { return reduced.data() + kPoseSize * i; }
   double* line(int i) { return reduced.data() + kPoseSize * num_poses + kLineSize * i; }
-  const double* line(int i) const {
-    return reduced.data() + kPoseSize * num_poses + kLineSize * i;
-  }
+  const double* line(int i) const { return reduced.data() + kPoseSize * num_poses + kLineSize * i; }
 };
 
 PluckerLine LineInWorld(const Parameters& p, int line) {
@@ -181,8 +179,7 @@ PassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
       costs.push_back(std::make_unique<StereoPointCost>(rig, o.observed, o.sigma_px));
       term.huber = robust ? std::sqrt(options.chi2_stereo) : 0.0;
     } else {
-      costs.push_back(
-          std::make_unique<PointCost>(rig.camera, o.observed.head<2>(), o.sigma_px));
+      costs.push_back(std::make_unique<PointCost>(rig.camera, o.observed.head<2>(), o.sigma_px));
       term.huber = robust ? std::sqrt(options.chi2_mono) : 0.0;
     }
     term.cost = costs.back().get();
@@ -256,20 +253,20 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
     double* point = params.points[o.point].data();
     if (o.stereo && robust) {
       solver_problem.AddResidualBlock(new StereoPointCost(rig, o.observed, o.sigma_px),
-                                      new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
-                                      pose, point);
+                                      new ceres::HuberLoss(std::sqrt(options.chi2_stereo)), pose,
+                                      point);
     } else if (o.stereo) {
       // Without a loss, the same rows as two blocks of two (StereoPointHalfCost): see the
       // ordering below.
       for (int half = 0; half < 2; ++half) {
-        solver_problem.AddResidualBlock(
-            new StereoPointHalfCost(rig, o.observed, o.sigma_px, half), nullptr, pose, point);
+        solver_problem.AddResidualBlock(new StereoPointHalfCost(rig, o.observed, o.sigma_px, half),
+                                        nullptr, pose, point);
       }
     } else {
       ceres::LossFunction* loss =
           robust ? new ceres::HuberLoss(std::sqrt(options.chi2_mono)) : nullptr;
-      solver_problem.AddResidualBlock(
-          new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px), loss, pose, point);
+      solver_problem.AddResidualBlock(new PointCost(rig.camera, o.observed.head<2>(), o.sigma_px),
+                                      loss, pose, point);
     }
     point_used[o.point] = true;
     pose_used[o.pose] = true;
@@ -289,8 +286,8 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
     solver_problem.AddResidualBlock(cost, loss, params.pose(o.pose), params.line(o.line));
     if (!line_used[o.line]) {
       double* line = params.line(o.line);
-      const int free = determined.empty() ? kLineTangentSize
-                                          : static_cast<int>(determined[o.line].cols());
+      const int free =
+          determined.empty() ? kLineTangentSize : static_cast<int>(determined[o.line].cols());
       if (free > 0 && free < kLineTangentSize) {
         solver_problem.SetManifold(line, new LineSubspaceManifold(determined[o.line]));
       } else {
@@ -298,8 +295,8 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
       }
       if (free == 0) solver_problem.SetParameterBlockConstant(line);
       if (options.line_prior_weight > 0.0) {
-        solver_problem.AddResidualBlock(new LinePriorCost(line, options.line_prior_weight),
-                                        nullptr, line);
+        solver_problem.AddResidualBlock(new LinePriorCost(line, options.line_prior_weight), nullptr,
+                                        line);
       }
     }
     line_used[o.line] = true;
@@ -315,8 +312,8 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-  if (options.dogleg_with_lines && std::any_of(line_used.begin(), line_used.end(),
-                                               [](bool used) { return used; })) {
+  if (options.dogleg_with_lines &&
+      std::any_of(line_used.begin(), line_used.end(), [](bool used) { return used; })) {
     solver_options.trust_region_strategy_type = ceres::DOGLEG;
   }
   solver_options.max_num_iterations =

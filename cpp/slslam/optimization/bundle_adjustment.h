@@ -44,9 +44,9 @@ struct BaProblem {
 };
 
 struct BundleAdjustmentOptions {
-  int robust_iterations = 5;        ///< iterations of the robust pass [-]
-  int refine_iterations = 10;       ///< iterations after outlier removal [-]
-  double chi2_mono = 5.991;         ///< [-]
+  int robust_iterations = 5;   ///< iterations of the robust pass [-]
+  int refine_iterations = 10;  ///< iterations after outlier removal [-]
+  double chi2_mono = 5.991;    ///< [-]
   /// outliers after each pass, and the robust pass's Huber bound, of a stereo observation (3
   /// degrees of freedom) [-]
   double chi2_stereo = 7.815;

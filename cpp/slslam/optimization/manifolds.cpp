@@ -127,8 +127,7 @@ LineSubspaceManifold::LineSubspaceManifold(const Basis& basis) : basis_(basis) {
           "a line subspace needs 1 to 4 directions");
 }
 
-bool LineSubspaceManifold::Plus(const double* x, const double* delta,
-                                double* x_plus_delta) const {
+bool LineSubspaceManifold::Plus(const double* x, const double* delta, double* x_plus_delta) const {
   const Eigen::Vector4d d = basis_ * Eigen::Map<const Eigen::VectorXd>(delta, basis_.cols());
   LineToParameters(ParametersToLine(x).Plus(d), x_plus_delta);
   return true;

@@ -9,8 +9,8 @@
 #include <ceres/cost_function.h>
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
-#include <ceres/solver.h>
 #include <ceres/sized_cost_function.h>
+#include <ceres/solver.h>
 #include <Eigen/Cholesky>
 
 #include "slslam/core/check.h"
@@ -22,8 +22,7 @@ namespace slslam {
 namespace {
 
 // Chi-square of one observation at the given pose; +inf when it cannot be evaluated.
-double PointChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
-                 const PointObservation& obs) {
+double PointChi2(const StereoRig& rig, const Rigid3d& cam_from_world, const PointObservation& obs) {
   const double w = 1.0 / (obs.sigma_px * obs.sigma_px);
   if (obs.stereo) {
     Eigen::Vector3d e;
@@ -37,16 +36,15 @@ double PointChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
   return w * e.squaredNorm();
 }
 
-double LineChi2(const StereoRig& rig, const Rigid3d& cam_from_world,
-                const LineObservation& obs) {
+double LineChi2(const StereoRig& rig, const Rigid3d& cam_from_world, const LineObservation& obs) {
   Eigen::Vector3d e;
   if (!LineResidual(rig.camera, cam_from_world, obs.line_w, obs.start_px, obs.end_px, 0.0, &e)) {
     return INFINITY;
   }
   // The line must also be in front of the camera: its point nearest to the segment's middle ray.
   const PluckerLine line_c = obs.line_w.Transformed(cam_from_world);
-  const Eigen::Vector3d middle = line_c.ClosestPointToRay(
-      rig.camera.Unproject(0.5 * (obs.start_px + obs.end_px)));
+  const Eigen::Vector3d middle =
+      line_c.ClosestPointToRay(rig.camera.Unproject(0.5 * (obs.start_px + obs.end_px)));
   if (!(middle.z() > 0.0)) return INFINITY;
   return e.head<2>().squaredNorm() / (obs.sigma_px * obs.sigma_px);
 }
@@ -196,8 +194,7 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
       const double relative_decrease = (current.cost - candidate.cost) / current.cost;
       std::copy(candidate_pose.begin(), candidate_pose.end(), pose);
       current = candidate;
-      radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)),
-                        1e16);
+      radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)), 1e16);
       decrease_factor = 2.0;
       // Converged: a step that lowered the cost by at most 1e-6 of it. Ceres stops at such a
       // candidate without taking it (and at a rise as small); this takes the lower cost. Taking
@@ -362,10 +359,10 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
   }
 
   ParametersToPose(pose.data(), &result.cam_from_world);
-  result.point_inliers = static_cast<int>(
-      std::count(result.point_inlier.begin(), result.point_inlier.end(), true));
-  result.line_inliers = static_cast<int>(
-      std::count(result.line_inlier.begin(), result.line_inlier.end(), true));
+  result.point_inliers =
+      static_cast<int>(std::count(result.point_inlier.begin(), result.point_inlier.end(), true));
+  result.line_inliers =
+      static_cast<int>(std::count(result.line_inlier.begin(), result.line_inlier.end(), true));
   result.success = result.point_inliers + result.line_inliers >= static_cast<int>(min_active);
   if (prior != nullptr) {
     // The posterior information at the result: the inliers without kernel and the prior.

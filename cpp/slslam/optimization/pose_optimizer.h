@@ -15,7 +15,7 @@
 namespace slslam {
 
 struct PointObservation {
-  Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< map point [m]
+  Eigen::Vector3d point_w = Eigen::Vector3d::Zero();   ///< map point [m]
   Eigen::Vector3d observed = Eigen::Vector3d::Zero();  ///< (u_left, v, u_right) [px]
   bool stereo = false;                                 ///< false: u_right is ignored
   double sigma_px = 1.0;                               ///< measurement standard deviation [px]
@@ -29,12 +29,12 @@ struct LineObservation {
 };
 
 struct PoseOptimizerOptions {
-  int rounds = 4;                 ///< optimise-classify rounds [-]
-  int iterations_per_round = 10;  ///< Levenberg-Marquardt iterations per round [-]
-  int robust_rounds = 3;          ///< rounds that use the Huber kernel (the rest use none) [-]
-  double chi2_mono = 5.991;       ///< inlier bound, 2 residuals (95 %, as ORB-SLAM3) [-]
-  double chi2_stereo = 7.815;     ///< inlier bound, 3 residuals [-]
-  double chi2_line = 5.991;       ///< inlier bound on the two endpoint distances [-]
+  int rounds = 4;                   ///< optimise-classify rounds [-]
+  int iterations_per_round = 10;    ///< Levenberg-Marquardt iterations per round [-]
+  int robust_rounds = 3;            ///< rounds that use the Huber kernel (the rest use none) [-]
+  double chi2_mono = 5.991;         ///< inlier bound, 2 residuals (95 %, as ORB-SLAM3) [-]
+  double chi2_stereo = 7.815;       ///< inlier bound, 3 residuals [-]
+  double chi2_line = 5.991;         ///< inlier bound on the two endpoint distances [-]
   double line_angle_weight = 10.0;  ///< scale of the bounded angle term e3 [px]
   double line_weight = 1.0;         ///< weight of the line terms against the point terms [-]
   /// true: each round solved by this library's 6-parameter Levenberg-Marquardt (Ceres' rules on

@@ -194,14 +194,14 @@ bool Solver::Evaluate(const State& x, NormalEquations* out) const {
     const double w = t.weight * rho1;
     const int free = free_index_[t.pose];
     if (t.line) {
-      Accumulate<3, 4>(residual, jacobian_pose, jacobian_landmark, kLineSize, w, free,
-                       t.landmark, slot_[i], out, &out->lines, &out->line_coupling);
+      Accumulate<3, 4>(residual, jacobian_pose, jacobian_landmark, kLineSize, w, free, t.landmark,
+                       slot_[i], out, &out->lines, &out->line_coupling);
     } else if (rows == 3) {
-      Accumulate<3, 3>(residual, jacobian_pose, jacobian_landmark, kPointSize, w, free,
-                       t.landmark, slot_[i], out, &out->points, &out->point_coupling);
+      Accumulate<3, 3>(residual, jacobian_pose, jacobian_landmark, kPointSize, w, free, t.landmark,
+                       slot_[i], out, &out->points, &out->point_coupling);
     } else {
-      Accumulate<2, 3>(residual, jacobian_pose, jacobian_landmark, kPointSize, w, free,
-                       t.landmark, slot_[i], out, &out->points, &out->point_coupling);
+      Accumulate<2, 3>(residual, jacobian_pose, jacobian_landmark, kPointSize, w, free, t.landmark,
+                       slot_[i], out, &out->points, &out->point_coupling);
     }
   }
   // A non-finite value fails the evaluation, as in Ceres.
@@ -226,8 +226,7 @@ bool Solver::EvaluateCost(const State& x, double* cost) const {
 // Jacobi scaling as Ceres': 1 / (1 + the column's norm), from the start's Jacobian.
 template <int D>
 Eigen::Matrix<double, D, 1> Scale(const Eigen::Matrix<double, D, D>& information) {
-  return (Eigen::Matrix<double, D, 1>::Ones() + information.diagonal().cwiseSqrt())
-      .cwiseInverse();
+  return (Eigen::Matrix<double, D, 1>::Ones() + information.diagonal().cwiseSqrt()).cwiseInverse();
 }
 
 // Levenberg-Marquardt's damping of a block's diagonal, in the unscaled coordinates: Ceres adds
@@ -305,12 +304,11 @@ void Solver::WriteBack() const {
     std::copy(state_.poses[i].begin(), state_.poses[i].end(), blocks_.poses[i]);
   }
   for (size_t i = 0; i < blocks_.points.size(); ++i) {
-    if (point_used_[i]) std::copy(state_.points[i].begin(), state_.points[i].end(),
-                                  blocks_.points[i]);
+    if (point_used_[i])
+      std::copy(state_.points[i].begin(), state_.points[i].end(), blocks_.points[i]);
   }
   for (size_t i = 0; i < blocks_.lines.size(); ++i) {
-    if (line_used_[i]) std::copy(state_.lines[i].begin(), state_.lines[i].end(),
-                                 blocks_.lines[i]);
+    if (line_used_[i]) std::copy(state_.lines[i].begin(), state_.lines[i].end(), blocks_.lines[i]);
   }
 }
 
@@ -401,8 +399,8 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     }
     EliminateLandmarks<3>(current.points, current.point_coupling, point_terms_, point_used_,
                           point_scale, radius, &reduced, &rhs, &point_inverse);
-    EliminateLandmarks<4>(current.lines, current.line_coupling, line_terms_, line_used_,
-                          line_scale, radius, &reduced, &rhs, &line_inverse);
+    EliminateLandmarks<4>(current.lines, current.line_coupling, line_terms_, line_used_, line_scale,
+                          radius, &reduced, &rhs, &line_inverse);
     bool solved = true;
     if (n > 0) {
       const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(reduced);
@@ -411,8 +409,8 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     }
     BackSubstitute<3>(current.points, current.point_coupling, point_terms_, point_used_,
                       point_inverse, pose_step, &point_step);
-    BackSubstitute<4>(current.lines, current.line_coupling, line_terms_, line_used_,
-                      line_inverse, pose_step, &line_step);
+    BackSubstitute<4>(current.lines, current.line_coupling, line_terms_, line_used_, line_inverse,
+                      pose_step, &line_step);
     // The step's size, its model decrease -(g^T d + 1/2 d^T H d) (H undamped), the candidate.
     double step_squared = 0.0, state_squared = 0.0, gd = 0.0, dhd = 0.0;
     for (int f = 0; f < num_free_; ++f) {
@@ -432,8 +430,8 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     };
     StepLandmarks(current.points, point_used_, point_step, state_.points, point_plus,
                   &candidate.points, &step_squared, &state_squared, &gd, &dhd);
-    StepLandmarks(current.lines, line_used_, line_step, state_.lines, line_plus,
-                  &candidate.lines, &step_squared, &state_squared, &gd, &dhd);
+    StepLandmarks(current.lines, line_used_, line_step, state_.lines, line_plus, &candidate.lines,
+                  &step_squared, &state_squared, &gd, &dhd);
     for (size_t i = 0; i < terms_.size(); ++i) {  // the couplings' cross terms, twice
       const SchurTerm& t = terms_[i];
       const int f = free_index_[t.pose];
@@ -444,8 +442,7 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     }
     const bool finite = solved && std::isfinite(step_squared) && std::isfinite(dhd);
     ++summary.steps;
-    if (finite &&
-        std::sqrt(step_squared) <= 1e-8 * (std::sqrt(state_squared) + 1e-8)) {
+    if (finite && std::sqrt(step_squared) <= 1e-8 * (std::sqrt(state_squared) + 1e-8)) {
       --summary.steps;  // Ceres stops before trying a step this small
       break;
     }
@@ -468,8 +465,7 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
       std::swap(current, next);
       summary.moved = true;
       summary.final_cost = current.cost;
-      radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)),
-                        1e16);
+      radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)), 1e16);
       decrease_factor = 2.0;
     } else {
       ++summary.rejected_steps;
@@ -488,13 +484,11 @@ SchurSolveSummary SolveSchurLevenbergMarquardt(const std::vector<SchurTerm>& ter
                                                const SchurBlocks& blocks, int max_iterations,
                                                const std::atomic<bool>* abort,
                                                const std::atomic<bool>* interrupt) {
-  Require(blocks.pose_fixed.size() == blocks.poses.size(),
-          "Schur solver: one fixed flag per pose");
+  Require(blocks.pose_fixed.size() == blocks.poses.size(), "Schur solver: one fixed flag per pose");
   for (const SchurTerm& t : terms) {
-    Require(t.cost != nullptr && t.pose >= 0 &&
-                t.pose < static_cast<int>(blocks.poses.size()) && t.landmark >= 0 &&
-                t.landmark < static_cast<int>(t.line ? blocks.lines.size()
-                                                     : blocks.points.size()),
+    Require(t.cost != nullptr && t.pose >= 0 && t.pose < static_cast<int>(blocks.poses.size()) &&
+                t.landmark >= 0 &&
+                t.landmark < static_cast<int>(t.line ? blocks.lines.size() : blocks.points.size()),
             "Schur solver: a term refers to a missing cost, pose or landmark");
   }
   Solver solver(terms, blocks);

@@ -30,19 +30,19 @@ struct SchurTerm {
 // The parameter blocks, in place: ambient values that the solve reads and, when it ends with a
 // usable estimate, overwrites. Blocks no term touches are left alone.
 struct SchurBlocks {
-  std::vector<double*> poses;   ///< 7 values each (PoseManifold)
+  std::vector<double*> poses;    ///< 7 values each (PoseManifold)
   std::vector<bool> pose_fixed;  ///< per pose: held
-  std::vector<double*> points;  ///< 3 values each
-  std::vector<double*> lines;   ///< 5 values each (LineManifold)
+  std::vector<double*> points;   ///< 3 values each
+  std::vector<double*> lines;    ///< 5 values each (LineManifold)
 };
 
 struct SchurSolveSummary {
-  int steps = 0;            ///< trust-region steps tried (Ceres' iterations after the start) [-]
-  int rejected_steps = 0;   ///< of which the cost rose or could not be evaluated [-]
-  bool moved = false;       ///< a step was accepted
-  bool usable = false;      ///< the start could be evaluated: the blocks hold a usable estimate
-  bool aborted = false;     ///< `abort` ended it; the blocks are as given
-  bool interrupted = false; ///< `interrupt` ended it at the last accepted iterate
+  int steps = 0;             ///< trust-region steps tried (Ceres' iterations after the start) [-]
+  int rejected_steps = 0;    ///< of which the cost rose or could not be evaluated [-]
+  bool moved = false;        ///< a step was accepted
+  bool usable = false;       ///< the start could be evaluated: the blocks hold a usable estimate
+  bool aborted = false;      ///< `abort` ended it; the blocks are as given
+  bool interrupted = false;  ///< `interrupt` ended it at the last accepted iterate
   double initial_cost = 0.0;
   double final_cost = 0.0;
 };

@@ -32,7 +32,8 @@ constexpr double kInitRetryS = 0.25;
 Matrix18d InitialCovariance(const Eigen::Vector3d& g_world) {
   Eigen::Matrix<double, 18, 1> sigma;
   sigma << Eigen::Vector3d::Constant(kInitRotationSigmaRad),
-      Eigen::Vector3d::Constant(kInitPositionSigmaM), Eigen::Vector3d::Constant(kInitVelocitySigmaMps),
+      Eigen::Vector3d::Constant(kInitPositionSigmaM),
+      Eigen::Vector3d::Constant(kInitVelocitySigmaMps),
       Eigen::Vector3d::Constant(kInitGyroBiasSigmaRadps),
       Eigen::Vector3d::Constant(kInitAccBiasSigmaMps2), Eigen::Vector3d::Zero();
   Matrix18d P = sigma.cwiseAbs2().asDiagonal();
@@ -264,18 +265,18 @@ void InertialOptions::Check() const {
   Require(body_from_cam.rotation.allFinite() && body_from_cam.translation.allFinite(),
           "tracking.imu.body_from_cam is not finite");
   const double det = body_from_cam.rotation.determinant();
-  SLSLAM_CHECK(std::abs(det - 1.0) < 1e-6 &&
-                   (body_from_cam.rotation * body_from_cam.rotation.transpose() -
-                    Eigen::Matrix3d::Identity())
-                           .norm() < 1e-6,
-               "tracking.imu.body_from_cam: the rotation is not orthonormal (det ", det, ")");
+  SLSLAM_CHECK(
+      std::abs(det - 1.0) < 1e-6 && (body_from_cam.rotation * body_from_cam.rotation.transpose() -
+                                     Eigen::Matrix3d::Identity())
+                                            .norm() < 1e-6,
+      "tracking.imu.body_from_cam: the rotation is not orthonormal (det ", det, ")");
   CheckInRange("tracking.imu.time_offset_s", time_offset_s, -10.0, 10.0);
   CheckInRange("tracking.imu.gyro_noise_density", gyro_noise_density, 0.0, 1.0);
   CheckInRange("tracking.imu.acc_noise_density", acc_noise_density, 0.0, 1.0);
   CheckInRange("tracking.imu.gyro_random_walk", gyro_random_walk, 0.0, 1.0);
   CheckInRange("tracking.imu.acc_random_walk", acc_random_walk, 0.0, 1.0);
-  SLSLAM_CHECK(gravity_mps2 > 0.0 && gravity_mps2 < 20.0, "tracking.imu.gravity_mps2 must be in (0, 20), got ",
-               gravity_mps2);
+  SLSLAM_CHECK(gravity_mps2 > 0.0 && gravity_mps2 < 20.0,
+               "tracking.imu.gravity_mps2 must be in (0, 20), got ", gravity_mps2);
   CheckAboveInRange("tracking.imu.gravity_tolerance_mps2", gravity_tolerance_mps2, 0.0, 100.0);
   CheckInRange("tracking.imu.window_s", window_s, 0.1, 1000.0);
   CheckInRange("tracking.imu.min_window_s", min_window_s, 0.05, 1000.0);

@@ -25,18 +25,18 @@
 namespace slslam {
 
 struct InertialOptions {
-  Rigid3d body_from_cam;           ///< the left camera in the IMU frame
-  double time_offset_s = 0.0;      ///< t_cam = t_imu + time_offset_s [s]
+  Rigid3d body_from_cam;       ///< the left camera in the IMU frame
+  double time_offset_s = 0.0;  ///< t_cam = t_imu + time_offset_s [s]
   // IMU noise (Kalibr / EuRoC sensor.yaml units).
   double gyro_noise_density = 1.6968e-4;  ///< [rad/s/sqrt(Hz)]
   double acc_noise_density = 2.0e-3;      ///< [m/s^2/sqrt(Hz)]
   double gyro_random_walk = 1.9393e-5;    ///< [rad/s^2/sqrt(Hz)]
   double acc_random_walk = 3.0e-3;        ///< [m/s^3/sqrt(Hz)]
   double gravity_mps2 = 9.81;             ///< expected magnitude of gravity [m/s^2]
-  double gravity_tolerance_mps2 = 0.5;  ///< initialisation refused further off [m/s^2]
-  double window_s = 3.0;      ///< tracked poses the initialisation uses, before the last [s]
-  double min_window_s = 1.0;  ///< the initialisation needs poses spanning at least this [s]
-  double refine_after_s = 10.0;  ///< initialisation run again this long after the first [s]
+  double gravity_tolerance_mps2 = 0.5;    ///< initialisation refused further off [m/s^2]
+  double window_s = 3.0;           ///< tracked poses the initialisation uses, before the last [s]
+  double min_window_s = 1.0;       ///< the initialisation needs poses spanning at least this [s]
+  double refine_after_s = 10.0;    ///< initialisation run again this long after the first [s]
   double refine_min_path_m = 1.0;  ///< ... over a window in which the body moved this far [m]
   double max_sample_gap_s = 0.05;  ///< IMU samples further apart than this: no propagation [s]
   /// Lost when the position's standard deviation passes this fraction of the distance driven
@@ -107,7 +107,7 @@ class InertialEstimator {
     double first_pose_s = -1.0;  ///< camera time of the first pose it was given [s]
     int initialisations = 0;     ///< successful (after a reset too), refinements not counted
     int refinements = 0;
-    std::string last_failure;    ///< the last initialisation attempt's reason, if it failed
+    std::string last_failure;  ///< the last initialisation attempt's reason, if it failed
   };
   const Report& report() const { return report_; }
 
@@ -124,15 +124,15 @@ class InertialEstimator {
   };
   std::deque<TimedPose> window_;  ///< tracked poses, the last window_s of them
   bool initialised_ = false;
-  double init_s_ = -1.0;          ///< when the state was last initialised [s]
+  double init_s_ = -1.0;  ///< when the state was last initialised [s]
   bool refined_ = false;
   double last_attempt_s_ = -1e300;
   InertialState state_;
   double state_t_s_ = 0.0;
-  ImuBias bias_start_;             ///< the next initialisation's linearisation point
-  double last_visual_s_ = 0.0;     ///< camera time of the last visual correction [s]
+  ImuBias bias_start_;          ///< the next initialisation's linearisation point
+  double last_visual_s_ = 0.0;  ///< camera time of the last visual correction [s]
   Eigen::Vector3d last_visual_p_ = Eigen::Vector3d::Zero();  ///< body position then [m]
-  double driven_m_ = 0.0;          ///< path of the propagated state since then [m]
+  double driven_m_ = 0.0;  ///< path of the propagated state since then [m]
   Report report_;
 };
 

@@ -13,8 +13,8 @@ KeyframeDecision DecideKeyframe(const KeyframeEvidence& e, const KeyframeRules& 
   const bool c1_without_gap =
       at_most || e.tracked < kLeavingTrackedFraction * e.reference || need_close;
   const bool c1 = c1_without_gap || past_gap;
-  const bool c2 = (e.tracked < r.track_ratio * e.reference || need_close) &&
-                  e.weighted_inliers > r.min_inliers;
+  const bool c2 =
+      (e.tracked < r.track_ratio * e.reference || need_close) && e.weighted_inliers > r.min_inliers;
   // Thin tracking (low texture, few lines): keyframes often, so the map keeps up with the view.
   const bool weak = e.weighted_inliers < r.weak_inliers && e.frames_since >= r.weak_frames;
   // The minimum gap is a hard one while tracking is strong.

@@ -31,15 +31,11 @@ StereoFrontend::StereoFrontend(const StereoFrontendOptions& options) : options_(
   options_.Check();
 }
 
-std::shared_ptr<StereoFrame> StereoFrontend::Build(int index, double timestamp,
-                                                   const cv::Mat& left_image,
-                                                   const cv::Mat& right_image,
-                                                   const Keypoints& left_keypoints,
-                                                   const Keypoints& right_keypoints,
-                                                   StereoFrontendTiming* timing,
-                                                   const LineFeatures* given_left_lines,
-                                                   cv::Mat* left_used,
-                                                   cv::Mat* right_used, bool denoised) const {
+std::shared_ptr<StereoFrame> StereoFrontend::Build(
+    int index, double timestamp, const cv::Mat& left_image, const cv::Mat& right_image,
+    const Keypoints& left_keypoints, const Keypoints& right_keypoints, StereoFrontendTiming* timing,
+    const LineFeatures* given_left_lines, cv::Mat* left_used, cv::Mat* right_used,
+    bool denoised) const {
   const PinholeCamera& cam = options_.rig.camera;
   SLSLAM_CHECK(left_image.cols == cam.width && left_image.rows == cam.height, "left image is ",
                left_image.cols, "x", left_image.rows, ", calibration says ", cam.width, "x",

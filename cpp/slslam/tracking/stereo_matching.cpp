@@ -121,9 +121,9 @@ void MatchStereoLinesInto(const LineFeatures& right_lines, const StereoRig& rig,
   frame->line_endpoints.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
   frame->line_has_depth.assign(m, false);
   if (m == 0 || right_lines.segments.empty()) return;
-  const IndexPairs pairs = MatchStereoLines(frame->lines, frame->line_descriptors,
-                                            right_lines.segments, right_lines.descriptors,
-                                            options.lines);
+  const IndexPairs pairs =
+      MatchStereoLines(frame->lines, frame->line_descriptors, right_lines.segments,
+                       right_lines.descriptors, options.lines);
   const double max_depth = options.max_depth_baselines * rig.baseline_m;
   for (Eigen::Index k = 0; k < pairs.rows(); ++k) {
     const int a = pairs(k, 0);
@@ -157,8 +157,8 @@ typedef float RowSearchVector __attribute__((vector_size(64), aligned(4), may_al
 typedef int32_t RowSearchMask __attribute__((vector_size(64)));
 
 SLSLAM_AVX512_CLONES void AccumulateRowSearchCosts(const float* patch, int side, const float* strip,
-                                                 int width, const float* mean_right, int count,
-                                                 float* cost) {
+                                                   int width, const float* mean_right, int count,
+                                                   float* cost) {
   if (count < kRowSearchBlock) {
     for (int k = 0; k < count; ++k) cost[k] = 0.0f;
     for (int dy = 0; dy < side; ++dy) {
@@ -363,8 +363,8 @@ void SearchAndRefineStereoPoints(const cv::Mat& left, const cv::Mat& right, cons
 bool SubpixelWindowFits(const cv::Mat& left, const cv::Mat& right,
                         const StereoMatchOptions& options, int ul, int v, int ur) {
   const int w = options.subpixel_window, L = options.subpixel_search;
-  return v - w >= 0 && v + w < left.rows && ul - w >= 0 && ul + w < left.cols &&
-         ur - L - w >= 0 && ur + L + w < right.cols;
+  return v - w >= 0 && v + w < left.rows && ul - w >= 0 && ul + w < left.cols && ur - L - w >= 0 &&
+         ur + L + w < right.cols;
 }
 
 void RefineStereoSubpixel(const cv::Mat& left, const cv::Mat& right, const StereoRig& rig,

@@ -284,8 +284,8 @@ void Tracker::SetPose(const Rigid3d& cam_from_world, bool update_velocity) {
   have_pose_ = true;
 }
 
-std::shared_ptr<const StereoFrame> Tracker::WithLeftLines(
-    std::shared_ptr<const StereoFrame> frame, double* ms) const {
+std::shared_ptr<const StereoFrame> Tracker::WithLeftLines(std::shared_ptr<const StereoFrame> frame,
+                                                          double* ms) const {
   const auto start = Clock::now();
   const bool pending = frame->left_lines_pending;
   frame = Completed(std::move(frame), &StereoFrame::left_lines_pending, complete_left_lines_);
@@ -401,8 +401,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
   mapper_->Insert(live, kf_id);
 }
 
-void Tracker::AcceptLines(Map& map, const LocalTracking& tracking,
-                          std::vector<int>* line_match) {
+void Tracker::AcceptLines(Map& map, const LocalTracking& tracking, std::vector<int>* line_match) {
   for (size_t i = 0; i < tracking.line_ids.size(); ++i) {
     if (!tracking.pose.line_inlier[i]) continue;
     auto l = map.line(tracking.line_ids[i]);
@@ -557,12 +556,12 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   predict();
   // lines_on_demand: a frame that starts a map, a frame while lost, and a frame after thin
   // tracking take their lines before anything else (as if extracted up front).
-  if (frame->left_lines_pending &&
-      (atlas_.size() == 0 || mode_ != Mode::kTracking ||
-       last_point_inliers_ < options_.lines_on_demand_inliers)) {
+  if (frame->left_lines_pending && (atlas_.size() == 0 || mode_ != Mode::kTracking ||
+                                    last_point_inliers_ < options_.lines_on_demand_inliers)) {
     frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
   }
-  if (atlas_.size() == 0) return FirstFrame(frame, predicted, std::move(result));  // not initialised yet
+  if (atlas_.size() == 0)
+    return FirstFrame(frame, predicted, std::move(result));  // not initialised yet
 
   LocalTracking tracking;
   bool tracked = false, relocalised = false;
@@ -664,8 +663,8 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   return NotTracked(frame, std::move(result), local_pose, have_prior, predicted);
 }
 
-TrackResult Tracker::FirstFrame(std::shared_ptr<const StereoFrame>& frame,
-                                const Rigid3d& predicted, TrackResult result) {
+TrackResult Tracker::FirstFrame(std::shared_ptr<const StereoFrame>& frame, const Rigid3d& predicted,
+                                TrackResult result) {
   const auto start = Clock::now();
   if (options_.localise_only) {
     throw std::runtime_error("localise-only mode needs a loaded map (the atlas is empty)");
@@ -820,8 +819,7 @@ void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, Track
   }
   if (same_world) {
     LocalTracking with_lines =
-        TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_,
-                      prior);
+        TrackSnapshot(*frame, local, points_pose, 1.0f, &valid, current_left_, prior);
     result.matching_ms += with_lines.matching_ms;
     result.optimisation_ms += with_lines.optimisation_ms;
     if (with_lines.pose.success && with_lines.weighted_inliers >= options_.min_inliers) {
@@ -921,8 +919,8 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
   // maps (a black frame does not count, and StartMap refuses it).
   const bool lit = CouldStartMap(*frame);
   if (lit) ++lost_map_candidates_;
-  const bool may_start = !options_.localise_only && lit &&
-                         lost_map_candidates_ > options_.new_map_after_lost_frames;
+  const bool may_start =
+      !options_.localise_only && lit && lost_map_candidates_ > options_.new_map_after_lost_frames;
   if (may_start && StartMap(frame, last_cam_from_world_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;

@@ -71,9 +71,10 @@ struct RelocalisationOptions {
 
 // Counts of the loss / recovery machinery since the tracker started.
 struct TrackingStats {
-  int inertial_frames = 0;  ///< frames whose pose the IMU carried (state INERTIAL)
+  int inertial_frames = 0;        ///< frames whose pose the IMU carried (state INERTIAL)
   int inertial_weak_updates = 0;  ///< ... of them corrected by a weak visual pose
-  int inertial_keyframes = 0;     ///< ... of them made keyframes (InertialOptions::keyframe_interval_s)
+  int inertial_keyframes =
+      0;  ///< ... of them made keyframes (InertialOptions::keyframe_interval_s)
   int relocalisations = 0;
   int relocalisation_attempts = 0;
   int maps_started = 0;
@@ -88,7 +89,7 @@ struct TrackerOptions {
   StereoMatchOptions stereo;
   PoseOptimizerOptions pose;
   LocalMapperOptions mapping;
-  bool use_lines = true;               ///< lines in tracking and mapping
+  bool use_lines = true;  ///< lines in tracking and mapping
   /// the right image's lines only for frames that become keyframes or start a map
   /// (StereoFrontendOptions::right_lines_on_keyframes; the tracker completes those frames):
   /// the same poses and map, about half the line work on the frames between keyframes
@@ -114,7 +115,7 @@ struct TrackerOptions {
   /// detection, line descriptors and stereo matching Gaussian-smoothed, sigma = noise / 7 px
   /// (StereoFrontendOptions::denoise_above_noise); 0: never [gray levels]
   double denoise_above_noise = 6.0;
-  bool sequential = true;              ///< local mapping inline (reproducible) or on its own thread
+  bool sequential = true;  ///< local mapping inline (reproducible) or on its own thread
   /// Threaded mode only: ORB-SLAM3's brake on keyframes. While local mapping is busy the minimum
   /// gap alone asks for no keyframe, and a keyframe that is due interrupts the running local BA
   /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/README.md,
@@ -134,21 +135,21 @@ struct TrackerOptions {
   /// ms and 21-23 -> 29-34 ms), frames/s gain only in the dark, and XFeat + lines drifted
   /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/README.md, 2026-11-27 d).
   bool mapping_overlap = false;
-  int min_init_points = 50;            ///< stereo points a frame needs to start a map [-]
-  int min_inliers = 15;                ///< fewer inliers after motion-only BA: LOST [-]
-  float search_radius_px = 15.0f;      ///< guided matching window [px]; doubled on a retry
-  float max_distance_binary = 80.0f;   ///< guided matching, ORB (Hamming) [bits]; dark, noisy
-                                       ///< frames need more than 50 (ORB-SLAM uses 100)
-  float max_distance_float = 0.8f;     ///< guided matching, SuperPoint (L2) [-]
-  float match_ratio = 0.9f;            ///< ratio test inside the window [-]
-  float line_search_px = 20.0f;        ///< frame segment midpoint to predicted line [px]
-  float line_max_angle_rad = 0.2f;     ///< [rad]
-  float line_max_lbd = 80.0f;          ///< [bits]
+  int min_init_points = 50;           ///< stereo points a frame needs to start a map [-]
+  int min_inliers = 15;               ///< fewer inliers after motion-only BA: LOST [-]
+  float search_radius_px = 15.0f;     ///< guided matching window [px]; doubled on a retry
+  float max_distance_binary = 80.0f;  ///< guided matching, ORB (Hamming) [bits]; dark, noisy
+                                      ///< frames need more than 50 (ORB-SLAM uses 100)
+  float max_distance_float = 0.8f;    ///< guided matching, SuperPoint (L2) [-]
+  float match_ratio = 0.9f;           ///< ratio test inside the window [-]
+  float line_search_px = 20.0f;       ///< frame segment midpoint to predicted line [px]
+  float line_max_angle_rad = 0.2f;    ///< [rad]
+  float line_max_lbd = 80.0f;         ///< [bits]
   /// The kind of line descriptors the frames carry (the line front end's, LineExtractorOptions::
   /// descriptor): written into map files, and a map file of another kind is refused.
   LineDescriptor line_descriptor = LineDescriptor::kOpenCvLbd;
-  int keyframe_max_frames = 20;        ///< a keyframe at least this often [frames]
-  int keyframe_min_frames = 2;         ///< no keyframe sooner than this after the last [frames]
+  int keyframe_max_frames = 20;  ///< a keyframe at least this often [frames]
+  int keyframe_min_frames = 2;   ///< no keyframe sooner than this after the last [frames]
   /// ... in a noisy frame (StereoFrame::noisy: smoothed as dark) instead: keypoints repeat less
   /// well there and fewer are tracked, so the map needs its keyframes sooner. XFeat + lines,
   /// 150 frames of the simulated loop at light 0.15, seeds 0-4, mean ATE 0.0100 m with the gap
@@ -159,10 +160,10 @@ struct TrackerOptions {
   /// camera rate. Off by default: 0.075 s (2 frames at 20 Hz, 1 at 10 Hz) with no frame gap was
   /// better on the dark 10 Hz loop and much worse on the bright one (benchmarks/README.md) [s]
   double keyframe_min_interval_s = 0.0;
-  double keyframe_track_ratio = 0.75;  ///< tracked / reference-keyframe points (those seen by
-                                       ///< >= 3 keyframes) below this: keyframe [-]
-  int keyframe_min_inliers = 100;      ///< fewer tracked close points (and > 70 untracked
-                                       ///< ones): keyframe, as ORB-SLAM3's stereo rule [-]
+  double keyframe_track_ratio = 0.75;   ///< tracked / reference-keyframe points (those seen by
+                                        ///< >= 3 keyframes) below this: keyframe [-]
+  int keyframe_min_inliers = 100;       ///< fewer tracked close points (and > 70 untracked
+                                        ///< ones): keyframe, as ORB-SLAM3's stereo rule [-]
   double close_depth_baselines = 40.0;  ///< "close" stereo points for the rule above [-]
   double point_sigma_px = 1.0;          ///< [px]
   /// Half size of the patch that refines a tracked keypoint's position [px]: a map point made
@@ -227,16 +228,16 @@ struct TrackerOptions {
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
-  int projection_cell_px = 24;  ///< at most one projected point per cell of this size [px]
-  double line_sigma_px = 3.0;           ///< line endpoint distance sigma [px]: the two
-                                        ///< distances of one segment share the map line's error
-                                        ///< (benchmarks/README.md: 1.5 px over-weighted lines)
-  double line_inlier_weight = 1.0;      ///< a line inlier counts as this many point inliers when
-                                        ///< deciding LOST, keyframes and a new map [-]
-  int recently_lost_frames = 10;        ///< frames of RECENTLY_LOST before LOST [frames]
-  double lost_velocity_decay = 0.6;     ///< per-frame factor on the predicted motion while
-                                        ///< recently lost (rotation angle and translation) [-]
-  float lost_search_scale = 2.0f;       ///< guided-matching window factor while recently lost [-]
+  int projection_cell_px = 24;       ///< at most one projected point per cell of this size [px]
+  double line_sigma_px = 3.0;        ///< line endpoint distance sigma [px]: the two
+                                     ///< distances of one segment share the map line's error
+                                     ///< (benchmarks/README.md: 1.5 px over-weighted lines)
+  double line_inlier_weight = 1.0;   ///< a line inlier counts as this many point inliers when
+                                     ///< deciding LOST, keyframes and a new map [-]
+  int recently_lost_frames = 10;     ///< frames of RECENTLY_LOST before LOST [frames]
+  double lost_velocity_decay = 0.6;  ///< per-frame factor on the predicted motion while
+                                     ///< recently lost (rotation angle and translation) [-]
+  float lost_search_scale = 2.0f;    ///< guided-matching window factor while recently lost [-]
   /// Lost: the motion before the loss, along which the local map is tried (TrackAlongLossMotion),
   /// is the mean per-frame motion over this many frames before it, not the last frame's alone:
   /// twenty black frames extrapolate one frame's jitter twentyfold. On the camera-only blackouts
@@ -266,11 +267,11 @@ struct TrackerOptions {
   /// fails both where the next ones do not; a new map is merged back only when place recognition
   /// links it. 0: the first lit frame starts one (where StartMap's other checks pass)
   int new_map_after_lost_frames = 5;
-  int weak_keyframe_inliers = 60;       ///< weighted inliers below this: a keyframe every
-                                        ///< `weak_keyframe_frames`, to keep a thin map alive [-]
-  int weak_keyframe_frames = 3;         ///< [frames]
-  std::string vocabulary_path;          ///< bag-of-words vocabulary for relocalisation; empty:
-                                        ///< no relocalisation
+  int weak_keyframe_inliers = 60;  ///< weighted inliers below this: a keyframe every
+                                   ///< `weak_keyframe_frames`, to keep a thin map alive [-]
+  int weak_keyframe_frames = 3;    ///< [frames]
+  std::string vocabulary_path;     ///< bag-of-words vocabulary for relocalisation; empty:
+                                   ///< no relocalisation
   RelocalisationOptions relocalisation;
   LoopClosingOptions loop_closing;  ///< loop closing and map merging (need the vocabulary)
   bool localise_only = false;       ///< track in the loaded maps without changing them: no
@@ -321,8 +322,8 @@ struct TrackResult {
   /// the frame came without keypoints (StereoFrame::keypoints_pending) and the tracker could not
   /// place the map's points in it: nothing changed, track it again with detected keypoints
   bool needs_keypoints = false;
-  int projected_keypoints = 0;  ///< tracked on this many projected keypoints (0: detected ones)
-  bool imu_initialised = false;  ///< the inertial state existed after this frame
+  int projected_keypoints = 0;    ///< tracked on this many projected keypoints (0: detected ones)
+  bool imu_initialised = false;   ///< the inertial state existed after this frame
   double position_sigma_m = 0.0;  ///< its position standard deviation then (0: no IMU) [m]
 };
 
@@ -441,15 +442,15 @@ class Tracker {
   bool CouldStartMap(const StereoFrame& frame) const;
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
   // was given a completer.
-  std::shared_ptr<const StereoFrame> WithStereoLines(std::shared_ptr<const StereoFrame> frame) const;
+  std::shared_ptr<const StereoFrame> WithStereoLines(
+      std::shared_ptr<const StereoFrame> frame) const;
   // The frame with its left lines: itself, or a completed copy when they are pending
   // (lines_on_demand) and Track was given a completer. Adds the time taken to `*ms`.
   std::shared_ptr<const StereoFrame> WithLeftLines(std::shared_ptr<const StereoFrame> frame,
                                                    double* ms = nullptr) const;
   // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
-                      const std::vector<int>& point_matches,
-                      const std::vector<int>& line_matches,
+                      const std::vector<int>& point_matches, const std::vector<int>& line_matches,
                       const std::vector<bool>& valid_keypoints = {});
   // What tracking needs of the local map around a reference keyframe, copied under the map
   // lock: the landmarks in front of the predicted camera, with their positions, descriptors and
@@ -459,8 +460,8 @@ class Tracker {
     std::vector<int> point_ids;
     std::vector<Eigen::Vector3d> point_w;
     Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor> point_uv;  ///< predicted [px]
-    cv::Mat point_descriptors;                                            ///< one row per point
-    std::vector<cv::Mat> point_patches;    ///< per point: MapPoint::patch (may be empty)
+    cv::Mat point_descriptors;                                          ///< one row per point
+    std::vector<cv::Mat> point_patches;       ///< per point: MapPoint::patch (may be empty)
     std::vector<double> point_patch_depth_m;  ///< per point: MapPoint::patch_depth_m
     std::vector<int> line_ids;
     std::vector<PluckerLine> lines_w;
@@ -472,8 +473,7 @@ class Tracker {
   // points not when `points_visible` is false (a frame tracked again: they were counted).
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                                     const Rigid3d& pred_cam_from_world,
-                                    bool points_visible = true) const
-      SLSLAM_REQUIRES(map.mutex());
+                                    bool points_visible = true) const SLSLAM_REQUIRES(map.mutex());
   // No lock: guided matching of the snapshot in the frame and the motion-only BA. With
   // `refine_image` (the frame's left image, as stereo matching saw it) the matches are aligned
   // to their points' patches first (track_refine_window_px): tracking's own frames only, never
@@ -520,8 +520,8 @@ class Tracker {
   // again from the best-ranked pose if that one has them, else none (pose.success false). The
   // caller takes it with twice min_inliers, or with min_inliers where `*confirmed`: the previous
   // frame's attempt agrees with it (lost_reentry_confirm_m).
-  LocalTracking TrackAlongLossMotion(const StereoFrame& frame,
-                                     const Rigid3d& frozen_cam_from_world, bool* confirmed);
+  LocalTracking TrackAlongLossMotion(const StereoFrame& frame, const Rigid3d& frozen_cam_from_world,
+                                     bool* confirmed);
   // The pose predicted for the next frame from the current motion model.
   void Predict(Rigid3d* pred_cam_from_world) const;
   void SetPose(const Rigid3d& cam_from_world, bool update_velocity);
@@ -531,9 +531,9 @@ class Tracker {
   std::unique_ptr<Vocabulary> vocabulary_;
   std::unique_ptr<LocalMapper> mapper_;
   bool keyframe_images_ = false;  // keyframes keep their left image for local mapping (patches)
-  std::unique_ptr<DynamicCellFilter> dynamic_;         ///< null when options_.dynamic_cells is off
+  std::unique_ptr<DynamicCellFilter> dynamic_;   ///< null when options_.dynamic_cells is off
   std::unique_ptr<InertialEstimator> inertial_;  ///< from the first IMU sample on (use_imu)
-  int inertial_map_ = -1;  ///< the map whose world the inertial state is in
+  int inertial_map_ = -1;                        ///< the map whose world the inertial state is in
   // The inertial state's prior on the frame's pose; false when there is none (no IMU, not
   // initialised, another map's world, samples missing).
   bool InertialPrior(const StereoFrame& frame, PosePrior* prior) const;
@@ -556,8 +556,8 @@ class Tracker {
   // observations in the local BA).
   std::shared_ptr<const StereoFrame> WithRefinedKeypoints(std::shared_ptr<const StereoFrame> frame,
                                                           const LocalTracking& tracking) const;
-  const cv::Mat* current_left_ = nullptr;  ///< the image handed to Track, during the call
-                                           ///< (tracking's thread only)
+  const cv::Mat* current_left_ = nullptr;   ///< the image handed to Track, during the call
+                                            ///< (tracking's thread only)
   const cv::Mat* current_right_ = nullptr;  ///< (as current_left_)
   int projected_run_ = 0;  ///< frames tracked on projected keypoints since the last detected one
   // Whether a frame given without keypoints is tracked on projected ones (projected_max_frames):
@@ -570,12 +570,12 @@ class Tracker {
       std::shared_ptr<const StereoFrame> frame, const LocalMapSnapshot& local,
       const Rigid3d& pred_cam_from_world) const;
   std::shared_ptr<const StereoFrame> previous_frame_;  ///< last tracked frame (dynamic cells)
-  Rigid3d previous_cam_from_world_;  ///< of previous_frame_
-  int active_ = -1;  ///< index of the map being tracked in
+  Rigid3d previous_cam_from_world_;                    ///< of previous_frame_
+  int active_ = -1;                                    ///< index of the map being tracked in
   Mode mode_ = Mode::kLost;
-  int lost_count_ = 0;          ///< frames since tracking failed
+  int lost_count_ = 0;           ///< frames since tracking failed
   int lost_map_candidates_ = 0;  ///< lit lost frames since tracking failed (CouldStartMap)
-  bool dynamic_masks_ = false;  ///< the dynamic-cell mask applies (last frame tracked strongly)
+  bool dynamic_masks_ = false;   ///< the dynamic-cell mask applies (last frame tracked strongly)
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)
   /// the poses of the last consecutive frames set with a known motion (newest last), at most
@@ -596,7 +596,7 @@ class Tracker {
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   double last_keyframe_time_s_ = 0.0;  ///< timestamp of the frame of the last keyframe [s]
-  int first_tracked_ = 0;  ///< inliers of the first frame after the last keyframe
+  int first_tracked_ = 0;              ///< inliers of the first frame after the last keyframe
   // After a loop correction or merge moved the active map: the active map index and the last
   // pose follow (the pose through its reference keyframe).
   void FollowCorrections();

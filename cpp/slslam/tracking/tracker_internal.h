@@ -50,8 +50,8 @@ using ::slslam::SamplePatch;
 // offset between the two drops out), at most 10 steps. True with (u, v) moved to the alignment
 // when it converged on texture (both eigenvalues of the normal matrix large enough) and the two
 // patches correlate (zero-mean NCC >= min_ncc).
-bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc,
-                double* u, double* v);
+bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc, double* u,
+                double* v);
 
 // The offset (even integers within +-radius_px) of (u, v) where `patch` (SamplePatch's)
 // correlates best with `image` (zero-mean NCC on every other patch pixel, the patch spanning

@@ -134,13 +134,10 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
   return snap;
 }
 
-Tracker::LocalTracking Tracker::TrackSnapshot(const StereoFrame& frame,
-                                              const LocalMapSnapshot& local,
-                                              const Rigid3d& pred_cam_from_world,
-                                              float radius_scale,
-                                              const std::vector<bool>* valid_keypoints,
-                                              const cv::Mat* refine_image,
-                                              const PosePrior* prior) const {
+Tracker::LocalTracking Tracker::TrackSnapshot(
+    const StereoFrame& frame, const LocalMapSnapshot& local, const Rigid3d& pred_cam_from_world,
+    float radius_scale, const std::vector<bool>* valid_keypoints, const cv::Mat* refine_image,
+    const PosePrior* prior) const {
   LocalTracking out;
   const auto match_start = Clock::now();
   // Points: matched in a window around the predicted position.
@@ -261,8 +258,8 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
 
 namespace tracker_detail {
 
-bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc,
-                double* u, double* v) {
+bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc, double* u,
+                double* v) {
   // Inverse compositional (Baker and Matthews): the template's gradients and normal matrix are
   // computed once, each step samples the image once per patch pixel.
   const int size = patch.rows, w = size / 2, n = size * size;

@@ -87,8 +87,8 @@ void Tracker::LoadMap(const std::string& path) {
   SLSLAM_CHECK(!loaded.maps.empty(), path, ": the file holds no map");
   // Keyframes' bag-of-words vectors and relocalisation compare words of one vocabulary only.
   const std::string saved = ChecksumOf(loaded.header.vocabulary);
-  const std::string current = ChecksumOf(VocabularyIdentity(options_.vocabulary_path,
-                                                            vocabulary_.get()));
+  const std::string current =
+      ChecksumOf(VocabularyIdentity(options_.vocabulary_path, vocabulary_.get()));
   SLSLAM_CHECK(saved.empty() || saved == current, path, ": the map was made with the vocabulary ",
                loaded.header.vocabulary, " and this run loads another (",
                VocabularyIdentity(options_.vocabulary_path, vocabulary_.get()),

@@ -88,8 +88,7 @@ std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(
   out->depth.clear();
   const cv::Mat* image = current_left_;
   const int n_local = static_cast<int>(local.point_ids.size());
-  if (image == nullptr || image->empty() || options_.track_refine_window_px <= 0 ||
-      n_local == 0) {
+  if (image == nullptr || image->empty() || options_.track_refine_window_px <= 0 || n_local == 0) {
     return out;
   }
   // Candidates: points with a patch, in front, at a scale the patch can be aligned at.
@@ -117,8 +116,8 @@ std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(
     const double u0 = local.point_uv(c.row, 0), v0 = local.point_uv(c.row, 1);
     double u = u0, v = v0;
     const cv::Mat& patch = local.point_patches[c.row];
-    if (tracker_detail::SearchPatch(*image, patch, c.scale, options_.projection_search_px, &u,
-                                    &v) < 0.7) {
+    if (tracker_detail::SearchPatch(*image, patch, c.scale, options_.projection_search_px, &u, &v) <
+        0.7) {
       continue;
     }
     if (!tracker_detail::AlignPatch(*image, patch, c.scale, kMinNcc, &u, &v)) continue;
@@ -152,8 +151,7 @@ std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(
     if (cell >= 2) continue;  // aligned one, or tried two
     ++cell;
     double u = u0, v = v0;
-    if (!tracker_detail::AlignPatch(*image, local.point_patches[c.row], c.scale, kMinNcc, &u,
-                                    &v)) {
+    if (!tracker_detail::AlignPatch(*image, local.point_patches[c.row], c.scale, kMinNcc, &u, &v)) {
       continue;
     }
     if ((u - u0) * (u - u0) + (v - v0) * (v - v0) > max_sq) continue;
@@ -180,10 +178,9 @@ std::shared_ptr<const StereoFrame> Tracker::WithProjectedKeypoints(
     local.point_descriptors.row(rows[i]).copyTo(kp.descriptors.row(i));
     if (!stereo) continue;
     const double u_r = uv[i].x() - cam.fx * options_.rig.baseline_m / depths[i];
-    if (!SubpixelWindowFits(*image, *right, options_.stereo,
-                            static_cast<int>(std::lround(uv[i].x())),
-                            static_cast<int>(std::lround(uv[i].y())),
-                            static_cast<int>(std::lround(u_r)))) {
+    if (!SubpixelWindowFits(
+            *image, *right, options_.stereo, static_cast<int>(std::lround(uv[i].x())),
+            static_cast<int>(std::lround(uv[i].y())), static_cast<int>(std::lround(u_r)))) {
       continue;
     }
     out->u_right[i] = u_r;

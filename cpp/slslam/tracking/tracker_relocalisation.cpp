@@ -187,8 +187,8 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
       *confirmed = (moved.Center() - pose.Center()).norm() <= options_.lost_reentry_confirm_m &&
                    angle_rad <= kLostReentryConfirmRad;
     }
-    loss_candidate_ = candidate ? LossCandidate{true, frame.index, active_, seen_epoch_, pose}
-                                : LossCandidate{};
+    loss_candidate_ =
+        candidate ? LossCandidate{true, frame.index, active_, seen_epoch_, pose} : LossCandidate{};
     return std::move(chosen);
   };
   for (auto& ranked : attempts) {

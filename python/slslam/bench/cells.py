@@ -173,7 +173,10 @@ def plan_cells(spec: Spec) -> list[Cell]:
     cells: list[Cell] = []
     for config in spec.configurations:
         if config.kind == "visual":
-            config_material = {"kind": "visual", "config": visual_config(spec, config)}
+            config_material: dict[str, Any] = {
+                "kind": "visual",
+                "config": visual_config(spec, config),
+            }
             tracking = config_material["config"]["tracking"]
             if not tracking["sequential"]:
                 # inline local mapping (the default) gives the same poses on every run and

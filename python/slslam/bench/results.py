@@ -223,12 +223,12 @@ def plot_ate(
             hi.append(s["max"] - s["mean"] if s["n"] else 0)
         ax.bar(x0, means, width, yerr=[lo, hi], capsize=3, label=labels[cfg], alpha=0.8)
         for k, seq in enumerate(sequences):
-            ys = [
+            values = [
                 _value(records[c.id], ("result", "ate_rmse_m"))
                 for c in cells
                 if c.sequence == seq and c.configuration == cfg and c.id in records
             ]
-            ys = [y for y in ys if y is not None]
+            ys = [y for y in values if y is not None]
             ax.plot([x0[k]] * len(ys), ys, "k.", ms=4)
     ax.set_xticks(np.arange(len(sequences)), sequences, rotation=20, ha="right")
     ax.set_ylabel("ATE RMSE [m] (SE3-aligned)")

@@ -318,7 +318,7 @@ def run_bench(
     data_dir: str | Path | None = None,
     progress: bool = True,
     ray_temp_dir: str | None = None,
-    on_done: Callable[[BenchRun], None] | None = None,
+    on_done: Callable[[BenchRun], object] | None = None,
 ) -> BenchRun:
     """Runs the spec's missing or changed cells and returns every cell's record. ``on_done`` is
     called with what is finished, also when the sweep is interrupted (then BenchInterrupted is

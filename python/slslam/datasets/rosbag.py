@@ -28,6 +28,7 @@ import threading
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -185,15 +186,18 @@ def load_stereo_calibration(
     """(left, right) camera calibration from a Kalibr camchain YAML, two EuRoC ``sensor.yaml``
     files (left, right), or a folder with ``cam0/sensor.yaml`` and ``cam1/sensor.yaml`` (an ASL
     ``mav0`` or the folder above it). Errors name the file and the key."""
-    paths = [Path(p) for p in paths]
-    if len(paths) == 2:
-        return CameraCalibration.from_yaml(paths[0]), CameraCalibration.from_yaml(paths[1])
-    if len(paths) != 1:
+    calib_paths = [Path(p) for p in paths]
+    if len(calib_paths) == 2:
+        return (
+            CameraCalibration.from_yaml(calib_paths[0]),
+            CameraCalibration.from_yaml(calib_paths[1]),
+        )
+    if len(calib_paths) != 1:
         raise CalibrationError(
-            ", ".join(map(str, paths)) or "--calib",
+            ", ".join(map(str, calib_paths)) or "--calib",
             "give one Kalibr camchain YAML, two EuRoC sensor.yaml files or one ASL folder",
         )
-    path = paths[0]
+    path = calib_paths[0]
     if path.is_dir():
         for root in (path / "mav0", path):
             if (root / "cam0" / "sensor.yaml").is_file():
@@ -496,7 +500,7 @@ def decode_image(msg, msgtype: str, where: str) -> np.ndarray:
             f"{encoding} ({height} rows of at least {row_bytes} bytes)",
         )
     rows = data.reshape(height, step)[:, :row_bytes]
-    order = ">" if msg.is_bigendian else "<"
+    order: Literal[">", "<"] = ">" if msg.is_bigendian else "<"
     pixels = np.ascontiguousarray(rows).view(np.dtype(dtype).newbyteorder(order))
     pixels = pixels.astype(dtype, copy=False).reshape(height, width, channels)
     if reversed_order:

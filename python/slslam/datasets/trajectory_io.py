@@ -35,7 +35,7 @@ def _first_data_line(path: Path) -> str:
     raise TrajectoryFileError(path, "the trajectory file is empty (no pose rows)")
 
 
-def detect_format(path: str | Path) -> str:
+def detect_format(path: str | Path) -> Literal["tum", "kitti", "euroc"]:
     """Guess the format from the first data row: commas -> euroc, 8 columns -> tum, 12 -> kitti."""
     path = Path(path)
     if not path.is_file():

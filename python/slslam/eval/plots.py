@@ -30,7 +30,8 @@ def plot_ape(ape: ErrorResult, path: str | Path, title: str = "") -> Path:
     )
     ax_top.plot(ref_xyz[:, 0], ref_xyz[:, 1], "--", color="0.45", lw=1.2, label="ground truth")
     segments = np.stack([est_xyz[:-1, :2], est_xyz[1:, :2]], axis=1)
-    lines = LineCollection(segments, cmap="viridis", linewidths=2.0)
+    # an (N, 2, 2) array is a sequence of segments; matplotlib's stub takes only a Sequence
+    lines = LineCollection(segments, cmap="viridis", linewidths=2.0)  # type: ignore[arg-type]
     lines.set_array(0.5 * (errors[:-1] + errors[1:]))
     ax_top.add_collection(lines)
     ax_top.autoscale()

@@ -22,9 +22,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import cv2
 
 LowLightMode = Literal["none", "gamma", "clahe"]
 LOW_LIGHT_MODES: tuple[str, ...] = ("none", "gamma", "clahe")
@@ -69,7 +72,7 @@ class LowLightEnhancer:
         options.check()
         self.options = options
         self.applied = 0
-        self._clahe = None
+        self._clahe: cv2.CLAHE | None = None
 
     @property
     def enabled(self) -> bool:
@@ -107,6 +110,6 @@ class LowLightEnhancer:
                 max(1, round(left.shape[0] / o.clahe_tile_px)),
             )
             self._clahe = cv2.createCLAHE(clipLimit=o.clahe_clip_limit, tileGridSize=tiles)
-            self._clahe_size = left.shape
+            self._clahe_size: tuple[int, ...] = left.shape
         self.applied += 1
         return self._clahe.apply(left), self._clahe.apply(right)

@@ -63,7 +63,7 @@ def simulated_calibration_images(
     """Left images of the simulated loop (seed 0, no dust, no LiDAR) at each light level."""
     from slslam.sim import SimOptions, Simulator
 
-    images = []
+    images: list[np.ndarray] = []
     for light in lights:
         sim = Simulator(SimOptions(preset="loop", light=light, frames=max(frames) + 1, lidar=False))
         images.extend(sim.render_stereo(i)[0] for i in frames)

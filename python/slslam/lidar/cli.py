@@ -108,14 +108,14 @@ def lidar_run_command(
             result = LidarSlam(options).run(
                 sequence, progress=progress, between_sweeps=signals.raise_if_requested
             )
-        except RunInterrupted as stop:  # before the first sweep: no result to write
+        except RunInterrupted as interrupted:  # before the first sweep: no result to write
             Console(stderr=True).print(
-                f"[bold red]stopped:[/] {stop} before the first sweep; {escape(str(out))} "
+                f"[bold red]stopped:[/] {interrupted} before the first sweep; {escape(str(out))} "
                 "holds only metrics.json (completed: false)",
                 highlight=False,
                 soft_wrap=True,
             )
-            raise typer.Exit(128 + stop.signum) from None
+            raise typer.Exit(128 + interrupted.signum) from None
         extra = {}
         if preset is not None:
             extra["map_measurement"] = measure_roadway(

@@ -167,8 +167,9 @@ class LidarSequence:
             raise DatasetError(path, f"{size} bytes: not a whole number of 16-byte points")
         points = np.fromfile(path, dtype=np.float32).reshape(-1, 4)
         times = None
-        if self.time_paths[k] is not None:
-            time_path = require_regular_file(self.time_paths[k], DatasetError, "point-time file")
+        time_file = self.time_paths[k]
+        if time_file is not None:
+            time_path = require_regular_file(time_file, DatasetError, "point-time file")
             times = np.fromfile(time_path, dtype=np.float32).astype(np.float64)
             if times.shape[0] != points.shape[0]:
                 raise DatasetError(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
@@ -94,7 +95,7 @@ def evaluate_run(sequence: LidarSequence, result: LidarSlamResult) -> dict:
             f"APE needs at least {MIN_EVALUATED_SWEEPS} sweeps (SE3 alignment of 3 poses); "
             f"the run has {len(result.t_ns)}",
         )
-    out = {}
+    out: dict[str, dict[str, Any]] = {}
     for name, T in (("odometry", result.T_world_body_odometry), ("slam", result.T_world_body)):
         est = to_trajectory(result.t_ns, T)
         ape = compute_ape(gt, est, align="se3", max_diff_s=0.003)

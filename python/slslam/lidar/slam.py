@@ -150,7 +150,9 @@ class LidarSlam:
         odometry = _core.LidarOdometry(opts)
         if opts.use_imu:
             imu = sequence.imu
-            odometry.add_imu(imu.t_ns, imu.gyro, imu.acc)
+            assert imu is not None  # use_imu is off without one
+            # pybind11 takes any sequence for t_ns; the stub's Sequence excludes numpy arrays
+            odometry.add_imu(imu.t_ns, imu.gyro, imu.acc)  # type: ignore[arg-type]
         return odometry
 
     def _verify(
@@ -217,7 +219,9 @@ class LidarSlam:
                 if between_sweeps is not None:
                     between_sweeps()
                 sweep = sequence.sweep(k)
-                times = [] if sweep.point_time_s is None else sweep.point_time_s
+                times: list[float] | np.ndarray = (
+                    [] if sweep.point_time_s is None else sweep.point_time_s
+                )
                 try:
                     r = odometry.process_scan(sweep.t_ns, sweep.points, times)
                 except RuntimeError as exc:

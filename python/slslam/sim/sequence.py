@@ -17,7 +17,7 @@ from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -334,7 +334,10 @@ class Simulator:
     ) -> np.ndarray:
         """Image formation (C++): textures, lights and sensor model for one camera's hits."""
         cam = self.camera
-        shading_camera = _core.ShadingCamera(cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3])
+        # pybind11 takes any sequence for the position; the stub's Sequence excludes numpy arrays
+        shading_camera = _core.ShadingCamera(  # type: ignore[call-overload]
+            cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3]
+        )
         normal, material = smooth_shotcrete_shading(hits)
         return _core.shade_image(
             hits.point,
@@ -369,7 +372,9 @@ class Simulator:
                 self.dust.draw(image, T_world_cam, cam, lamp, level, t)
             images.append(image)
             if k == 0:
+                assert hits.depth is not None  # camera casts carry depth
                 depth = hits.depth.reshape(cam.height, cam.width)
+        assert depth is not None
         return images[0], images[1], depth
 
     def _render_record(self, frame: int, rng: np.random.Generator) -> dict:
@@ -377,7 +382,7 @@ class Simulator:
         opts = self.options
         t = frame / opts.rate_hz
         T_world_body = self.trajectory.pose(np.array([t]))[0]
-        record = {"t_ns": T0_NS + round(t * 1e9)}
+        record: dict[str, Any] = {"t_ns": T0_NS + round(t * 1e9)}
         if opts.cameras:
             record["left"], record["right"], _ = self.render_stereo(frame)
             record["T_world_cam0"] = T_world_body @ self.camera.T_body_cam0
@@ -424,7 +429,7 @@ class Simulator:
         if between_frames is not None:
             between_frames()
         writer = AslWriter(out, lidar=opts.lidar, cameras=opts.cameras)
-        manifest = {
+        manifest: dict[str, Any] = {
             "status": "running",
             "preset": opts.preset,
             "seed": opts.seed,

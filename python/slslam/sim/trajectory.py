@@ -118,6 +118,7 @@ class TrajectoryOptions:
             self._check_spin(src)
 
     def _check_spin(self, src: str) -> None:
+        assert self.spin_at_s is not None  # checked by the caller
         ta = self.accel_time_s
         _require(ta > 0, src, "accel_time_s must be > 0 with spin_at_s (a smooth stop)")
         _require(
@@ -283,11 +284,11 @@ class RobotTrajectory:
         s = np.where(t < ta, ramp_s, 0.5 * v * ta + v * (t - ta))
         sd = v * x**3 * (x * (6.0 * x - 15.0) + 10.0)
         sdd = (v / ta) * 30.0 * x**2 * (x - 1.0) ** 2
-        if self.options.spin_at_s is not None:
+        o = self.options
+        if o.spin_at_s is not None:
             # speed v * (ramp(t) - ramp(t - t_stop) + ramp(t - t_go)): each ramp is C2 and
             # constant outside its accel_time_s, so the sum is C2, and exactly 0 during the stop
             # and the spin
-            o = self.options
             t_stop = o.spin_at_s - ta
             t_go = o.spin_at_s + o.stop_duration_s + o.spin_duration_s
             for start, sign in ((t_stop, -v), (t_go, v)):

@@ -43,6 +43,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
@@ -337,7 +338,7 @@ def _score(estimate: PoseTrajectory3D, gt, out: Path) -> dict:
     return scores
 
 
-def _groundtruth(sequence: EurocSequence, groundtruth: str | Path | None):
+def _groundtruth(sequence: EurocSequence | KittiSequence, groundtruth: str | Path | None):
     """The ground truth to score against, read and checked before any frame is tracked."""
     if groundtruth is not None:
         if not Path(groundtruth).exists():
@@ -350,7 +351,7 @@ def _groundtruth(sequence: EurocSequence, groundtruth: str | Path | None):
     return None
 
 
-def _stereo_frames(sequence: EurocSequence, n: int) -> Iterator[tuple]:
+def _stereo_frames(sequence: EurocSequence | KittiSequence, n: int) -> Iterator[tuple]:
     """(left, right, timestamp [s]) of the first n frames, read as they are asked for."""
     for i in range(n):
         frame = sequence[i]
@@ -389,7 +390,11 @@ def _map_metrics(map_data: MapData) -> dict:
 
 
 #: Front-end class -> its ``features.point_frontend`` name.
-_FRONTEND_KEYS = {"Orb": "orb", "XFeat": "xfeat", "SuperPoint": "superpoint"}
+_FRONTEND_KEYS: dict[str, Literal["superpoint", "xfeat", "orb"]] = {
+    "Orb": "orb",
+    "XFeat": "xfeat",
+    "SuperPoint": "superpoint",
+}
 
 
 def _dump_effective_config(config: Config, tracker: Tracker, path: Path) -> None:

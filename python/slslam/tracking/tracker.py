@@ -30,11 +30,11 @@ import queue
 import threading
 import time
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Generator, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -255,7 +255,7 @@ class MapStats:
         }
 
     # Deprecated dict-style access (MapData.stats was a dict up to 0.1): for one release.
-    def __getitem__(self, key: str):
+    def __getitem__(self, key: str) -> Any:
         warnings.warn(
             "MapData.stats[key] is deprecated: use the attribute (stats.key)",
             DeprecationWarning,
@@ -263,7 +263,7 @@ class MapStats:
         )
         return self.as_dict()[key]
 
-    def get(self, key: str, default=None):
+    def get(self, key: str, default: Any = None) -> Any:
         """Deprecated: use the attribute."""
         warnings.warn(
             "MapData.stats.get(key) is deprecated: use the attribute (stats.key)",
@@ -296,7 +296,7 @@ class FinalTrajectory:
     T_world_cam: np.ndarray
 
 
-def _set_core(options, path: str, value) -> None:
+def _set_core(options: Any, path: str, value: Any) -> None:
     *parents, last = path.split(".")
     target = options
     for part in parents:
@@ -351,7 +351,7 @@ def _core_options(
 _SHIPPED_VOCABULARY_FOR = {"Orb": "orb", "XFeat": "xfeat"}
 
 
-def _vocabulary_for(config: Config, frontend) -> Path | None:
+def _vocabulary_for(config: Config, frontend: Any) -> Path | None:
     """The vocabulary relocalisation uses: the configured file, else the one shipped for the
     front end (ORB, XFeat); None (no relocalisation) otherwise."""
     t = config.tracking
@@ -401,13 +401,13 @@ class Tracker:
         self,
         camera: RectifiedStereoCamera,
         config: Config | None = None,
-        frontend=None,
+        frontend: Any = None,
         load_map: str | Path | None = None,
         localise_only: bool = False,
     ) -> None:
         self.config = config or default_config()
         self.camera = camera
-        self.frontend = (
+        self.frontend: Any = (  # duck-typed: any object with detect(image, ...) -> Keypoints
             frontend if frontend is not None else make_point_frontend(self.config.features)
         )
         self.frontend_name = type(self.frontend).__name__
@@ -591,7 +591,7 @@ class Tracker:
         frames: Iterable[tuple[np.ndarray, np.ndarray, float]],
         pipeline: bool = True,
         frames_ahead: int | None = None,
-    ) -> Iterator[TrackResult]:
+    ) -> Generator[TrackResult, None, None]:
         """Tracks (left, right, timestamp) triples in order, yielding each frame's result.
 
         With ``pipeline`` the point front end and the stereo matching of the next frames (and
@@ -736,10 +736,10 @@ class Tracker:
             assert self._no_keypoints is not None  # (_detect_ahead: only after a detection)
             kl = self._no_keypoints
         if row_search or not detect:
-            right = right_side.result()
+            right = cast(np.ndarray, right_side.result())  # _smooth
             kr = kl.select(np.zeros(0, dtype=np.int64))
         else:
-            right, kr = right_side.result()
+            right, kr = cast(tuple[np.ndarray, Keypoints], right_side.result())
         inference_ms = (time.perf_counter() - start) * 1e3
         try:
             left_lines = lines.result() if lines is not None else None
@@ -996,5 +996,5 @@ class Tracker:
     def __enter__(self) -> Tracker:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

@@ -77,6 +77,7 @@ def draw_matches(
         hues = (np.arange(len(line_pairs)) * 37 % 180).astype(np.uint8)
         hsv = np.stack([hues, np.full_like(hues, 255), np.full_like(hues, 255)], 1)[None]
         colours = [tuple(int(c) for c in bgr) for bgr in cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0]]
+        assert segments_a is not None and segments_b is not None  # line_pairs index them
         _segments(canvas, segments_a[line_pairs[:, 0]], colours, 2)
         _segments(canvas, segments_b[line_pairs[:, 1]], colours, 2, shift)
     return _save(canvas, path)

@@ -39,8 +39,9 @@ TEST(Rigid3d, CompositionChainsTheFrames) {
   EXPECT_EQ(c_from_a.translation, c_from_b.rotation * b_from_a.translation + c_from_b.translation);
   // Associative up to rounding.
   const Rigid3d d_from_c = Pose(2.0, Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(-3, 1, 0.5));
-  EXPECT_TRUE(((d_from_c * c_from_b) * b_from_a).ToMatrix4().isApprox(
-      (d_from_c * (c_from_b * b_from_a)).ToMatrix4(), 1e-12));
+  EXPECT_TRUE(((d_from_c * c_from_b) * b_from_a)
+                  .ToMatrix4()
+                  .isApprox((d_from_c * (c_from_b * b_from_a)).ToMatrix4(), 1e-12));
 }
 
 TEST(Rigid3d, InverseUndoesTheTransform) {

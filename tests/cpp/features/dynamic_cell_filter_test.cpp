@@ -153,7 +153,7 @@ TEST(DynamicCellFilter, ACellWithoutMatchesRecovers) {
 }
 
 TEST(DynamicCellFilter, OneMatchIsNoEvidenceAndAMedianIgnoresAMismatch) {
-  DynamicCellOptions options;  // min_matches 2
+  DynamicCellOptions options;        // min_matches 2
   options.sigma_median_ratio = 0.0;  // the default: a fixed width
   DynamicCellFilter filter(64, 64, options);
   PixelArray one(1, 2), one_predicted(1, 2);

@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <numeric>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -18,8 +18,7 @@ cv::Mat Texture(int width, int height, uint64_t seed) {
   cv::Mat image(height, width, CV_8U);
   cv::RNG rng(seed);
   rng.fill(image, cv::RNG::UNIFORM, 0, 256);
-  cv::rectangle(image, cv::Rect(0, 0, width / 3 + 1, height / 2 + 1), cv::Scalar(255),
-                cv::FILLED);
+  cv::rectangle(image, cv::Rect(0, 0, width / 3 + 1, height / 2 + 1), cv::Scalar(255), cv::FILLED);
   cv::rectangle(image, cv::Rect(width / 2, height / 2, width / 2, height / 2), cv::Scalar(0),
                 cv::FILLED);
   for (int y = height / 2; y < height; ++y) {
@@ -31,8 +30,8 @@ cv::Mat Texture(int width, int height, uint64_t seed) {
 int CountDifferent(const cv::Mat& a, const cv::Mat& b) { return cv::countNonZero(a != b); }
 
 TEST(GaussianBlurTest, GivesOpenCvsPixelsForEverySigmaAndSize) {
-  const cv::Size sizes[] = {{752, 480}, {33, 17}, {9, 9}, {5, 200}, {200, 5}, {1, 1}, {1, 30},
-                            {3, 2}};
+  const cv::Size sizes[] = {{752, 480}, {33, 17}, {9, 9},  {5, 200},
+                            {200, 5},   {1, 1},   {1, 30}, {3, 2}};
   // The tracker's range (noise / 7, clamped to [0.5, 2.5]) finely, and beyond it.
   std::vector<double> sigmas = {0.1, 0.3, 0.42, 3.0, 4.0, 7.5};
   for (double sigma = 0.5; sigma <= 2.5; sigma += 0.0625) sigmas.push_back(sigma);
@@ -105,8 +104,7 @@ TEST(GaussianBlurTest, AsOpenCvGivesOpenCvsPixelsForAViewAndBeyondTheLimits) {
   for (const Case& c : {Case{view, 1.4, -1}, Case{view, 1.0, 2}, Case{image, 1.3, -1},
                         Case{image, 1.2, 5}, Case{image, 120.0, 3}, Case{image, 1.0, 1200}}) {
     cv::Mat expected;
-    const cv::Size size =
-        c.radius < 0 ? cv::Size() : cv::Size(2 * c.radius + 1, 2 * c.radius + 1);
+    const cv::Size size = c.radius < 0 ? cv::Size() : cv::Size(2 * c.radius + 1, 2 * c.radius + 1);
     cv::GaussianBlur(c.image, expected, size, c.sigma, c.sigma, cv::BORDER_REFLECT_101);
     const cv::Mat blurred = GaussianBlurAsOpenCv(c.image, c.sigma, c.radius);
     EXPECT_EQ(CountDifferent(blurred, expected), 0) << "sigma " << c.sigma << " r " << c.radius;
@@ -119,8 +117,7 @@ TEST(GaussianBlurTest, AsOpenCvGivesOpenCvsPixelsForAViewAndBeyondTheLimits) {
 TEST(GaussianBlurTest, RefusesBadInput) {
   EXPECT_THROW(GaussianBlur8u(cv::Mat(), 1.0), std::invalid_argument);
   EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_32F, cv::Scalar(0)), 1.0), std::invalid_argument);
-  EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_8UC3, cv::Scalar(0)), 1.0),
-               std::invalid_argument);
+  EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_8UC3, cv::Scalar(0)), 1.0), std::invalid_argument);
   EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_8U, cv::Scalar(0)), 0.0), std::invalid_argument);
   EXPECT_THROW(GaussianBlur8u(cv::Mat(10, 10, CV_8U, cv::Scalar(0)), std::nan("")),
                std::invalid_argument);

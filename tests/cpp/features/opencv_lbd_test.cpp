@@ -77,8 +77,7 @@ TEST(OpenCvLbd, GivesOpenCvsBytesOnDetectedAndRandomSegments) {
       const Segments random = RandomSegments(300, seed);
       for (const Segments* segments : {&detected, &random}) {
         const cv::Mat reference = ComputeOpenCvLbdReference(image, *segments);
-        const std::string what = "gain " + std::to_string(gain) + ", seed " +
-                                 std::to_string(seed) +
+        const std::string what = "gain " + std::to_string(gain) + ", seed " + std::to_string(seed) +
                                  (segments == &detected ? ", detected" : ", random");
         ExpectSameBytes(ComputeOpenCvCompatibleLbd(image, *segments), reference, what);
         ExpectSameBytes(ComputeOpenCvCompatibleLbd(image, *segments, /*simd=*/false), reference,
@@ -88,9 +87,9 @@ TEST(OpenCvLbd, GivesOpenCvsBytesOnDetectedAndRandomSegments) {
         for (const bool simd : {true, false}) {
           const cv::Mat floats = ComputeOpenCvCompatibleLbdFloat(image, *segments, simd);
           ASSERT_EQ(floats.size(), reference_floats.size()) << what;
-          EXPECT_EQ(std::memcmp(floats.data, reference_floats.data,
-                                floats.total() * floats.elemSize()),
-                    0)
+          EXPECT_EQ(
+              std::memcmp(floats.data, reference_floats.data, floats.total() * floats.elemSize()),
+              0)
               << what << (simd ? "" : ", scalar") << ": floats differ, by up to "
               << cv::norm(floats, reference_floats, cv::NORM_INF) << ", "
               << cv::countNonZero(floats != reference_floats) << " of " << floats.total();
@@ -110,10 +109,9 @@ TEST(OpenCvLbd, EmptyInputAndBadInput) {
 
 TEST(OpenCvLbd, InterleavedSobelGivesOpenCvsSobelAtEverySize) {
   cv::RNG rng(7);
-  std::vector<cv::Size> sizes = {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 5),
-                                 cv::Size(2, 2), cv::Size(2, 9), cv::Size(9, 2),
-                                 cv::Size(3, 3), cv::Size(13, 7), cv::Size(7, 13),
-                                 cv::Size(752, 480)};
+  std::vector<cv::Size> sizes = {
+      cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 5),  cv::Size(2, 2),  cv::Size(2, 9),
+      cv::Size(9, 2), cv::Size(3, 3), cv::Size(13, 7), cv::Size(7, 13), cv::Size(752, 480)};
   for (int w = 4; w <= 40; ++w) sizes.emplace_back(w, 3);  // the vector loop's tails
   for (const cv::Size size : sizes) {
     cv::Mat image(size, CV_8U);

@@ -137,8 +137,8 @@ TEST(OrbExtractor, NoiseEstimateMatchesTheAddedNoise) {
 // 3 x 3 mask filtered by OpenCV and its L1 norm (the definition), edges and odd sizes included.
 TEST(OrbExtractor, NoiseEstimateEqualsTheFilteredMasksNorm) {
   cv::RNG rng(11);
-  for (const cv::Size size : {cv::Size(3, 3), cv::Size(4, 7), cv::Size(752, 480),
-                              cv::Size(257, 33)}) {
+  for (const cv::Size size :
+       {cv::Size(3, 3), cv::Size(4, 7), cv::Size(752, 480), cv::Size(257, 33)}) {
     cv::Mat image(size, CV_8U);
     rng.fill(image, cv::RNG::UNIFORM, 0, 256);
     const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);

@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "slslam/geometry/rotation.h"
 #include "../test_support.h"
+#include "slslam/geometry/rotation.h"
 
 namespace slslam {
 namespace {

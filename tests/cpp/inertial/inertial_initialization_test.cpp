@@ -106,8 +106,8 @@ TEST(InertialInitialisation, RefusesPosesThatDisagreeWithTheImu) {
   Input wrong_extrinsics = MakeInput(motion, {}, 3.0);
   const Eigen::Matrix3d flip = ExpSO3(Eigen::Vector3d(0.0, M_PI / 2, 0.0));
   for (Rigid3d& pose : wrong_extrinsics.poses) pose.rotation = pose.rotation * flip;
-  const InertialInitResult rotated = InitialiseInertial(wrong_extrinsics.poses,
-                                                        wrong_extrinsics.pre);
+  const InertialInitResult rotated =
+      InitialiseInertial(wrong_extrinsics.poses, wrong_extrinsics.pre);
   EXPECT_FALSE(rotated.success);
   EXPECT_FALSE(rotated.reason.empty());
 

@@ -35,11 +35,21 @@ InertialState Perturbed(const InertialState& s, int axis, double eps) {
     case 0:
       out.nav.R_world_body = (s.nav.R_world_body * ExpQuaternion(d)).normalized();
       break;
-    case 1: out.nav.p_world_body += d; break;
-    case 2: out.nav.v_world_body += d; break;
-    case 3: out.bias.gyro += d; break;
-    case 4: out.bias.acc += d; break;
-    default: out.g_world += d; break;
+    case 1:
+      out.nav.p_world_body += d;
+      break;
+    case 2:
+      out.nav.v_world_body += d;
+      break;
+    case 3:
+      out.bias.gyro += d;
+      break;
+    case 4:
+      out.bias.acc += d;
+      break;
+    default:
+      out.g_world += d;
+      break;
   }
   return out;
 }
@@ -121,8 +131,7 @@ TEST(InertialState, CovarianceMatchesMonteCarloOfANoisyImu) {
       }
       pre.Integrate(motion.Gyro(t) + wn, motion.Accelerometer(t) + an, dt);
     }
-    const Eigen::Matrix<double, 9, 1> e =
-        ErrorBetween(mean, Propagate(start, pre)).head<9>();
+    const Eigen::Matrix<double, 9, 1> e = ErrorBetween(mean, Propagate(start, pre)).head<9>();
     sample += e * e.transpose() / trials;
   }
   for (int block = 0; block < 3; ++block) {

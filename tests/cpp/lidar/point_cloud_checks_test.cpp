@@ -187,7 +187,7 @@ TEST(PointCloudChecks, RegistrationOptionsMustBeFinite) {
   const double bad[] = {std::numeric_limits<double>::quiet_NaN(),
                         std::numeric_limits<double>::infinity()};
   for (double value : bad) {
-    for (double RegistrationOptions::* member :
+    for (double RegistrationOptions::*member :
          {&RegistrationOptions::fine_voxel_m, &RegistrationOptions::feature_radius_m,
           &RegistrationOptions::icp_max_corr_fine_m, &RegistrationOptions::ndt_step_m,
           &RegistrationOptions::max_range_m, &RegistrationOptions::sac_ia_max_corr_m}) {

@@ -95,10 +95,9 @@ void FillMap(Map* map, unsigned seed, int keyframes) {
   const int m = 5;
   std::vector<int> kf_ids;
   for (int k = 0; k < keyframes; ++k) {
-    auto kf =
-        map->AddKeyFrame(
-            Rigid3d(Rotation(0.05 * k, -0.01 * k), Eigen::Vector3d(0.02 * k, 0.0, -0.4 * k)),
-                         MakeFrame(rng, 10 * k + 3, n, m));
+    auto kf = map->AddKeyFrame(
+        Rigid3d(Rotation(0.05 * k, -0.01 * k), Eigen::Vector3d(0.02 * k, 0.0, -0.4 * k)),
+        MakeFrame(rng, 10 * k + 3, n, m));
     kf_ids.push_back(kf->id);
     for (int w = 0; w < 4; ++w) kf->bow[static_cast<WordId>(rng() % 1000)] = 0.25;
     kf->bow_features[7] = {0, 3, 5};
@@ -327,8 +326,7 @@ TEST_F(MapIo, RoundTripGivesIdenticalMaps) {
   // Both loaded maps count on one id source, past every id in the file.
   EXPECT_EQ(&loaded.maps[0]->ids(), &loaded.maps[1]->ids());
   MutexLock lock(loaded.maps[1]->mutex());
-  const auto kf = loaded.maps[1]->AddKeyFrame(Rigid3d(),
-                                              std::make_shared<StereoFrame>());
+  const auto kf = loaded.maps[1]->AddKeyFrame(Rigid3d(), std::make_shared<StereoFrame>());
   EXPECT_EQ(kf->id, ids_->next_keyframe);
 }
 
@@ -445,8 +443,8 @@ TEST_F(MapIo, VersionOneFilesReadAsOpenCvLineDescriptors) {
   SaveMaps(path_, {first_.get(), second_.get()}, h);
   std::vector<uint8_t> bytes = ReadBytes(path_);
   EXPECT_EQ(LoadMaps(path_).header.line_descriptor, LineDescriptor::kLbd);
-  const size_t name = kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 +
-                      h.vocabulary.size();
+  const size_t name =
+      kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 + h.vocabulary.size();
   ASSERT_EQ(std::string(bytes.begin() + name + 4, bytes.begin() + name + 4 + 3), "lbd");
   bytes.erase(bytes.begin() + name, bytes.begin() + name + 4 + 3);
   PutU32(&bytes, 8, 1);
@@ -464,8 +462,8 @@ TEST_F(MapIo, UnknownLineDescriptorIsRefused) {
   // The header field is an enum, so saving cannot write an unknown name; a file can hold one.
   std::vector<uint8_t> bytes = SaveAtlas();
   const MapFileHeader h = Header();
-  const size_t name = kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 +
-                      h.vocabulary.size() + 4;
+  const size_t name =
+      kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 + h.vocabulary.size() + 4;
   ASSERT_EQ(std::string(bytes.begin() + name, bytes.begin() + name + 10), "opencv_lbd");
   const std::string sift = "sift______";
   std::copy(sift.begin(), sift.end(), bytes.begin() + name);

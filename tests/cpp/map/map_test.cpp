@@ -49,8 +49,8 @@ TEST(Map, PointsOfAscendingIdsAreTheLookedUpPoints) {
     ids.push_back(map.AddPoint(Eigen::Vector3d(i, 0, 1), descriptor, kf->id)->id);
   }
   for (int i = 0; i < 60; i += 7) map.ErasePoint(ids[i]);
-  const std::vector<int> query = {ids[0] - 5, ids[1], ids[1], ids[2], ids[7], ids[8], ids[30],
-                                  ids[31], ids[59], ids[59] + 1, ids[59] + 100};
+  const std::vector<int> query = {ids[0] - 5, ids[1],  ids[1],  ids[2],      ids[7],       ids[8],
+                                  ids[30],    ids[31], ids[59], ids[59] + 1, ids[59] + 100};
   const std::vector<MapPoint*> found = map.PointsOf(query);
   ASSERT_EQ(found.size(), query.size());
   for (size_t i = 0; i < query.size(); ++i) {

@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include "../test_support.h"
 #include "slslam/geometry/rotation.h"
 #include "slslam/optimization/manifolds.h"
-#include "../test_support.h"
 
 namespace slslam {
 namespace {
@@ -60,15 +60,16 @@ void CheckCost(const ceres::CostFunction& cost, std::vector<std::vector<double>>
     }
     const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
     EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale)
-        << "block " << b << "\nanalytic\n" << analytic << "\nnumeric\n" << numeric;
+        << "block " << b << "\nanalytic\n"
+        << analytic << "\nnumeric\n"
+        << numeric;
   }
 }
 
 std::vector<double> PoseParams() {
   std::vector<double> p(kPoseSize);
   PoseToParameters(
-      Rigid3d(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2)), Eigen::Vector3d(0.3, -0.1, 0.5)),
-                   p.data());
+      Rigid3d(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.2)), Eigen::Vector3d(0.3, -0.1, 0.5)), p.data());
   return p;
 }
 
@@ -147,8 +148,8 @@ std::vector<double> LineParams(const PluckerLine& line) {
 TEST(CostFunctions, AnchoredLineCostJacobiansThroughManifold) {
   const StereoRig rig = EurocLikeRig();
   const Eigen::Vector3d anchor(2.0, -1.0, 30.0);  // far from the line and from the origin
-  LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0,
-                1.0, anchor);
+  LineCost cost(rig.camera, Eigen::Vector2d(250.0, 210.0), Eigen::Vector2d(420.0, 285.0), 10.0, 1.0,
+                anchor);
   const PluckerLine world =
       PluckerLine::FromPoints(Eigen::Vector3d(-0.8, 0.4, 6.0), Eigen::Vector3d(0.9, -0.3, 7.5));
   PluckerLine local = world;
@@ -202,8 +203,8 @@ TEST(Manifolds, MinusInvertsPlus) {
 
   LineManifold line_manifold;
   std::array<double, kLineSize> l;
-  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(
-                       Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(-1, 0, 5))),
+  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(Eigen::Vector3d(1, 2, 3),
+                                                                        Eigen::Vector3d(-1, 0, 5))),
                    l.data());
   const std::array<double, 4> dl{0.1, -0.05, 0.2, 0.1};
   std::array<double, kLineSize> l2;
@@ -215,8 +216,8 @@ TEST(Manifolds, MinusInvertsPlus) {
 
 TEST(Manifolds, LineSubspaceMovesWithinItsSpan) {
   std::array<double, kLineSize> l;
-  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(
-                       Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(-1, 0, 5))),
+  LineToParameters(OrthonormalLine::FromPlucker(PluckerLine::FromPoints(Eigen::Vector3d(1, 2, 3),
+                                                                        Eigen::Vector3d(-1, 0, 5))),
                    l.data());
   // Two orthonormal tangent directions.
   LineSubspaceManifold::Basis basis(4, 2);

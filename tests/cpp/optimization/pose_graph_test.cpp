@@ -60,8 +60,7 @@ TEST(PoseGraph, LoopEdgeRemovesDriftOfASyntheticLoop) {
   ASSERT_TRUE(report.solved);
   EXPECT_LT(report.final_cost, 0.1 * report.initial_cost);
   double worst = 0.0;
-  for (int i = 0; i < n; ++i)
-    worst = std::max(worst, CenterError(poses[i], truth[i]));
+  for (int i = 0; i < n; ++i) worst = std::max(worst, CenterError(poses[i], truth[i]));
   // The bias is spread over the loop: every pose within a fraction of the end drift.
   EXPECT_LT(CenterError(poses[n - 1], truth[n - 1]), 0.05 * drift_before);
   EXPECT_LT(worst, 0.35 * drift_before);

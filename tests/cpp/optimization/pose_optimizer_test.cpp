@@ -9,10 +9,10 @@
 #include <ceres/solver.h>
 #include <gtest/gtest.h>
 
+#include "../test_support.h"
 #include "slslam/geometry/rotation.h"
 #include "slslam/optimization/cost_functions.h"
 #include "slslam/optimization/manifolds.h"
-#include "../test_support.h"
 
 namespace slslam {
 namespace {
@@ -47,7 +47,8 @@ Scene MakeScene(int num_points, int num_lines, double outlier_fraction, unsigned
     PointObservation obs;
     obs.point_w = world_point(u, v, z);
     obs.stereo = i % 2 == 0;
-    obs.observed << u + noise(rng), v + noise(rng), u - rig.camera.fx * rig.baseline_m / z + noise(rng);
+    obs.observed << u + noise(rng), v + noise(rng),
+        u - rig.camera.fx * rig.baseline_m / z + noise(rng);
     const bool bad = unit(rng) < outlier_fraction;
     if (bad) obs.observed += Eigen::Vector3d(gross(rng), -gross(rng), gross(rng));
     s.points.push_back(obs);
@@ -179,8 +180,7 @@ TEST(PoseOptimizer, OwnSolverAgreesWithCeres) {
 // observation flagged in `use`, Huber losses when `robust`, line terms scaled by `line_weight`.
 Rigid3d SolveWithCeres(const StereoRig& rig, const Scene& s, const Rigid3d& start,
                        const std::vector<bool>& use_points, const std::vector<bool>& use_lines,
-                       bool robust, const PoseOptimizerOptions& o, int max_iterations,
-                       bool tight) {
+                       bool robust, const PoseOptimizerOptions& o, int max_iterations, bool tight) {
   std::vector<Eigen::Vector3d> points;
   std::vector<std::array<double, kLineSize>> lines(s.lines.size());
   for (const PointObservation& obs : s.points) points.push_back(obs.point_w);
@@ -210,8 +210,8 @@ Rigid3d SolveWithCeres(const StereoRig& rig, const Scene& s, const Rigid3d& star
       loss = new ceres::ScaledLoss(loss, o.line_weight, ceres::TAKE_OWNERSHIP);
     }
     problem.AddResidualBlock(
-        new LineCost(rig.camera, obs.start_px, obs.end_px, o.line_angle_weight, obs.sigma_px),
-        loss, pose.data(), lines[i].data());
+        new LineCost(rig.camera, obs.start_px, obs.end_px, o.line_angle_weight, obs.sigma_px), loss,
+        pose.data(), lines[i].data());
     problem.SetParameterBlockConstant(lines[i].data());
   }
   ceres::Solver::Options options;

@@ -17,7 +17,8 @@ namespace {
 
 using test::SyntheticMotion;
 
-const Rigid3d kBodyFromCam(ExpSO3(Eigen::Vector3d(-1.2, 0.1, 0.3)), Eigen::Vector3d(0.05, 0.0, -0.03));
+const Rigid3d kBodyFromCam(ExpSO3(Eigen::Vector3d(-1.2, 0.1, 0.3)),
+                           Eigen::Vector3d(0.05, 0.0, -0.03));
 
 // IMU samples at 1 kHz over [0, duration] with white noise at EuRoC's densities and a constant
 // bias (1 kHz: the synthetic motion accelerates to 6 m/s, and the first-order integration's own

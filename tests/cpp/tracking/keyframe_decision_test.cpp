@@ -49,60 +49,78 @@ TEST(KeyframeDecisionTest, Table) {
   const std::vector<Case> cases = {
       {"strong tracking keeps the map", Strong(), kDefault, {false, false}},
       {"c2: tracked below track_ratio of the reference, past the gap",
-       With([](auto& e) { e.tracked = 299; }), kDefault, {true, false}},
+       With([](auto& e) { e.tracked = 299; }),
+       kDefault,
+       {true, false}},
       {"... but never on the keyframe's own frame",
        With([](auto& e) {
          e.tracked = 299;
          e.frames_since = 0;
        }),
-       kDefault, {false, false}},
+       kDefault,
+       {false, false}},
       {"... nor inside the minimum gap",
        With([](auto& e) {
          e.tracked = 299;
          e.frames_since = 1;
        }),
-       kDefault, {false, false}},
-      {"... nor sooner than min_interval_s", With([](auto& e) { e.tracked = 299; }),
-       Rules([](auto& r) { r.min_interval_s = 0.2; }), {false, false}},
+       kDefault,
+       {false, false}},
+      {"... nor sooner than min_interval_s",
+       With([](auto& e) { e.tracked = 299; }),
+       Rules([](auto& r) { r.min_interval_s = 0.2; }),
+       {false, false}},
       {"... nor with too few weighted inliers (c2's bound)",
        With([](auto& e) {
          e.tracked = 299;
          e.weighted_inliers = 15.0;
        }),
-       Rules([](auto& r) { r.weak_inliers = 0.0; }), {false, false}},
+       Rules([](auto& r) { r.weak_inliers = 0.0; }),
+       {false, false}},
       {"c1c: below a quarter of the reference, the keyframe is due",
-       With([](auto& e) { e.tracked = 99; }), kDefault, {true, true}},
-      {"a quarter exactly is not c1c", With([](auto& e) { e.tracked = 100; }), kDefault,
+       With([](auto& e) { e.tracked = 99; }),
+       kDefault,
+       {true, true}},
+      {"a quarter exactly is not c1c",
+       With([](auto& e) { e.tracked = 100; }),
+       kDefault,
        {true, false}},
       {"close rule: few close points tracked, more than 70 untracked",
        With([](auto& e) {
          e.close_tracked = 99;
          e.close_untracked = kCloseUntrackedForKeyframe + 1;
        }),
-       kDefault, {true, true}},
+       kDefault,
+       {true, true}},
       {"close rule: 70 untracked are not enough",
        With([](auto& e) {
          e.close_tracked = 99;
          e.close_untracked = kCloseUntrackedForKeyframe;
        }),
-       kDefault, {false, false}},
+       kDefault,
+       {false, false}},
       {"close rule: enough close points tracked",
        With([](auto& e) {
          e.close_tracked = 100;
          e.close_untracked = 500;
        }),
-       kDefault, {false, false}},
+       kDefault,
+       {false, false}},
       {"max_frames: a keyframe however strong the tracking",
-       With([](auto& e) { e.frames_since = 20; }), kDefault, {true, true}},
+       With([](auto& e) { e.frames_since = 20; }),
+       kDefault,
+       {true, true}},
       {"thin tracking: a keyframe every weak_frames, inside the gap",
        With([](auto& e) { e.weighted_inliers = 59.0; }),
-       Rules([](auto& r) { r.min_frames = 6; }), {true, true}},
+       Rules([](auto& r) { r.min_frames = 6; }),
+       {true, true}},
       {"thin tracking: not sooner than weak_frames",
        With([](auto& e) {
          e.weighted_inliers = 59.0;
          e.frames_since = 2;
        }),
-       Rules([](auto& r) { r.min_frames = 6; }), {false, false}},
+       Rules([](auto& r) { r.min_frames = 6; }),
+       {false, false}},
       {"a noisy frame takes min_frames_noisy",
        With([](auto& e) {
          e.tracked = 299;
@@ -130,7 +148,8 @@ TEST(KeyframeDecisionTest, Table) {
          e.frames_since = 5;
          e.noisy = true;
        }),
-       Rules([](auto& r) { r.min_frames = 6; }), {false, false}},
+       Rules([](auto& r) { r.min_frames = 6; }),
+       {false, false}},
   };
   for (const Case& c : cases) {
     const KeyframeDecision got = DecideKeyframe(c.evidence, c.rules);

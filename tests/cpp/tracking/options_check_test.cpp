@@ -244,24 +244,22 @@ TEST(OptionsCheck, OptimisationAndMappingOptions) {
                    CheckOnly<Opts>);
     PoseOptimizerOptions bad;
     bad.line_weight = kNaN;
-    EXPECT_THROW(
-        OptimizePose(rig, Rigid3d(), {}, {}, bad),
-        std::invalid_argument);
+    EXPECT_THROW(OptimizePose(rig, Rigid3d(), {}, {}, bad), std::invalid_argument);
   }
   {
     using Opts = BundleAdjustmentOptions;
-    RunTable<Opts>("BundleAdjustmentOptions",
-                   {FIELD(robust_iterations, "ba.robust_iterations", 0, 10000, "[]"),
-                    FIELD(refine_iterations, "ba.refine_iterations", 0, 10000, "[]"),
-                    FIELD(chi2_mono, "ba.chi2_mono", 0, 1e6, "(]"),
-                    FIELD(chi2_stereo, "ba.chi2_stereo", 0, 1e6, "(]"),
-                    FIELD(chi2_line, "ba.chi2_line", 0, 1e6, "(]"),
-                    FIELD(line_angle_weight, "ba.line_angle_weight", 0, 1e6, "[]"),
-                    FIELD(line_weight, "ba.line_weight", 0, 1e6, "[]"),
-                    FIELD(line_prior_weight, "ba.line_prior_weight", 0, 1e6, "[]"),
-                    FIELD(line_min_information_per_rad2, "ba.line_min_information_per_rad2", 0,
-                          1e12, "[]")},
-                   CheckOnly<Opts>);
+    RunTable<Opts>(
+        "BundleAdjustmentOptions",
+        {FIELD(robust_iterations, "ba.robust_iterations", 0, 10000, "[]"),
+         FIELD(refine_iterations, "ba.refine_iterations", 0, 10000, "[]"),
+         FIELD(chi2_mono, "ba.chi2_mono", 0, 1e6, "(]"),
+         FIELD(chi2_stereo, "ba.chi2_stereo", 0, 1e6, "(]"),
+         FIELD(chi2_line, "ba.chi2_line", 0, 1e6, "(]"),
+         FIELD(line_angle_weight, "ba.line_angle_weight", 0, 1e6, "[]"),
+         FIELD(line_weight, "ba.line_weight", 0, 1e6, "[]"),
+         FIELD(line_prior_weight, "ba.line_prior_weight", 0, 1e6, "[]"),
+         FIELD(line_min_information_per_rad2, "ba.line_min_information_per_rad2", 0, 1e12, "[]")},
+        CheckOnly<Opts>);
     BundleAdjustmentOptions bad;
     bad.line_weight = kInf;
     BaProblem problem;
@@ -314,8 +312,8 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(track_refine_max_px, "tracking.track_refine_max_px", 0, 1e5, "(]"),
        FIELD(unaligned_sigma_factor, "tracking.unaligned_sigma_factor", 1, 1000, "[]"),
        FIELD(unaligned_min_aligned, "tracking.unaligned_min_aligned", 0, 1e9, "[]"),
-       FIELD(unaligned_max_turn_deg_per_frame, "tracking.unaligned_max_turn_deg_per_frame", 0,
-             180, "[]"),
+       FIELD(unaligned_max_turn_deg_per_frame, "tracking.unaligned_max_turn_deg_per_frame", 0, 180,
+             "[]"),
        FIELD(projected_max_frames, "tracking.projected_max_frames", 0, 1e9, "[]"),
        FIELD(projection_min_inliers, "tracking.projection_min_inliers", 0, 1e9, "[]"),
        FIELD(projection_search_px, "tracking.projection_search_px", 0, 64, "[]"),
@@ -387,7 +385,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(imu.acc_random_walk, "tracking.imu.acc_random_walk", 0, 1, "[]"),
        FIELD(imu.gravity_mps2, "tracking.imu.gravity_mps2", 0, 20, "()"),
        FIELD(imu.gravity_tolerance_mps2, "tracking.imu.gravity_tolerance_mps2", 0, 100, "(]"),
-       FIELD(imu.window_s, "tracking.imu.window_s", 1, 1000, "[]"),  // >= min_window_s
+       FIELD(imu.window_s, "tracking.imu.window_s", 1, 1000, "[]"),          // >= min_window_s
        FIELD(imu.min_window_s, "tracking.imu.min_window_s", 0.05, 3, "[]"),  // <= window_s
        FIELD(imu.refine_after_s, "tracking.imu.refine_after_s", 0, 1e6, "[]"),
        FIELD(imu.refine_min_path_m, "tracking.imu.refine_min_path_m", 0, 1e6, "[]"),
@@ -395,8 +393,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(imu.lost_sigma_fraction, "tracking.imu.lost_sigma_fraction", 0, 10, "[]"),
        FIELD(imu.lost_sigma_min_m, "tracking.imu.lost_sigma_min_m", 0, 1e6, "[]"),
        FIELD(imu.max_gap_s, "tracking.imu.max_gap_s", 0, 1e6, "[]"),
-       FIELD(imu.weak_update_min_inliers, "tracking.imu.weak_update_min_inliers", 0, 100000,
-             "[]"),
+       FIELD(imu.weak_update_min_inliers, "tracking.imu.weak_update_min_inliers", 0, 100000, "[]"),
        FIELD(imu.keyframe_interval_s, "tracking.imu.keyframe_interval_s", 0, 1e6, "[]"),
        FIELD(imu.visual_information_scale, "tracking.imu.visual_information_scale", 1e-6, 1e6,
              "[]")},

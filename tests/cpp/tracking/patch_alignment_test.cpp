@@ -76,8 +76,8 @@ TEST(PatchSampling, GivesEachSampleAsAPlainBilinearInterpolation) {
   // row clamped to it), near the buffer's end and on a view into a larger image, each sample is
   // the plain interpolation's float, and the sum theirs.
   const cv::Mat full = Texture(7, 70, 100);
-  for (const cv::Mat& image : {full.rowRange(0, 60).colRange(0, 80).clone(),
-                               full(cv::Rect(10, 5, 80, 60))}) {
+  for (const cv::Mat& image :
+       {full.rowRange(0, 60).colRange(0, 80).clone(), full(cv::Rect(10, 5, 80, 60))}) {
     const int w = 5, size = 2 * w + 1;
     std::vector<float> out(size * size);
     for (double scale : {0.5, 0.73, 1.0, 1.02, 1.5, 2.0}) {
@@ -99,10 +99,8 @@ TEST(PatchSampling, GivesEachSampleAsAPlainBilinearInterpolation) {
             const double sx = centre.x + c * scale;
             const int x0 = static_cast<int>(sx), x1 = std::min(x0 + 1, image.cols - 1);
             const float ax = static_cast<float>(sx - x0);
-            const float top =
-                (1.0f - ax) * image.at<uchar>(y0, x0) + ax * image.at<uchar>(y0, x1);
-            const float low =
-                (1.0f - ax) * image.at<uchar>(y1, x0) + ax * image.at<uchar>(y1, x1);
+            const float top = (1.0f - ax) * image.at<uchar>(y0, x0) + ax * image.at<uchar>(y0, x1);
+            const float low = (1.0f - ax) * image.at<uchar>(y1, x0) + ax * image.at<uchar>(y1, x1);
             const float expected = (1.0f - ay) * top + ay * low;
             ASSERT_EQ(out[k], expected) << "scale " << scale << ", sample " << k;
             expected_sum += expected;

@@ -201,8 +201,8 @@ TEST(StereoFrameTest, RowSearchFindsTheDisparityWithoutRightKeypoints) {
     for (int i = 0; i < frame.NumKeypoints(); ++i) {
       if (frame.u_right[i] < 0.0) continue;
       ++matched;
-      worst_integer =
-          std::max(worst_integer, std::abs(frame.keypoints.uv(i, 0) - frame.u_right[i] - disparity));
+      worst_integer = std::max(worst_integer,
+                               std::abs(frame.keypoints.uv(i, 0) - frame.u_right[i] - disparity));
     }
     // Keypoints whose disparity range leaves the image (u < disparity + window) find nothing.
     EXPECT_GT(matched, 0.8 * frame.NumKeypoints()) << disparity;

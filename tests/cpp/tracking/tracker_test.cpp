@@ -354,8 +354,8 @@ void FeedTrueImu(double duration, Tracker* tracker) {
         LogSO3(Eigen::Quaterniond(TrueWorldFromCam(t - h).rotation.transpose() *
                                   TrueWorldFromCam(t + h).rotation)) /
         (2 * h);
-    const Eigen::Vector3d a_world = (TrueWorldFromCam(t + h).translation -
-                                     2.0 * pose.translation + TrueWorldFromCam(t - h).translation) /
+    const Eigen::Vector3d a_world = (TrueWorldFromCam(t + h).translation - 2.0 * pose.translation +
+                                     TrueWorldFromCam(t - h).translation) /
                                     (h * h);
     Eigen::Vector3d wn, an;
     for (int j = 0; j < 3; ++j) {
@@ -369,9 +369,9 @@ void FeedTrueImu(double duration, Tracker* tracker) {
 
 TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
   // 10 s lit (the IMU initialises after 1 s; the rest pins its biases down), 10 s with no feature
-  // at all (lamp out: 200 frames, 10 m driven), 2 s lit again. Camera-only the tracker is lost after recently_lost_frames; with the
-  // IMU every dark frame is INERTIAL, its position within 3 sigma of the truth by the
-  // uncertainty it reports, and tracking resumes in the same map.
+  // at all (lamp out: 200 frames, 10 m driven), 2 s lit again. Camera-only the tracker is lost
+  // after recently_lost_frames; with the IMU every dark frame is INERTIAL, its position within 3
+  // sigma of the truth by the uncertainty it reports, and tracking resumes in the same map.
   const Scene scene;
   Tracker tracker(Options(true, /*lines=*/false));
   FeedTrueImu(22.0, &tracker);
@@ -442,8 +442,7 @@ TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
     EXPECT_EQ(results[k].cam_from_world.translation, results[39].cam_from_world.translation) << k;
   }
   EXPECT_EQ(results[40 + wait].state, TrackingState::kNewMap);
-  EXPECT_EQ(results[40 + wait].cam_from_world.translation,
-            results[39].cam_from_world.translation);
+  EXPECT_EQ(results[40 + wait].cam_from_world.translation, results[39].cam_from_world.translation);
   for (int k = 41 + wait; k < 50; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
   EXPECT_EQ(tracker.num_maps(), 2);
 }
@@ -900,8 +899,8 @@ TEST(TriangulationTest, TriangulatedPointsKeepTheNewKeyframesPatch) {
       if (expected.empty()) continue;
       ++with_patch;
       EXPECT_EQ(cv::norm(p->patch, expected, cv::NORM_INF), 0.0) << id;
-      const double depth = (kb.cam_from_world.rotation * p->position +
-                            kb.cam_from_world.translation).z();
+      const double depth =
+          (kb.cam_from_world.rotation * p->position + kb.cam_from_world.translation).z();
       EXPECT_NEAR(p->patch_depth_m, depth, 1e-9) << id;
     }
     EXPECT_GT(with_patch, 200);
@@ -1027,7 +1026,7 @@ TEST(BundleAdjustmentTest, RecoversPerturbedPosesPointsAndLines) {
   own.own_solver = true;
   ceres.own_solver = false;
   for (const BundleAdjustmentOptions& options : {own, ceres, pulled, held}) {
-    SCOPED_TRACE(options.dogleg_with_lines                       ? "dogleg, pulled lines"
+    SCOPED_TRACE(options.dogleg_with_lines                     ? "dogleg, pulled lines"
                  : options.line_min_information_per_rad2 > 0.0 ? "weak directions held"
                  : options.own_solver                          ? "own solver"
                                                                : "Ceres");
@@ -1089,8 +1088,8 @@ TEST(BundleAdjustmentTest, OwnSolverFollowsCeresStepForStep) {
   for (bool outlier : a.point_outlier) outliers += outlier;
   EXPECT_GT(outliers, 0);  // the gross ones were found
   for (size_t f = 0; f < problem.poses.size(); ++f) {
-    EXPECT_LT((by_own.poses[f].cam_from_world.Center() -
-               by_ceres.poses[f].cam_from_world.Center()).norm(),
+    EXPECT_LT((by_own.poses[f].cam_from_world.Center() - by_ceres.poses[f].cam_from_world.Center())
+                  .norm(),
               1e-7)
         << "pose " << f;
   }
