@@ -84,6 +84,37 @@ def test_cli_bad_spec_is_one_error_line(tmp_path: Path, capsys) -> None:
     assert "error:" in err and "sequences.s.sim" in err and "Traceback" not in err
 
 
+def test_every_shipped_spec_parses() -> None:
+    """Each spec under benchmarks/specs loads (its keys, sequences and configurations checked)."""
+    specs = sorted((REPO / "benchmarks" / "specs").glob("*.yaml"))
+    assert {p.stem for p in specs} >= {"smoke", "recovery", "euroc", "kitti", "inertial"}
+    for path in specs:
+        spec = load_spec(path)
+        assert spec.configurations and spec.sequences, path
+
+
+def test_a_groundtruth_file_joins_the_cell_key(tmp_path: Path) -> None:
+    """A recorded sequence's ``groundtruth:`` (relative to the spec) is part of its cells' keys,
+    and a missing file is an error naming the sequence; cells without one keep their keys."""
+    data = tmp_path / "seq"
+    (data / "mav0").mkdir(parents=True)
+    gt = tmp_path / "gt.tum"
+    gt.write_text("0 0 0 0 0 0 0 1\n")
+    base = "sequences:\n  s: {path: seq%s}\nconfigurations:\n  c: {point_frontend: orb}\n"
+    plain = plan_cells(load_spec(_spec(tmp_path, base % "")))[0]
+    scored = plan_cells(load_spec(_spec(tmp_path, base % ", groundtruth: gt.tum")))[0]
+    assert scored.key != plain.key
+    assert scored.material["sequence"]["groundtruth"]["path"] == str(gt.resolve())
+    assert "groundtruth" not in plain.material["sequence"]
+    gt.unlink()
+    with pytest.raises(SpecError, match=r"sequences\.s\.groundtruth"):
+        plan_cells(load_spec(_spec(tmp_path, base % ", groundtruth: gt.tum")))
+    with pytest.raises(SpecError, match="groundtruth"):
+        load_spec(
+            _spec(tmp_path, MINIMAL.replace("lidar: false}", "lidar: false}, groundtruth: x"))
+        )
+
+
 def test_keys_change_only_with_the_configuration() -> None:
     spec = load_spec(SMOKE)
     before = {c.id: c.key for c in plan_cells(spec)}

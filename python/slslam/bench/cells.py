@@ -160,11 +160,16 @@ def _sequence_material(seq: SequenceSpec, seed: int) -> dict[str, Any]:
     assert seq.path is not None
     if not seq.path.exists():
         raise SpecError(seq.path, f"sequences.{seq.name}.path: not found")
-    return {
+    material: dict[str, Any] = {
         "recorded": tree_fingerprint(seq.path),
         "topics": seq.bag_topics,
         "max_frames": seq.max_frames,
     }
+    if seq.groundtruth is not None:  # (only then: the keys of cells without one stay as they were)
+        if not seq.groundtruth.is_file():
+            raise SpecError(seq.groundtruth, f"sequences.{seq.name}.groundtruth: not found")
+        material["groundtruth"] = tree_fingerprint(seq.groundtruth)
+    return material
 
 
 def plan_cells(spec: Spec) -> list[Cell]:
@@ -320,8 +325,14 @@ def _run_visual(material: dict[str, Any], data: Path, run_dir: Path) -> dict[str
 
     config = config_from_dict(material["configuration"]["config"], preset=False)
     seq = material["sequence"]
+    groundtruth = (seq.get("groundtruth") or {}).get("path")
     summary = run_sequence(
-        _open_visual(seq, data), run_dir, config, max_frames=seq.get("max_frames"), progress=False
+        _open_visual(seq, data),
+        run_dir,
+        config,
+        max_frames=seq.get("max_frames"),
+        progress=False,
+        groundtruth=Path(groundtruth) if groundtruth else None,
     )
     return summary.metrics
 

@@ -248,9 +248,13 @@ def _aligned_xy(record: dict[str, Any], out: Path):
     run_dir = out / record["run_dir"]
     estimate = read_trajectory(run_dir / "trajectory.tum", "tum")
     if record["cell"]["kind"] == "visual":
-        from slslam.datasets.euroc import EurocSequence
+        from slslam.tracking.run import _groundtruth, open_dataset
 
-        gt = EurocSequence(record["input"]).groundtruth(frame="rectified")
+        # (the sequence's own ground truth, or the spec's groundtruth: file; EuRoC or KITTI)
+        given = (record.get("material") or {}).get("sequence", {}).get("groundtruth") or {}
+        gt = _groundtruth(open_dataset(record["input"]), given.get("path"))
+        if gt is None:
+            raise ValueError(f"{record['input']}: no ground truth")
         ape = compute_ape(gt, estimate, align="se3")
     else:
         from slslam.lidar.datasets import open_lidar_sequence
@@ -264,7 +268,9 @@ def _aligned_xy(record: dict[str, Any], out: Path):
 
 
 def plot_trajectories(out: Path, cells: list[Cell], records: dict[str, dict]) -> list[Path]:
-    """Per sequence: ground truth and each configuration's first finished seed, top view."""
+    """Per sequence: ground truth and each configuration's first finished seed, in the plane of
+    the ground truth's two widest axes (x-y for a z-up world, x-z for a camera's: KITTI, EuRoC's
+    rectified left camera)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -294,16 +300,18 @@ def plot_trajectories(out: Path, cells: list[Cell], records: dict[str, dict]) ->
                 log.warning("no trajectory of %s/%s in the plot: %s", seq, cfg, exc)
                 continue
             if not drawn_gt:
-                ax.plot(ref[:, 0], ref[:, 1], "k--", lw=1.0, label="ground truth")
+                spread = ref.max(axis=0) - ref.min(axis=0)
+                a, b = sorted(int(i) for i in spread.argsort()[-2:])
+                ax.plot(ref[:, a], ref[:, b], "k--", lw=1.0, label="ground truth")
                 drawn_gt = True
             label = f"{first['cell']['label']} (seed {first['cell']['seed']})"
-            ax.plot(est[:, 0], est[:, 1], lw=1.2, label=label)
+            ax.plot(est[:, a], est[:, b], lw=1.2, label=label)
         if not drawn_gt:
             plt.close(fig)
             continue
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel(f"{'xyz'[a]} [m]")
+        ax.set_ylabel(f"{'xyz'[b]} [m]")
         ax.set_title(f"{seq}: trajectories, SE3-aligned to the ground truth")
         ax.legend(fontsize=8)
         fig.tight_layout()

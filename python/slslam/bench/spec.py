@@ -86,6 +86,7 @@ class SequenceSpec:
     max_frames: int | None = None
     seeds: tuple[int, ...] | None = None  # None: the spec's seeds (simulated) or (0,) (recorded)
     bag_topics: dict[str, Any] = field(default_factory=dict)  # left, right, imu, calib
+    groundtruth: Path | None = None  # absolute; a trajectory file to score against (recorded)
 
     @property
     def simulated(self) -> bool:
@@ -260,7 +261,20 @@ def _sim_options(reader: _Reader) -> dict[str, Any]:
 
 
 def _sequence(reader: _Reader, name: str, base: Path) -> SequenceSpec:
-    reader.only({"sim", "path", "max_frames", "seeds", "left", "right", "imu", "lidar", "calib"})
+    reader.only(
+        {
+            "sim",
+            "path",
+            "max_frames",
+            "seeds",
+            "left",
+            "right",
+            "imu",
+            "lidar",
+            "calib",
+            "groundtruth",
+        }
+    )
     max_frames = reader.get("max_frames", int)
     if max_frames is not None and max_frames < 2:
         reader.fail(f"must be >= 2, got {max_frames}", "max_frames")
@@ -270,9 +284,9 @@ def _sequence(reader: _Reader, name: str, base: Path) -> SequenceSpec:
         reader.fail("give exactly one of sim: (simulator options) and path: (a recorded sequence)")
     topics: dict[str, Any] = {}
     if has_sim:
-        for key in ("left", "right", "imu", "lidar", "calib"):
+        for key in ("left", "right", "imu", "lidar", "calib", "groundtruth"):
             if key in reader.data:
-                reader.fail("only for a recorded ROS bag (path:)", key)
+                reader.fail("only for a recorded sequence (path:)", key)
         sim = _sim_options(reader.sub("sim"))
         return SequenceSpec(name, sim=sim, max_frames=max_frames, seeds=seeds)
     raw = reader.get("path", str)
@@ -289,7 +303,18 @@ def _sequence(reader: _Reader, name: str, base: Path) -> SequenceSpec:
         if not isinstance(calib, list) or not all(isinstance(c, str) for c in calib):
             reader.fail("expected a file or a list of files", "calib")
         topics["calib"] = [str((base / c).resolve()) for c in calib]
-    return SequenceSpec(name, path=path, max_frames=max_frames, seeds=seeds, bag_topics=topics)
+    groundtruth = None
+    if "groundtruth" in reader.data:
+        gt = Path(reader.get("groundtruth", str)).expanduser()
+        groundtruth = (gt if gt.is_absolute() else base / gt).resolve()
+    return SequenceSpec(
+        name,
+        path=path,
+        max_frames=max_frames,
+        seeds=seeds,
+        bag_topics=topics,
+        groundtruth=groundtruth,
+    )
 
 
 def _configuration(reader: _Reader, name: str, base: Path, defaults: Resources) -> ConfigSpec:
