@@ -502,7 +502,10 @@ def generate(original: bytes, layout: Layout, rng: np.random.Generator) -> list[
     # -- map table, resealed ---------------------------------------------------------------
     entry = layout.table[0]
     # a count one off: the next record is misread as this one, whatever it then fails on
-    misread = r"truncated|unsupported matrix type|but only \d+ bytes are left|bytes left after"
+    misread = (
+        r"truncated|unsupported matrix type|but only \d+ bytes are left|bytes left after"
+        r"|negative size"
+    )
     add(
         "table",
         "map-count-huge",
