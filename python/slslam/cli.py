@@ -21,6 +21,7 @@ from rich.table import Table
 
 from slslam._version import __version__
 from slslam.errors import InputError, SlslamError
+from slslam.terminal import reflow_help, stderr_console, stdout_console
 
 if TYPE_CHECKING:
     from slslam.sim.sequence import Preset
@@ -34,7 +35,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console(stderr=True)
+console = stderr_console()
 log = logging.getLogger("slslam")
 
 
@@ -125,7 +126,7 @@ def eval_command(
             f"[bold red]error:[/] {escape(message[:300])}", highlight=False, soft_wrap=True
         )
         raise typer.Exit(2) from None
-    out_console = Console()
+    out_console = stdout_console()
     out_console.print(
         _stats_table(
             f"APE translation (m), {align} alignment, {result.ape.options['num_poses']} poses",
@@ -169,7 +170,7 @@ def info_command(
     seq = KittiSequence(dataset) if is_kitti(dataset) else EurocSequence(dataset)
     cam = seq.camera
     duration = (seq.timestamps_ns[-1] - seq.timestamps_ns[0]) * 1e-9
-    out = Console()
+    out = stdout_console()
     kind = f"KITTI {seq.layout}" if isinstance(seq, KittiSequence) else "EuRoC ASL"
     out.print(f"{kind} sequence at {seq.root}")
     out.print(f"  stereo pairs     {len(seq)} over {duration:.2f} s")
@@ -221,7 +222,7 @@ def rectify_command(
                 tmp.replace(path)
             finally:
                 tmp.unlink(missing_ok=True)
-    Console().print(f"wrote {count} rectified pairs to {out}")
+    stdout_console().print(f"wrote {count} rectified pairs to {out}")
 
 
 @app.command("demo")
@@ -237,8 +238,10 @@ def demo_command(
 
     _check_output_folder(out)
     result = run_demo(out)
-    Console().print(_stats_table("demo APE translation (m) (synthetic estimate)", result.ape.stats))
-    Console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
+    stdout_console().print(
+        _stats_table("demo APE translation (m) (synthetic estimate)", result.ape.stats)
+    )
+    stdout_console().print(f"wrote {out}/groundtruth.tum, estimate.tum, metrics.json, ape.png")
 
 
 @app.command("sim")
@@ -388,7 +391,7 @@ def sim_command(
             manifest = Simulator(options).write(out, between_frames=signals.raise_if_requested)
     except RunInterrupted as stop:
         _sim_stopped(out, stop)
-    Console().print(
+    stdout_console().print(
         f"wrote {manifest['frames_written']} frames to {out} "
         f"({manifest['frames_per_second']:.2f} frames/s)"
     )
@@ -407,7 +410,7 @@ def _sim_stopped(out: Path, stop) -> None:
         if frames is None
         else f"{escape(str(out))} holds the first {frames} frames (manifest status: interrupted)"
     )
-    Console(stderr=True).print(
+    stderr_console().print(
         f"[bold red]stopped:[/] {escape(str(stop))}; {where}", highlight=False, soft_wrap=True
     )
     raise typer.Exit(128 + stop.signum)
@@ -602,7 +605,7 @@ def run_command(
             localise_only=localise_only,
         )
     except RunInterrupted as stop:
-        Console(stderr=True).print(
+        stderr_console().print(
             f"[bold red]stopped:[/] {stop}; the results so far are in {escape(str(out))} "
             "(metrics.json says where the run stopped)",
             highlight=False,
@@ -613,7 +616,7 @@ def run_command(
         if shown is not None:
             shown.close()
     m = summary.metrics
-    console = Console()
+    console = stdout_console()
     console.print(
         f"{m['frames']} frames, {m['tracked_ratio'] * 100:.1f} % tracked "
         f"({m['frontend']}{' + lines' if m['lines'] else ''}), {m['keyframes']} keyframes, "
@@ -684,7 +687,7 @@ def models_guide_command() -> None:
     """Explain where SuperPoint weights come from and how slslam finds them."""
     from slslam.features.models import GUIDE
 
-    Console().print(GUIDE, highlight=False, markup=False)
+    stdout_console().print(GUIDE, highlight=False, markup=False)
 
 
 @models_app.command("check")
@@ -695,7 +698,7 @@ def models_check_command(
     from slslam.features.models import check_model
 
     net = check_model(path)
-    Console().print(f"{path}: SuperPoint model OK (providers: {', '.join(net.providers)})")
+    stdout_console().print(f"{path}: SuperPoint model OK (providers: {', '.join(net.providers)})")
 
 
 @models_app.command("convert")
@@ -712,7 +715,7 @@ def models_convert_command(
     onnx.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(onnx, keep_suffix=True) as tmp:  # renamed once converted and checked
         convert_pth(pth, tmp)
-    Console().print(f"wrote {onnx}")
+    stdout_console().print(f"wrote {onnx}")
 
 
 @models_app.command("export")
@@ -733,7 +736,7 @@ def models_export_command(
 
 def _print_written(out: Path, facts: dict[str, str]) -> None:
     """The file a models command wrote and the facts its PROVENANCE.md records."""
-    console = Console()
+    console = stdout_console()
     console.print(f"wrote {out}", highlight=False)
     for key, value in facts.items():
         console.print(f"  {key}: {value}", highlight=False, markup=False)
@@ -862,13 +865,13 @@ def vocab_train_command(
             signals.raise_if_requested()
     except RunInterrupted as stop:
         outcome = "was written whole" if path is not None else "was not written"
-        Console(stderr=True).print(
+        stderr_console().print(
             f"[bold red]stopped:[/] {stop}; {escape(str(out))} {outcome}",
             highlight=False,
             soft_wrap=True,
         )
         raise typer.Exit(128 + stop.signum) from None
-    out_console = Console()
+    out_console = stdout_console()
     out_console.print(
         f"{summary.descriptors} {frontend} descriptors from {summary.images} images "
         f"({summary.extract_s:.1f} s), trained in {summary.train_s:.1f} s"
@@ -918,7 +921,7 @@ def vocab_info_command(
 
     vocabulary = Vocabulary.load(path)  # a FIFO, device or folder is refused before reading
     weights = np.array([vocabulary.word_weight(w) for w in range(vocabulary.num_words)])
-    out = Console()
+    out = stdout_console()
     out.print(f"vocabulary {path} ({path.stat().st_size / 1024:.0f} KiB)")
     out.print(
         f"  descriptors  {vocabulary.descriptor_type}, {vocabulary.descriptor_cols} "
@@ -967,7 +970,7 @@ def config_command(
         from slslam.files import check_output_target
 
         dump_config(cfg, check_output_target(out, "--out"), header=header)
-        Console().print(f"wrote {out}")
+        stdout_console().print(f"wrote {out}")
     else:
         sys.stdout.write(config_to_yaml(cfg, header))
 
@@ -977,7 +980,7 @@ def version_command() -> None:
     """Print the slslam version and the C++ core it loads."""
     from slslam import _core
 
-    Console().print(f"slslam {__version__} (C++ core {_core.__version__})")
+    stdout_console().print(f"slslam {__version__} (C++ core {_core.__version__})")
 
 
 @app.callback()
@@ -1010,6 +1013,7 @@ def main(argv: list[str] | None = None) -> int:
     exit code 2.
     """
     received: list[int] = []
+    reflow_help(app)  # (typer keeps a docstring's line breaks: the help would wrap mid-sentence)
     try:
         with _signals_outside_commands(received):
             try:

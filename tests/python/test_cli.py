@@ -78,3 +78,35 @@ def test_config_prints_what_run_uses_and_loads_back(tmp_path, capsys):
     assert load_config(out) == default_config("xfeat")
     assert main(["config", "--orb", "--xfeat"]) == 2  # one front end, not both
     assert main(["config", "--config", str(tmp_path / "missing.yaml")]) == 2
+
+
+def test_help_paragraphs_reflow_and_output_stays_one_line_in_a_log():
+    """A command's help reflows its docstring's paragraphs to the terminal's width (no break
+    left where the source line ended), and what a command prints to a file or a pipe is one
+    line per message, however narrow the terminal would be."""
+    import os
+
+    env = dict(os.environ, COLUMNS="70")
+    help_text = subprocess.run(
+        [sys.executable, "-m", "slslam", "lidar", "run", "--help"],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
+    ).stdout
+    flat = " ".join(line.strip(" │") for line in help_text.splitlines())
+    # the docstring breaks after "voxel" and after "the simulator's": reflowed, neither is a
+    # line end any more, and the sentence reads through
+    assert "a bounded voxel map from the IMU prediction" in flat
+    ends = [line.rstrip().rsplit(" ", 1)[-1] for line in help_text.splitlines() if line.strip()]
+    assert "voxel" not in ends and "simulator's" not in ends
+    version = subprocess.run(
+        [sys.executable, "-m", "slslam", "version"], capture_output=True, text=True, env=env
+    ).stdout
+    assert len(version.strip().splitlines()) == 1
+
+    from slslam.terminal import reflow
+
+    assert (
+        reflow("a\nb\n\n- x\n- y\n\n    code\n    here") == "a b\n\n- x\n- y\n\n    code\n    here"
+    )

@@ -12,9 +12,10 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from typer.core import TyperGroup
+
+from slslam.terminal import stderr_console, stdout_console
 
 
 class _RunByDefault(TyperGroup):
@@ -94,7 +95,7 @@ def bench_run_command(
 
     parsed = load_spec(spec)
     out = out if out is not None else default_out(spec, parsed.name)
-    console = Console(stderr=True)
+    console = stderr_console()
     try:
         run = run_bench(
             parsed,
@@ -113,7 +114,7 @@ def bench_run_command(
             soft_wrap=True,
         )
         raise typer.Exit(128 + stop.signum) from None
-    say = Console()
+    say = stdout_console()
     say.print(
         f"{len(run.cells)} cells: {len(run.ran)} run ({run.backend}), {len(run.cached)} cached, "
         f"{len(run.failed)} failed; {run.wall_s:.1f} s"
@@ -138,7 +139,9 @@ def _update(parsed, out: Path, spec_arg: Path, path: Path) -> None:
 
     text = block_text(parsed, load_finished(parsed, out), str(spec_arg))
     changed = update_file(path, parsed.name, text)
-    Console().print(f"{'updated' if changed else 'unchanged'}: block {parsed.name} in {path}")
+    stdout_console().print(
+        f"{'updated' if changed else 'unchanged'}: block {parsed.name} in {path}"
+    )
 
 
 @bench_app.command("report")
@@ -180,7 +183,7 @@ def bench_compare_command(
         if not (folder / "cells").is_dir():
             raise InputError(folder, "not a results folder (no cells/ in it)")
     found = compare_results(a, b)
-    say = Console()
+    say = stdout_console()
     say.print(
         f"{len(found['same'])} cells identical, {len(found['different'])} different, "
         f"{len(found['other_key'])} with another key, {len(found['only_a'])} only in {a}, "

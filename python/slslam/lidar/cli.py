@@ -7,8 +7,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 from rich.markup import escape
+
+from slslam.terminal import stderr_console, stdout_console
 
 lidar_app = typer.Typer(
     help="LiDAR-inertial SLAM: deskew, scan-to-map odometry with IMU smoothing, Scan Context "
@@ -109,7 +110,7 @@ def lidar_run_command(
                 sequence, progress=progress, between_sweeps=signals.raise_if_requested
             )
         except RunInterrupted as interrupted:  # before the first sweep: no result to write
-            Console(stderr=True).print(
+            stderr_console().print(
                 f"[bold red]stopped:[/] {interrupted} before the first sweep; {escape(str(out))} "
                 "holds only metrics.json (completed: false)",
                 highlight=False,
@@ -122,12 +123,12 @@ def lidar_run_command(
                 result.map_points, result.T_world_body[:, :3, 3], preset
             )
         metrics = write_outputs(out, sequence, result, extra)  # a signal now waits for it
-    console = Console()
+    console = stdout_console()
     stop = result.stopped
     if stop is None and len(signals.received) > signals._consumed:
         stop = RunInterrupted(signals.received[-1])  # came while the files were written
     if stop is not None:
-        Console(stderr=True).print(
+        stderr_console().print(
             f"[bold red]stopped:[/] {escape(str(stop))}; the results of the first "
             f"{metrics['sweeps']} sweeps are in {escape(str(out))}",
             highlight=False,
