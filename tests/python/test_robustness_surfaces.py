@@ -1657,8 +1657,10 @@ def test_vocab_train_stopped_by_a_signal_writes_nothing_or_all(
     if proc.returncode == 0:
         Vocabulary.load(out)  # finished first: the file is whole
         pytest.skip("training ended before the signal arrived")
-    if proc.returncode == -signum:  # before Python's handlers exist: the default action
-        assert not out.exists()
+    if proc.returncode == -signum:
+        # The default action: before Python's handlers exist (nothing written), or after they
+        # are gone at the interpreter's exit (the file already written whole, atomically).
+        assert not out.exists() or Vocabulary.load(out).num_words > 0
         return
     assert proc.returncode == 128 + signum, err
     assert "stopped" in err and (not out.exists() or Vocabulary.load(out).num_words > 0)
