@@ -257,6 +257,27 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   }
   if (neighbour_bows.empty()) min_score = 0.0;
 
+  const std::vector<std::tuple<double, int, int>> candidates =
+      Candidates(atlas, source, *kf, exclude, min_score, map_keyframes);
+  Verified verified;
+  const bool found = VerifyFirst(atlas, source, *kf, candidates, &verified);
+  const bool accept = Consistent(source, found, verified);
+  const int corrected_map = accept ? Apply(atlas, source, keyframe_id, *kf, verified) : -1;
+  {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.keyframes_checked;
+    stats_.loop_ms += Ms(start);
+  }
+  if (corrected_map >= 0 && options_.global_ba) GlobalBundleAdjustment(atlas, corrected_map);
+  return corrected_map >= 0;
+}
+
+std::vector<std::tuple<double, int, int>> LoopCloser::Candidates(Atlas* atlas, int source,
+                                                                 const KeyFrame& kf,
+                                                                 const std::set<int>& exclude,
+                                                                 double min_score,
+                                                                 int map_keyframes) const {
+  const int keyframe_id = kf.id;
   std::vector<std::tuple<double, int, int>> candidates;  // (-score, map, keyframe)
   for (int m = 0; m < atlas->size(); ++m) {
     if (atlas->merged(m)) continue;
@@ -265,7 +286,7 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
     if (!same && !options_.merge_maps) continue;
     Map& target = atlas->map(m);
     const auto found =
-        atlas->database(m).Query(kf->bow, options_.candidates, min_score, 0.8, [&](int id) {
+        atlas->database(m).Query(kf.bow, options_.candidates, min_score, 0.8, [&](int id) {
           if (same && (exclude.count(id) || id >= keyframe_id)) return false;
           MutexLock lock(target.mutex());
           auto c = target.keyframe(id);
@@ -284,23 +305,28 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
   if (static_cast<int>(candidates.size()) > options_.candidates) {
     candidates.resize(options_.candidates);
   }
+  return candidates;
+}
 
-  Verified verified;
-  bool found = false;
+bool LoopCloser::VerifyFirst(Atlas* atlas, int source, const KeyFrame& kf,
+                             const std::vector<std::tuple<double, int, int>>& candidates,
+                             Verified* out) {
   for (const auto& [score, m, id] : candidates) {
     (void)score;
     Verified attempt;
-    if (Verify(atlas, source, *kf, m, id, &attempt)) {
-      verified = std::move(attempt);
-      found = true;
-      break;
+    if (Verify(atlas, source, kf, m, id, &attempt)) {
+      *out = std::move(attempt);
+      return true;
     }
     if (attempt.target_map >= 0) {  // verified geometrically but implausible
       std::lock_guard<std::mutex> stats_lock(stats_mutex_);
       ++stats_.loops_rejected;
     }
   }
+  return false;
+}
 
+bool LoopCloser::Consistent(int source, bool found, const Verified& verified) {
   Pending& pending = pending_[source];
   bool accept = false;
   if (found) {
@@ -331,81 +357,75 @@ bool LoopCloser::Process(Atlas* atlas, int map_index, int keyframe_id) {
     ++stats_.loops_rejected;
     pending = Pending{};
   }
+  return accept;
+}
 
-  bool changed = false;
+int LoopCloser::Apply(Atlas* atlas, int source, int keyframe_id, const KeyFrame& kf,
+                      const Verified& verified) {
+  Map& source_map = atlas->map(source);
   int corrected_map = -1;
-  if (accept) {
-    // A global BA in flight works on the world this correction is about to change.
-    CancelGlobalBa();
-    pending_.erase(source);
-    const int target = verified.target_map;
-    Map& target_map = atlas->map(target);
-    LoopEvent event;
-    event.keyframe_id = keyframe_id;
-    event.candidate_id = verified.candidate;
-    event.merge = target != source;
-    event.frame_index = kf->frame->index;
-    {
-      MutexLock lock(target_map.mutex());
-      if (auto c = target_map.keyframe(verified.candidate); c && c->frame) {
-        event.candidate_frame_index = c->frame->index;
-      }
-    }
-    event.correction_m = (kf->Center() - verified.match.cam_from_world.Center()).norm();
-    if (event.merge) event.correction_m = 0.0;  // different worlds: no distance to compare
-    {
-      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-      events_.push_back(event);
-    }
-    if (target == source) {
-      MutexLock lock(source_map.mutex());
-      if (source_map.keyframe(keyframe_id)) {
-        Correct(&source_map, keyframe_id, verified);
-        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-        ++stats_.loops_accepted;
-        changed = true;
-        corrected_map = source;
-        corrected_before_[source] = source_map.ids().next_keyframe;
-      }
-    } else {
-      std::scoped_lock lock(source_map.mutex(), target_map.mutex());  // in a fixed order
-      source_map.mutex().AssertHeld();  // (the analysis does not follow std::scoped_lock)
-      target_map.mutex().AssertHeld();
-      if (source_map.keyframe(keyframe_id)) {
-        TransformMap(&source_map, verified.target_from_source);
-        std::vector<std::pair<int, BowVector>> moved;
-        for (const auto& [id, k] : source_map.keyframes()) moved.emplace_back(id, k->bow);
-        target_map.Absorb(&source_map);
-        atlas->database(source).Clear();
-        for (const auto& [id, bow] : moved) {
-          if (!bow.empty()) atlas->database(target).Add(id, bow);
-        }
-        atlas->MarkMerged(source, target);
-        auto& edges = loop_edges_[target];
-        for (const LoopEdge& e : loop_edges_[source]) edges.push_back(e);
-        loop_edges_.erase(source);
-        Correct(&target_map, keyframe_id, verified);
-        // Inline, a global BA over the whole map follows at once and subsumes it.
-        if (!options_.global_ba || background_global_ba_) {
-          std::set<int> merged_side;
-          for (const auto& [id, bow] : moved) merged_side.insert(id);
-          WeldingBundleAdjustment(&target_map, keyframe_id, verified.candidate, merged_side);
-        }
-        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-        ++stats_.merges;
-        changed = true;
-        corrected_map = target;
-        corrected_before_[target] = target_map.ids().next_keyframe;
-      }
+  // A global BA in flight works on the world this correction is about to change.
+  CancelGlobalBa();
+  pending_.erase(source);
+  const int target = verified.target_map;
+  Map& target_map = atlas->map(target);
+  LoopEvent event;
+  event.keyframe_id = keyframe_id;
+  event.candidate_id = verified.candidate;
+  event.merge = target != source;
+  event.frame_index = kf.frame->index;
+  {
+    MutexLock lock(target_map.mutex());
+    if (auto c = target_map.keyframe(verified.candidate); c && c->frame) {
+      event.candidate_frame_index = c->frame->index;
     }
   }
+  event.correction_m = (kf.Center() - verified.match.cam_from_world.Center()).norm();
+  if (event.merge) event.correction_m = 0.0;  // different worlds: no distance to compare
   {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-    ++stats_.keyframes_checked;
-    stats_.loop_ms += Ms(start);
+    events_.push_back(event);
   }
-  if (corrected_map >= 0 && options_.global_ba) GlobalBundleAdjustment(atlas, corrected_map);
-  return changed;
+  if (target == source) {
+    MutexLock lock(source_map.mutex());
+    if (source_map.keyframe(keyframe_id)) {
+      Correct(&source_map, keyframe_id, verified);
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.loops_accepted;
+      corrected_map = source;
+      corrected_before_[source] = source_map.ids().next_keyframe;
+    }
+  } else {
+    std::scoped_lock lock(source_map.mutex(), target_map.mutex());  // in a fixed order
+    source_map.mutex().AssertHeld();  // (the analysis does not follow std::scoped_lock)
+    target_map.mutex().AssertHeld();
+    if (source_map.keyframe(keyframe_id)) {
+      TransformMap(&source_map, verified.target_from_source);
+      std::vector<std::pair<int, BowVector>> moved;
+      for (const auto& [id, k] : source_map.keyframes()) moved.emplace_back(id, k->bow);
+      target_map.Absorb(&source_map);
+      atlas->database(source).Clear();
+      for (const auto& [id, bow] : moved) {
+        if (!bow.empty()) atlas->database(target).Add(id, bow);
+      }
+      atlas->MarkMerged(source, target);
+      auto& edges = loop_edges_[target];
+      for (const LoopEdge& e : loop_edges_[source]) edges.push_back(e);
+      loop_edges_.erase(source);
+      Correct(&target_map, keyframe_id, verified);
+      // Inline, a global BA over the whole map follows at once and subsumes it.
+      if (!options_.global_ba || background_global_ba_) {
+        std::set<int> merged_side;
+        for (const auto& [id, bow] : moved) merged_side.insert(id);
+        WeldingBundleAdjustment(&target_map, keyframe_id, verified.candidate, merged_side);
+      }
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.merges;
+      corrected_map = target;
+      corrected_before_[target] = target_map.ids().next_keyframe;
+    }
+  }
+  return corrected_map;
 }
 
 void LoopCloser::TransformMap(Map* map, const Rigid3d& target_from_source) {

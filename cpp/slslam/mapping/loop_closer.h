@@ -33,6 +33,7 @@
 #include <mutex>
 #include <set>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
@@ -172,6 +173,21 @@ class LoopCloser {
 
   bool Verify(Atlas* atlas, int source_map, const KeyFrame& kf, int target_map, int candidate,
               Verified* out);
+  // Process's steps. The place-recognition candidates of `kf` (keyframe database queries in
+  // every map that may take it), best first: (-score, map, keyframe id).
+  std::vector<std::tuple<double, int, int>> Candidates(Atlas* atlas, int source, const KeyFrame& kf,
+                                                       const std::set<int>& exclude,
+                                                       double min_score, int map_keyframes) const;
+  // The first candidate that passes Verify (into `out`); false when none does.
+  bool VerifyFirst(Atlas* atlas, int source, const KeyFrame& kf,
+                   const std::vector<std::tuple<double, int, int>>& candidates, Verified* out);
+  // Updates the source map's pending hypothesis with this keyframe's result (`found`,
+  // `verified`); true when it has been confirmed often enough to be applied.
+  bool Consistent(int source, bool found, const Verified& verified);
+  // Applies a confirmed loop (a correction of the source map) or merge (into the target map);
+  // the map corrected, or -1 when the keyframe went meanwhile.
+  int Apply(Atlas* atlas, int source, int keyframe_id, const KeyFrame& kf,
+            const Verified& verified);
   // Path length along the keyframes (by id) between two keyframes of a map [m]. Caller locks.
   static double PathLength(const Map& map, int from_id, int to_id) SLSLAM_REQUIRES(map.mutex());
   // Moves every keyframe, point and line of `map` from the source world into the target world
