@@ -65,7 +65,7 @@ def _precision(pairs: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray, transfer
 
 def full_resolution_lines() -> _core.LineExtractorOptions:
     """The paper's extractor: LSD at full resolution, every segment preprocessing keeps (the
-    numbers in benchmarks/README.md; the tracker's defaults detect at half resolution and keep
+    numbers this script prints; the tracker's defaults detect at half resolution and keep
     the 150 longest)."""
     options = _core.LineExtractorOptions()
     options.detection_scale = 1.0

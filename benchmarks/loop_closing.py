@@ -75,7 +75,7 @@ def simulate(name: str, frames: int, data: Path) -> Path:
 
 
 def with_loops(enabled: bool, threaded: bool = False, overrides: dict | None = None) -> Config:
-    # ORB + lines, as every result of this benchmark in benchmarks/README.md
+    # ORB + lines, as every result of this benchmark in benchmarks/log/loop_closing.md
     config = config_from_dict(overrides, point_frontend="orb")
     loop = dataclasses.replace(config.tracking.loop_closing, enabled=enabled, merge_maps=enabled)
     tracking = dataclasses.replace(config.tracking, loop_closing=loop)

@@ -26,10 +26,10 @@ per frame. Writes tracking_recovery.md and .json in --out and each run's files i
 <out>/<sequence>/<configuration>/ (<out>/seedN/<sequence>/<configuration>/ for seed N > 0).
 
 One seed's long dark runs are chaotic: the hard junction's ATE moved from 0.089 to 0.204 m
-between seeds 0-2 with the same settings (benchmarks/README.md), so a change of 20-50 % on one
-seed says little. ``--seeds 0 1 2`` runs every sequence with each simulator seed (other noise,
-dust and jitter on the same roadway) and adds a table of the mean ATE over the seeds with its
-smallest and largest.
+between seeds 0-2 with the same settings (benchmarks/log/realtime.md, 2026-11-27 d), so a change of
+20-50 % on one seed says little. ``--seeds 0 1 2`` runs every sequence with each simulator seed
+(other noise, dust and jitter on the same roadway) and adds a table of the mean ATE over the seeds
+with its smallest and largest.
 """
 
 from __future__ import annotations

@@ -452,8 +452,9 @@ class TrackingConfig:
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
     # frames the pipeline's worker may have prepared and the core not yet taken: more lets the
-    # front end run on through a keyframe's local mapping (benchmarks/README.md: 10-24 % more
-    # frames/s offline at 3 than at 1; a live camera's frames are taken as they come either way)
+    # front end run on through a keyframe's local mapping (benchmarks/log/realtime.md, 2026-11-27 c:
+    # 10-24 % more frames/s offline at 3 than at 1; a live camera's frames are taken as they come
+    # either way)
     pipeline_frames_ahead: int = _option(3, "[1, 64]")
     # stereo points a frame needs to start a map
     min_init_points: int = _tracking("min_init_points", "[3, 1000000]")
@@ -492,7 +493,7 @@ class TrackingConfig:
     # without a match (flat, ambiguous along the row, far), from their detected positions; false:
     # points from stereo only (measured: at 1 degree, without them XFeat + lines drifted half as
     # much on the dark 600-frame sequences but 1.6x as much on the short dark loops,
-    # benchmarks/README.md, 2026-11-29 g)
+    # benchmarks/log/realtime.md, 2026-11-29 g)
     triangulate_points: bool = _tracking("triangulate_points")
     # ... and only where the two rays meet at this angle at least [deg]
     triangulation_min_parallax_deg: float = _tracking("triangulation_min_parallax_deg", "[0, 180]")
@@ -502,7 +503,7 @@ class TrackingConfig:
     line_angle_weight: float = _tracking("line_angle_weight", "[0, 1000000]")
     # local BA: each line's pull towards its value at the start of each pass [1/rad] (0: none);
     # with local_ba_dogleg a local BA with lines takes about 40 % less time, but the drift moved
-    # both ways over three seeds (benchmarks/README.md, 2026-11-27 f), so off
+    # both ways over three seeds (benchmarks/log/realtime.md, 2026-11-27 f), so off
     local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1000000]")
     # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
     # no linear solve); needs local_ba_line_prior_weight > 0
@@ -510,17 +511,17 @@ class TrackingConfig:
     # motion-only BA by slslam's own 6-parameter Levenberg-Marquardt instead of a Ceres problem
     # per outlier round (the same costs and trust-region rules; about 3x faster, 2.28 -> 0.72 ms on
     # 400 stereo points); false: a Ceres problem per round, the default until 2026-11-28 i
-    # (benchmarks/README.md)
+    # (benchmarks/log/realtime.md)
     own_pose_solver: bool = _tracking("own_pose_solver")
     # local BA by slslam's own Levenberg-Marquardt with the points and lines eliminated (the same
     # costs, trust-region rules and steps, a dense reduced system over the window's free
     # keyframes; about 5x faster) instead of Ceres' sparse Schur solver; false: Ceres, the
-    # default until 2026-11-29 (benchmarks/README.md)
+    # default until 2026-11-29 (benchmarks/log/realtime.md)
     own_local_ba_solver: bool = _tracking("own_local_ba_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
     # (0: free in all four; 1: less drift in the dark with the IMU over five simulator seeds,
-    # but camera-only recovery after a blackout came out worse, so off; benchmarks/README.md,
+    # but camera-only recovery after a blackout came out worse, so off; benchmarks/log/realtime.md,
     # 2026-11-27 g)
     local_ba_line_min_information_per_rad2: float = _tracking(
         "local_ba_line_min_information_per_rad2", "[0, 1e12]"
@@ -566,7 +567,7 @@ class TrackingConfig:
     # in a frame smoothed as noisy with at least unaligned_min_aligned matches aligned to their
     # map points' patches, the matches that could not be aligned enter the motion-only BA with
     # their sigma times this (detected keypoints follow a small image motion only in part; see
-    # benchmarks/README.md) [-]; 1: all alike
+    # benchmarks/log/realtime.md, 2026-11-29 j) [-]; 1: all alike
     unaligned_sigma_factor: float = _tracking("unaligned_sigma_factor", "[1, 1000]")
     # aligned matches a noisy frame needs for unaligned_sigma_factor to apply [-]
     unaligned_min_aligned: int = _tracking("unaligned_min_aligned", "[0, 1000000000]")
@@ -590,7 +591,7 @@ class TrackingConfig:
     # at most one projected point per square cell of this size [px]
     projection_cell_px: int = _tracking("projection_cell_px", "[1, 1000]")
     # line endpoint distance sigma [px] (both endpoints share the map line's error; 1.5 px
-    # over-weighted lines, see benchmarks/README.md)
+    # over-weighted lines, see benchmarks/log/tracking_ablation.md)
     line_sigma_px: float = _tracking("line_sigma_px", "(0, 10000]")
     # LSD runs on the image scaled by this (segments mapped back; OpenCV's LBD at full
     # resolution, ours on the scaled image)
@@ -600,8 +601,8 @@ class TrackingConfig:
     line_detector: Literal["lsd", "lsd_opencv", "fld"] = _lines("line_detector")
     # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor's bytes, computed here at about
     # 20 us a segment with AVX2) or lbd (ours, from the LBD paper, about 10 us a segment on the
-    # half-size image; less accurate tracking so far, see benchmarks/README.md); a saved map
-    # keeps the kind it was made with
+    # half-size image; less accurate tracking so far, see benchmarks/log/realtime.md, 2026-11-25); a
+    # saved map keeps the kind it was made with
     line_descriptor: Literal["opencv_lbd", "lbd"] = _lines("line_descriptor")
     # keep at most this many segments per image after preprocessing, the longest (0: all)
     max_lines: int = _lines("max_lines", "[0, 100000]")
@@ -617,7 +618,7 @@ class TrackingConfig:
     lost_search_scale: float = _tracking("lost_search_scale", "[1, 1000]")
     # lost: the motion before the loss, along which the local map is tried, is the mean per-frame
     # motion over this many frames (1: the last frame's; one frame's jitter extrapolated over a
-    # blackout of 20 frames re-entered a repeated roadway 0.9 m off; benchmarks/README.md,
+    # blackout of 20 frames re-entered a repeated roadway 0.9 m off; benchmarks/log/realtime.md,
     # 2026-11-29)
     lost_motion_frames: int = _tracking("lost_motion_frames", "[1, 1000]")
     # lost: a re-entry along the motion before the loss needs this share of its point matches

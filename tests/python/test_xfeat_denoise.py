@@ -35,7 +35,7 @@ def test_smoothing_only_above_the_bound_and_it_lowers_the_noise():
 
 
 def test_detector_sees_the_smoothed_image_only_when_the_frame_is_noisy():
-    # The accuracy gain is measured on whole runs (benchmarks/README.md, real time); here the
+    # The accuracy gain is measured on whole runs (benchmarks/log/realtime.md); here the
     # wiring: keypoints at their own pixels, descriptors of the smoothed input.
     on, off = (
         XFeat(XFeatOptions(denoise_above_noise=6.0)),

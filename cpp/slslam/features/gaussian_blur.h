@@ -17,7 +17,7 @@ namespace slslam {
 // 8-bit path spreads a 752 x 480 image over its thread pool at about 1.3 ms of CPU (sigma 1.3),
 // which the frame's other threads are waiting for. This is the same integer arithmetic (8-bit
 // taps, exact sums, one rounding) on one thread, in 16-bit lanes the compiler vectorises (AVX2
-// clone, core/cpu_dispatch.h): benchmarks/README.md has the times.
+// clone, core/cpu_dispatch.h): benchmarks/log/realtime.md, 2026-11-30 d, has the times.
 cv::Mat GaussianBlur8u(const cv::Mat& image, double sigma_px, int radius_px = -1);
 
 // The kernel GaussianBlur8u uses, from the centre out: tap k in 1/256, the centre and twice the

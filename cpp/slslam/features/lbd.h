@@ -21,7 +21,7 @@
 // features/opencv_lbd.h at about 20 us a segment). The line front end computes
 // this one on the half-size image LSD ran on, about 7x cheaper. It is not the default: it
 // matched as well in isolation but degraded faster as the views moved apart, and the tracker
-// was less accurate with it (benchmarks/README.md).
+// was less accurate with it (benchmarks/log/realtime.md, 2026-11-25).
 #pragma once
 
 #include <string>

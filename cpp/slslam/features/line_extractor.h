@@ -21,7 +21,7 @@ struct LineFeatures {
 /// The segment detector. LSD is the paper's: ours (features/lsd.h) or OpenCV's
 /// LineSegmentDetector (LSD_REFINE_STD), the same algorithm; FLD (OpenCV contrib ximgproc's
 /// FastLineDetector: Canny edges fitted by lines, no merging) took about half OpenCV's LSD's time
-/// on simulated mine frames (benchmarks/README.md).
+/// on simulated mine frames (benchmarks/log/realtime.md).
 enum class LineDetector { kLsd, kOpenCvLsd, kFld };
 
 /// "lsd", "lsd_opencv" or "fld"; anything else throws std::invalid_argument naming the choices.
@@ -36,7 +36,7 @@ struct LineExtractorOptions {
   /// full resolution; LBD and everything after work at full resolution. 0.5 cuts LSD's time about
   /// 4x and keeps the long segments preprocessing keeps anyway; with max_lines 150 and
   /// keyframe_min_frames 2 it gave equal or lower ATE on the four hard simulated sequences of
-  /// benchmarks/tracking_recovery.py (benchmarks/README.md) [-], (0, 1]
+  /// benchmarks/tracking_recovery.py (benchmarks/log/tracking_recovery.md, 2026-11-24) [-], (0, 1]
   float detection_scale = 0.5f;
   LineDetector detector = LineDetector::kLsd;
   /// Keep at most this many segments after preprocessing, the longest (0: all). The LBD costs
@@ -46,7 +46,8 @@ struct LineExtractorOptions {
   /// Descriptor of the segments: OpenCV's BinaryDescriptor's bytes at full resolution
   /// (computed by features/opencv_lbd.h, the same bytes three times faster), or our LBD
   /// (features/lbd.h) on the image LSD ran on (the detection scale): about 7x cheaper, but it
-  /// tracked less accurately on the simulated sequences so far (benchmarks/README.md).
+  /// tracked less accurately on the simulated sequences so far (benchmarks/log/realtime.md,
+  /// 2026-11-25).
   LineDescriptor descriptor = LineDescriptor::kOpenCvLbd;
   LbdOptions lbd;  ///< our LBD's settings (in pixels of the detection image)
 

@@ -9,8 +9,8 @@
 // 12-15 ms a call on these 2-core machines (the largest stage of ORB + lines after ORB). It
 // works in double precision on angles, with a sine and a cosine for every pixel a region takes;
 // this one keeps each pixel's level-line direction as a unit vector and tests alignment by a dot
-// product, so growing a region needs no trigonometry (benchmarks/README.md, 2026-11-29 d, for the
-// time and for how its segments compare with OpenCV's).
+// product, so growing a region needs no trigonometry (benchmarks/log/realtime.md, 2026-11-29 d, for
+// the time and for how its segments compare with OpenCV's).
 #pragma once
 
 #include <vector>

@@ -642,7 +642,7 @@ void LoopCloser::WeldingBundleAdjustment(Map* map, int keyframe_id, int candidat
                         static_cast<int>(window.size()), options_.point_sigma_px,
                         options_.line_sigma_px);
   // Solved under the maps' locks, as the merge itself (a window of about 20 keyframes: tens of
-  // milliseconds, benchmarks/README.md).
+  // milliseconds, benchmarks/log/loop_closing.md).
   const BundleAdjustmentReport report =
       SolveBundleAdjustment(rig_, &ba.problem(), options_.global_ba_options);
   if (!report.solved) return;

@@ -34,7 +34,7 @@ struct TriangulationOptions {
   /// the dark dusty stretch of the 600-frame loops they pulled the poses. With 3, means of 3
   /// seeds of the four hard sequences: ORB + lines 0.0130 / 0.136 / 0.124 / 0.0178 -> 0.0126 /
   /// 0.101 / 0.111 / 0.0160 m, XFeat + lines 0.0198 / 0.304 / 0.298 / 0.0245 -> 0.0151 / 0.159 /
-  /// 0.173 / 0.0171 m (benchmarks/README.md, 2026-11-29 g)
+  /// 0.173 / 0.0171 m (benchmarks/log/realtime.md, 2026-11-29 g)
   double min_parallax_deg = 3.0;
   double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
   double chi2 = 5.991;                ///< reprojection bound in both views (2 dof, 95 %) [-]
@@ -46,7 +46,7 @@ struct TriangulationOptions {
   /// (Tracker::RefineTracks). false: points come from stereo alone. At min_parallax_deg 1,
   /// without them XFeat + lines drifted about half as much on the dark 600-frame sequences but
   /// 1.6x as much on the 150- and 300-frame dark loops; min_parallax_deg 3 keeps both
-  /// (benchmarks/README.md, 2026-11-29 g) [-]
+  /// (benchmarks/log/realtime.md, 2026-11-29 g) [-]
   bool points = true;
   /// Half size of the patch a triangulated point keeps of the new keyframe's left image around
   /// its keypoint (KeyFrame::left_image), as the points the tracker makes from stereo keep one

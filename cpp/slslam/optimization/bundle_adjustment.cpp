@@ -326,7 +326,7 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
   // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
   // it would be another objective. The ordering names every parameter block, in two groups
   // (with a third for the lines, local BA took longer than before this ordering; measured in
-  // benchmarks/README.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
+  // benchmarks/log/realtime.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
   if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
     for (size_t i = 0; i < ba.points.size(); ++i) {

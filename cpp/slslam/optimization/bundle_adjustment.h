@@ -64,7 +64,7 @@ struct BundleAdjustmentOptions {
   /// as a roadway edge driven along). With `dogleg_with_lines` a local BA then took 42 % less time
   /// (pull 10); but the pull biases each pass towards its start, and over three seeds of the hard
   /// sequences 30 drifted more on the dark loop and 10 on the bright one, so both stay off
-  /// (benchmarks/README.md, 2026-11-27 f).
+  /// (benchmarks/log/realtime.md, 2026-11-27 f).
   double line_prior_weight = 0.0;
   /// Powell's dogleg instead of Levenberg-Marquardt when the problem has lines: a rejected step
   /// costs one evaluation, not a new linear solve (the Schur elimination, most of a solve). Use
@@ -78,14 +78,14 @@ struct BundleAdjustmentOptions {
   /// Nearly every line of a local window has a direction its observers barely see (cameras
   /// driven along a roadway edge): the smallest eigenvalue was below 1 for 45 % of them and
   /// below 10 for 97 %, and their free steps there made Levenberg-Marquardt reject 60 % of its
-  /// steps (benchmarks/README.md, 2026-11-27 g). 0: every line free in all four directions.
+  /// steps (benchmarks/log/realtime.md, 2026-11-27 g). 0: every line free in all four directions.
   double line_min_information_per_rad2 = 0.0;
   /// true: each pass solved by this library's own Levenberg-Marquardt with the landmarks
   /// eliminated (schur_levenberg_marquardt.h: Ceres' trust-region rules on the same costs, no
   /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR),
   /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took as many
   /// steps in each, to the same cost within 1e-6 in 169 (1e-9 in 121, 0.15-0.7 % apart in 5),
-  /// in 5.8x less time (benchmarks/README.md, 2026-11-29).
+  /// in 5.8x less time (benchmarks/log/realtime.md, 2026-11-29).
   /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg or
   /// held line directions above; Ceres solves the others (a large map's global BA) [-]
   bool own_solver = true;

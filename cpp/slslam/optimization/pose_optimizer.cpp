@@ -155,7 +155,7 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
 // The default (PoseOptimizerOptions::own_solver): on a 6-parameter problem 70 % of Ceres' time
 // went to building the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3
 // against 0.7 ms here, on every frame's tracking; on the long dark sequences its accuracy is
-// within the spread of simulator seeds of Ceres' (benchmarks/README.md, 2026-11-27 i and
+// within the spread of simulator seeds of Ceres' (benchmarks/log/realtime.md, 2026-11-27 i and
 // 2026-11-28 i). Ceres solves by QR of the Jacobian, this by the normal equations, so steps differ
 // in the last digits (pose_optimizer_test compares steps with Huber losses and with scaled lines,
 // and the whole outlier rounds, with Ceres). When the starting pose cannot be evaluated the pose
@@ -200,7 +200,7 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
       // candidate without taking it (and at a rise as small); this takes the lower cost. Taking
       // it or not moves later poses in the last digits, and those decide, through the long dark
       // runs' chaos, e.g. whether a camera-only blackout in test_tracking.py comes back into
-      // its map (benchmarks/README.md, 2026-11-27 i).
+      // its map (benchmarks/log/realtime.md, 2026-11-27 i).
       if (!(relative_decrease > 1e-6)) return;
     } else {
       radius /= decrease_factor;

@@ -40,7 +40,7 @@ struct PoseOptimizerOptions {
   /// true: each round solved by this library's 6-parameter Levenberg-Marquardt (Ceres' rules on
   /// the same costs, 3-4x faster: no problem to build); false: by Ceres (the default until
   /// 2026-11-28 i; the two agree within the spread of simulator seeds on the long sequences, and
-  /// each lost one run that the other kept: benchmarks/README.md, 2026-11-28 i).
+  /// each lost one run that the other kept: benchmarks/log/realtime.md, 2026-11-28 i).
   bool own_solver = true;
 
   void Check() const;

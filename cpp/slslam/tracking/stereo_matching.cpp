@@ -293,7 +293,7 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
   frame->depth.resize(n, -1.0);
   // Keypoints in parallel stripes (each keypoint writes only its own entries; buffers per
   // stripe): on two threads the stereo stage of ORB points (1,000 keypoints, realtime.py) went
-  // from 9.7 to 5.1 ms median, the same matches (benchmarks/README.md, 2026-11-29 i).
+  // from 9.7 to 5.1 ms median, the same matches (benchmarks/log/realtime.md, 2026-11-29 i).
   const auto search = [&](const cv::Range& range) {
     std::vector<float> patch(side * side);  // left patch minus its mean, row-major
     std::vector<float> strip;               // right rows of the search range, as float

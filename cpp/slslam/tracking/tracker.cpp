@@ -797,7 +797,7 @@ void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, Track
   // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
   // from the pose its points gave, and the pose is optimised again with them. The keyframe
   // keeps its points' matches from the first tracking (the second, pulled by the lines,
-  // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/README.md
+  // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/log/realtime.md,
   // 2026-11-27 h); its keypoints are refined as the second tracking aligned them (below),
   // and it is made either way. The local map is copied again in the world the estimate is
   // in (the anchor's): when a correction or a merge landed since (threaded mode), the

@@ -103,7 +103,7 @@ struct TrackerOptions {
   /// lost. The frames between keyframes of a well-textured stretch are tracked on their points:
   /// no line detection and no LBD there (the largest part of a frame's front end with ORB).
   /// Applies with right_lines_on_keyframes (without it both images' lines are extracted every
-  /// frame). Measured (benchmarks/README.md, 2026-11-27 h): five simulator seeds of the four
+  /// frame). Measured (benchmarks/log/realtime.md, 2026-11-27 h): five simulator seeds of the four
   /// 600-frame sequences with the IMU, mean ATE dark dusty loop -16 %, hard junction -11 %,
   /// bright loop +7 %, spin +6 %; about half the bright loop's frames skip their lines. Off:
   /// every frame's lines
@@ -118,7 +118,7 @@ struct TrackerOptions {
   bool sequential = true;  ///< local mapping inline (reproducible) or on its own thread
   /// Threaded mode only: ORB-SLAM3's brake on keyframes. While local mapping is busy the minimum
   /// gap alone asks for no keyframe, and a keyframe that is due interrupts the running local BA
-  /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/README.md,
+  /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/log/realtime.md,
   /// 2026-11-26): 5-20 % more frames/s, but worse ATE on the hard dark sequences, so off.
   bool mapping_brake = false;
   /// Sequential mode only: each keyframe's local BA solves on a thread of its own, on the window's
@@ -133,7 +133,7 @@ struct TrackerOptions {
   /// solve competes with the frames' own work, so the 95th percentile of the per-frame latency
   /// falls by 29-49 % but its median rises (ORB points, bright loop: 108-129 -> 64-70
   /// ms and 21-23 -> 29-34 ms), frames/s gain only in the dark, and XFeat + lines drifted
-  /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/README.md, 2026-11-27 d).
+  /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/log/realtime.md, 2026-11-27 d).
   bool mapping_overlap = false;
   int min_init_points = 50;           ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;               ///< fewer inliers after motion-only BA: LOST [-]
@@ -153,12 +153,13 @@ struct TrackerOptions {
   /// ... in a noisy frame (StereoFrame::noisy: smoothed as dark) instead: keypoints repeat less
   /// well there and fewer are tracked, so the map needs its keyframes sooner. XFeat + lines,
   /// 150 frames of the simulated loop at light 0.15, seeds 0-4, mean ATE 0.0100 m with the gap
-  /// of 6 frames, 0.0082 with 5, 0.0079 with 4 (benchmarks/README.md, 2026-11-30 b). -1: the
+  /// of 6 frames, 0.0082 with 5, 0.0079 with 4 (benchmarks/log/realtime.md, 2026-11-30 b). -1: the
   /// same as keyframe_min_frames [frames]
   int keyframe_min_frames_noisy = -1;
   /// ... nor sooner than this after it, while tracking is strong: a gap in time, the same at any
   /// camera rate. Off by default: 0.075 s (2 frames at 20 Hz, 1 at 10 Hz) with no frame gap was
-  /// better on the dark 10 Hz loop and much worse on the bright one (benchmarks/README.md) [s]
+  /// better on the dark 10 Hz loop and much worse on the bright one
+  /// (benchmarks/log/loop_closing.md) [s]
   double keyframe_min_interval_s = 0.0;
   double keyframe_track_ratio = 0.75;   ///< tracked / reference-keyframe points (those seen by
                                         ///< >= 3 keyframes) below this: keyframe [-]
@@ -174,7 +175,7 @@ struct TrackerOptions {
   /// and a keyframe take the aligned position, the stereo column shifted with it. Detected
   /// keypoints repeat to 1-2 px against the ground truth (XFeat 1.8, SuperPoint and ORB 1.1 px
   /// median on the simulated loop); aligned ones follow the point the map was made from.
-  /// Measured (benchmarks/README.md, 2026-11-27): XFeat + lines 0.0404 -> 0.015 m on the
+  /// Measured (benchmarks/log/realtime.md, 2026-11-27): XFeat + lines 0.0404 -> 0.015 m on the
   /// 600-frame bright loop, ORB + lines 0.163 -> 0.089 m on the hard junction. Points that local
   /// mapping triangulates and points loaded from a map file have no patch. 0: off
   int track_refine_window_px = 5;
@@ -182,7 +183,7 @@ struct TrackerOptions {
   /// keyframe's left image (TriangulationOptions::patch_window_px, the keyframe holding its image
   /// until then): their later matches are aligned as the stereo points' are, instead of taken at
   /// the detected position, which follows a small image motion only in part (XFeat's keypoints a
-  /// 0.5 % scale change by 0.84 of it, benchmarks/README.md 2026-11-29 h). Needs
+  /// 0.5 % scale change by 0.84 of it, benchmarks/log/realtime.md, 2026-11-29 h). Needs
   /// track_refine_window_px > 0. false: triangulated points have no patch, as before [-]
   bool triangulated_point_patches = false;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
@@ -190,15 +191,15 @@ struct TrackerOptions {
   /// unaligned_min_aligned matches aligned to their map points' patches (track_refine_window_px),
   /// the matches that could not be aligned enter the motion-only BA with their sigma times this.
   /// Detected keypoints follow a small image motion only in part (XFeat's 84-94 % of a 0.5-1 %
-  /// scale change, benchmarks/README.md 2026-11-29 h), so in a dark stretch where the image
+  /// scale change, benchmarks/log/realtime.md, 2026-11-29 h), so in a dark stretch where the image
   /// scales by about 1 % a frame the unaligned matches pull the pose short; the aligned ones
   /// follow the map. The count gate keeps the weights where few matches align (a turn on the
   /// spot: the alignment models no rotation; frames tracked on projected keypoints, which are
   /// aligned already). Off: XFeat + lines with 3 (the other gates as below), seeds 0-2 of the
   /// 600-frame sequences: dusty dark loop 0.166 -> 0.145 m and hard junction 0.173 -> 0.157 m
   /// (means), bright loop the same poses, but the spin 0.0181 -> 0.0219 m and the 150-frame dark
-  /// loop of realtime.py 0.0082 -> 0.0090 m (benchmarks/README.md, 2026-11-29 j). 1: every match
-  /// with point_sigma_px [-]
+  /// loop of realtime.py 0.0082 -> 0.0090 m (benchmarks/log/realtime.md, 2026-11-29 j). 1: every
+  /// match with point_sigma_px [-]
   double unaligned_sigma_factor = 1.0;
   int unaligned_min_aligned = 30;  ///< see unaligned_sigma_factor [-]
   /// ... and while the camera turned by at most this between the last two frames (the motion
@@ -224,14 +225,16 @@ struct TrackerOptions {
   /// the 150-frame loop but the 600-frame bright loop drifted more, 0.0133 -> 0.0153 m over 3
   /// seeds). configs/xfeat.yaml sets 2 with projection_cell_px 16: XFeat + lines 1.26x / 1.39x
   /// the frames/s (light 1.0 / 0.15), the 600-frame sequences' ATE 0.91 - 1.07 of its own
-  /// without (benchmarks/README.md, 2026-11-29 e and f). 0: every frame's keypoints are detected
+  /// without (benchmarks/log/realtime.md, 2026-11-29 e and f). 0: every frame's
+  /// keypoints are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
   int projection_search_px = 8;      ///< the global shift's search radius [px]
   int projection_cell_px = 24;       ///< at most one projected point per cell of this size [px]
   double line_sigma_px = 3.0;        ///< line endpoint distance sigma [px]: the two
                                      ///< distances of one segment share the map line's error
-                                     ///< (benchmarks/README.md: 1.5 px over-weighted lines)
+                                     ///< (benchmarks/log/tracking_ablation.md:
+                                     ///< 1.5 px over-weighted lines)
   double line_inlier_weight = 1.0;   ///< a line inlier counts as this many point inliers when
                                      ///< deciding LOST, keyframes and a new map [-]
   int recently_lost_frames = 10;     ///< frames of RECENTLY_LOST before LOST [frames]
@@ -243,14 +246,15 @@ struct TrackerOptions {
   /// twenty black frames extrapolate one frame's jitter twentyfold. On the camera-only blackouts
   /// of the simulated junction (light 0.5 seeds 0-8, light 0.15 with dust seeds 0-15) 5 brought
   /// all 25 back right with either local BA solver, where with 1 the bright seed 0 re-entered
-  /// 0.9 m off with the own one (benchmarks/README.md, 2026-11-29). 1: the last frame's [frames]
+  /// 0.9 m off with the own one (benchmarks/log/realtime.md, 2026-11-29). 1: the last
+  /// frame's [frames]
   int lost_motion_frames = 5;
   /// Lost, the local map tracked from a pose along the motion before the loss is taken only where
   /// at least this share of its point matches are inliers [-]. Lines do not count here: a line
   /// constrains a pose little along itself, and on the camera-only blackout of the simulated
   /// junction at light 0.5 the wrong re-entries kept 12-13 % of their point matches and made up
-  /// the rest with line inliers, the right ones kept 38-48 % (benchmarks/README.md, 2026-11-28).
-  /// 0: any share above none (a pose held by lines alone is never taken)
+  /// the rest with line inliers, the right ones kept 38-48 % (benchmarks/log/realtime.md,
+  /// 2026-11-28). 0: any share above none (a pose held by lines alone is never taken)
   double lost_reentry_min_point_ratio = 0.25;
   /// Lost: the re-entry along the loss motion whose pose holds fewer than twice min_inliers is
   /// taken when it holds min_inliers and the previous frame's (also short of the bar, with
@@ -259,7 +263,7 @@ struct TrackerOptions {
   /// take no part (two frames of it agree by construction). On the dark camera-only blackout of
   /// the simulated junction the attempts along the motion reached the right pose (1-9 cm off)
   /// with 21-29 weighted inliers, frame after frame, until the frozen pose 1 m behind got past
-  /// the bar on its lines (benchmarks/README.md, 2026-11-28 d). 0: off [m]
+  /// the bar on its lines (benchmarks/log/realtime.md, 2026-11-28 d). 0: off [m]
   double lost_reentry_confirm_m = 0.15;
   /// Lost: lit frames (at least min(min_init_points, 15) stereo points, StartMap's first check;
   /// a black frame has none) that must fail relocalisation and the re-entry along the loss

@@ -118,11 +118,11 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // inliers, then by the weighted inliers. Lines and far points cannot tell poses apart along
   // the roadway (its edges run along it, and a far point moves little with the camera), the
   // close points with a depth can. On the camera-only blackouts of the simulated junction
-  // (benchmarks/README.md, 2026-11-28), dark: the frozen pose, 1 m behind the truth, kept 28-32
-  // line inliers and 12-22 point inliers, 1-7 of them with a depth; the poses along the motion
-  // 4-15 cm off 13-24 points, 7-11 with a depth, and fewer lines. A wrong pose may also gather a
-  // few points among the wide window's many matches, so an attempt must keep a share of its
-  // point matches.
+  // (benchmarks/log/realtime.md, 2026-11-28), dark: the frozen pose, 1 m behind the truth, kept
+  // 28-32 line inliers and 12-22 point inliers, 1-7 of them with a depth; the poses along the
+  // motion 4-15 cm off 13-24 points, 7-11 with a depth, and fewer lines. A wrong pose may also
+  // gather a few points among the wide window's many matches, so an attempt must keep a share of
+  // its point matches.
   struct Rank {
     int stereo_points = 0;
     int points = 0;

@@ -221,8 +221,8 @@ class SuperPoint:
     #: The tracker hands the network the image as it came, not the copy it smooths for lines and
     #: stereo matching when it is noisy (``tracking.denoise_above_noise``): on 150 frames of the
     #: simulated loop at light 0.15, SuperPoint + lines drifted 0.0134 m on the raw images and
-    #: 0.0195 m on the smoothed ones (benchmarks/README.md, 2026-11-26). Bright frames are quiet,
-    #: so the two are the same image there.
+    #: 0.0195 m on the smoothed ones (benchmarks/log/realtime.md, 2026-11-26). Bright frames are
+    #: quiet, so the two are the same image there.
     smoothed_input = False
 
     def __init__(self, options: SuperPointOptions = SuperPointOptions()):

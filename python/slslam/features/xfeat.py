@@ -29,7 +29,7 @@ multiples of 32 both give the same keypoints.
 holding a keypoint above the threshold keeps only those). With the rank as the score, 86 % of the
 keypoints above the threshold scored below it on a EuRoC image and the fallback thinned the cells
 that had any; on 100 frames of the dark simulated loop (XFeat + lines) that gave 0.073 m ATE
-against 0.039 m with the heatmap value (benchmarks/README.md).
+against 0.039 m with the heatmap value (benchmarks/log/xfeat_frontend.md).
 
 Keypoints are whole pixels. The keypoint head sees one 8 x 8 cell at a time, so a keypoint repeats
 exactly under shifts by whole cells and within about 1.3 px rms along a shift that moves the
