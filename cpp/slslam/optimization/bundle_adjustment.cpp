@@ -227,6 +227,70 @@ PassSummary SolvePassOwn(const StereoRig& rig, const BaProblem& ba,
   return summary;
 }
 
+// Solver options of one Ceres pass over the used blocks (the ordering below).
+ceres::Solver::Options CeresPassOptions(const BaProblem& ba, const BundleAdjustmentOptions& options,
+                                        bool robust, const std::vector<bool>& point_used,
+                                        const std::vector<bool>& pose_used,
+                                        const std::vector<bool>& line_used,
+                                        Parameters* parameters) {
+  Parameters& params = *parameters;
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  if (options.dogleg_with_lines &&
+      std::any_of(line_used.begin(), line_used.end(), [](bool used) { return used; })) {
+    solver_options.trust_region_strategy_type = ceres::DOGLEG;
+  }
+  solver_options.max_num_iterations =
+      robust ? options.robust_iterations : options.refine_iterations;
+  solver_options.num_threads = 1;
+  // The points are eliminated, the poses and lines kept in the reduced system. In the refine
+  // pass every point block has two rows (above) and every pose tangent six, so Ceres' Schur
+  // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
+  // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
+  // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
+  // it would be another objective. The ordering names every parameter block, in two groups
+  // (with a third for the lines, local BA took longer than before this ordering; measured in
+  // benchmarks/log/realtime.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
+  if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (size_t i = 0; i < ba.points.size(); ++i) {
+      if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
+    }
+    for (size_t i = 0; i < ba.poses.size(); ++i) {
+      if (pose_used[i]) ordering->AddElementToGroup(params.pose(i), 1);
+    }
+    for (size_t i = 0; i < ba.lines.size(); ++i) {
+      if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
+    }
+    solver_options.linear_solver_ordering = ordering;
+  }
+  return solver_options;
+}
+
+// A Ceres pass's summary as the pass's (stopped by `abort`: aborted).
+PassSummary PassSummaryOf(const ceres::Solver::Summary& solved, const std::atomic<bool>* abort,
+                          const std::atomic<bool>* interrupt) {
+  PassSummary summary;
+  summary.ran = true;
+  if (abort && abort->load()) {
+    summary.aborted = true;
+    return summary;
+  }
+  // (iterations[0] is the start itself; Ceres counts it among the successful steps)
+  const bool moved =
+      solved.iterations.size() > 1 &&
+      std::any_of(solved.iterations.begin() + 1, solved.iterations.end(),
+                  [](const ceres::IterationSummary& it) { return it.step_is_successful; });
+  summary.interrupted_unmoved = interrupt && interrupt->load() && !moved;
+  // (iterations[0] is the start, not a step)
+  summary.steps = std::max(static_cast<int>(solved.iterations.size()) - 1, 0);
+  summary.rejected_steps = solved.num_unsuccessful_steps;
+  summary.initial_cost = solved.initial_cost;
+  summary.final_cost = solved.final_cost;
+  summary.usable = solved.IsSolutionUsable();
+  return summary;
+}
+
 // One pass by Ceres (SPARSE_SCHUR; the pull, the dogleg, held line directions, large problems).
 PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
                            const BundleAdjustmentOptions& options, bool robust,
@@ -310,60 +374,14 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
     if (ba.poses[i].fixed) solver_problem.SetParameterBlockConstant(params.pose(i));
   }
 
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-  if (options.dogleg_with_lines &&
-      std::any_of(line_used.begin(), line_used.end(), [](bool used) { return used; })) {
-    solver_options.trust_region_strategy_type = ceres::DOGLEG;
-  }
-  solver_options.max_num_iterations =
-      robust ? options.robust_iterations : options.refine_iterations;
-  solver_options.num_threads = 1;
-  // The points are eliminated, the poses and lines kept in the reduced system. In the refine
-  // pass every point block has two rows (above) and every pose tangent six, so Ceres' Schur
-  // eliminator runs its fixed-size <2, 3, 6> kernel; blocks of 2 and 3 rows, or lines
-  // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
-  // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
-  // it would be another objective. The ordering names every parameter block, in two groups
-  // (with a third for the lines, local BA took longer than before this ordering; measured in
-  // benchmarks/log/realtime.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
-  if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
-    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (size_t i = 0; i < ba.points.size(); ++i) {
-      if (point_used[i]) ordering->AddElementToGroup(params.points[i].data(), 0);
-    }
-    for (size_t i = 0; i < ba.poses.size(); ++i) {
-      if (pose_used[i]) ordering->AddElementToGroup(params.pose(i), 1);
-    }
-    for (size_t i = 0; i < ba.lines.size(); ++i) {
-      if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
-    }
-    solver_options.linear_solver_ordering = ordering;
-  }
+  ceres::Solver::Options solver_options =
+      CeresPassOptions(ba, options, robust, point_used, pose_used, line_used, &params);
   solver_options.logging_type = ceres::SILENT;
   StopCallback stop_callback(abort, interrupt);
   if (abort || interrupt) solver_options.callbacks.push_back(&stop_callback);
   ceres::Solver::Summary solved;
   ceres::Solve(solver_options, &solver_problem, &solved);
-  PassSummary summary;
-  summary.ran = true;
-  if (abort && abort->load()) {
-    summary.aborted = true;
-    return summary;
-  }
-  // (iterations[0] is the start itself; Ceres counts it among the successful steps)
-  const bool moved =
-      solved.iterations.size() > 1 &&
-      std::any_of(solved.iterations.begin() + 1, solved.iterations.end(),
-                  [](const ceres::IterationSummary& it) { return it.step_is_successful; });
-  summary.interrupted_unmoved = interrupt && interrupt->load() && !moved;
-  // (iterations[0] is the start, not a step)
-  summary.steps = std::max(static_cast<int>(solved.iterations.size()) - 1, 0);
-  summary.rejected_steps = solved.num_unsuccessful_steps;
-  summary.initial_cost = solved.initial_cost;
-  summary.final_cost = solved.final_cost;
-  summary.usable = solved.IsSolutionUsable();
-  return summary;
+  return PassSummaryOf(solved, abort, interrupt);
 }
 
 }  // namespace

@@ -244,6 +244,62 @@ void SolvePoseCeres(const std::vector<const PoseTerm*>& terms, bool robust, int 
   ceres::Solve(solver_options, &problem, &summary);
 }
 
+// The pose problem's terms, one per observation, built once for all rounds (the same analytic
+// costs as local BA), over the landmarks' parameters (sized by the caller, filled here: the
+// costs point into them).
+void BuildPoseTerms(const StereoRig& rig, const std::vector<PointObservation>& points,
+                    const std::vector<LineObservation>& lines, const PoseOptimizerOptions& options,
+                    std::vector<Eigen::Vector3d>* point_params_out,
+                    std::vector<std::array<double, kLineSize>>* line_params_out,
+                    std::vector<PoseTerm>* point_terms_out, std::vector<PoseTerm>* line_terms_out) {
+  std::vector<Eigen::Vector3d>& point_params = *point_params_out;
+  std::vector<std::array<double, kLineSize>>& line_params = *line_params_out;
+  for (size_t i = 0; i < points.size(); ++i) point_params[i] = points[i].point_w;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    LineToParameters(OrthonormalLine::FromPlucker(lines[i].line_w), line_params[i].data());
+  }
+  // One term per observation, built once for all rounds (the same analytic costs as local BA).
+  std::vector<PoseTerm>& point_terms = *point_terms_out;
+  point_terms.resize(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const PointObservation& obs = points[i];
+    PoseTerm& term = point_terms[i];
+    if (obs.stereo) {
+      term.cost = std::make_unique<StereoPointCost>(rig, obs.observed, obs.sigma_px);
+      term.huber = std::sqrt(options.chi2_stereo);
+    } else {
+      term.cost = std::make_unique<PointCost>(rig.camera, obs.observed.head<2>(), obs.sigma_px);
+      term.huber = std::sqrt(options.chi2_mono);
+    }
+    term.landmark = point_params[i].data();
+  }
+  // (a line weight of 0 leaves the lines out of the problem; they are still classified)
+  std::vector<PoseTerm>& line_terms = *line_terms_out;
+  line_terms.resize(options.line_weight > 0.0 ? lines.size() : 0);
+  for (size_t i = 0; i < line_terms.size(); ++i) {
+    const LineObservation& obs = lines[i];
+    PoseTerm& term = line_terms[i];
+    term.cost = std::make_unique<LineCost>(rig.camera, obs.start_px, obs.end_px,
+                                           options.line_angle_weight, obs.sigma_px);
+    term.huber = std::sqrt(options.chi2_line);
+    term.weight = options.line_weight;
+    term.line = true;
+    term.landmark = line_params[i].data();
+  }
+}
+
+// The terms of the observations classified as inliers in `result`.
+void ActiveTerms(const PoseOptimizerResult& result, const std::vector<PoseTerm>& point_terms,
+                 const std::vector<PoseTerm>& line_terms, std::vector<const PoseTerm*>* active) {
+  active->clear();
+  for (size_t i = 0; i < point_terms.size(); ++i) {
+    if (result.point_inlier[i]) active->push_back(&point_terms[i]);
+  }
+  for (size_t i = 0; i < line_terms.size(); ++i) {
+    if (result.line_inlier[i]) active->push_back(&line_terms[i]);
+  }
+}
+
 }  // namespace
 
 void PoseOptimizerOptions::Check() const {
@@ -280,36 +336,9 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
   // Landmarks are constants of this problem: their parameters, read by the costs.
   std::vector<Eigen::Vector3d> point_params(points.size());
   std::vector<std::array<double, kLineSize>> line_params(lines.size());
-  for (size_t i = 0; i < points.size(); ++i) point_params[i] = points[i].point_w;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    LineToParameters(OrthonormalLine::FromPlucker(lines[i].line_w), line_params[i].data());
-  }
-  // One term per observation, built once for all rounds (the same analytic costs as local BA).
-  std::vector<PoseTerm> point_terms(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const PointObservation& obs = points[i];
-    PoseTerm& term = point_terms[i];
-    if (obs.stereo) {
-      term.cost = std::make_unique<StereoPointCost>(rig, obs.observed, obs.sigma_px);
-      term.huber = std::sqrt(options.chi2_stereo);
-    } else {
-      term.cost = std::make_unique<PointCost>(rig.camera, obs.observed.head<2>(), obs.sigma_px);
-      term.huber = std::sqrt(options.chi2_mono);
-    }
-    term.landmark = point_params[i].data();
-  }
-  // (a line weight of 0 leaves the lines out of the problem; they are still classified)
-  std::vector<PoseTerm> line_terms(options.line_weight > 0.0 ? lines.size() : 0);
-  for (size_t i = 0; i < line_terms.size(); ++i) {
-    const LineObservation& obs = lines[i];
-    PoseTerm& term = line_terms[i];
-    term.cost = std::make_unique<LineCost>(rig.camera, obs.start_px, obs.end_px,
-                                           options.line_angle_weight, obs.sigma_px);
-    term.huber = std::sqrt(options.chi2_line);
-    term.weight = options.line_weight;
-    term.line = true;
-    term.landmark = line_params[i].data();
-  }
+  std::vector<PoseTerm> point_terms, line_terms;
+  BuildPoseTerms(rig, points, lines, options, &point_params, &line_params, &point_terms,
+                 &line_terms);
 
   PoseTerm prior_term;
   if (prior != nullptr) {
@@ -327,13 +356,7 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
   std::vector<const PoseTerm*> active;
   for (int round = 0; round < options.rounds; ++round) {
     const bool robust = round < options.robust_rounds;
-    active.clear();
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (result.point_inlier[i]) active.push_back(&point_terms[i]);
-    }
-    for (size_t i = 0; i < line_terms.size(); ++i) {
-      if (result.line_inlier[i]) active.push_back(&line_terms[i]);
-    }
+    ActiveTerms(result, point_terms, line_terms, &active);
     // Three points (or an equivalent set of lines) determine a pose; fewer is not a pose.
     if (active.size() < min_active) {
       if (round == 0) return result;  // success stays false, pose stays the initial guess
@@ -366,13 +389,7 @@ PoseOptimizerResult OptimizePose(const StereoRig& rig, const Rigid3d& cam_from_w
   result.success = result.point_inliers + result.line_inliers >= static_cast<int>(min_active);
   if (prior != nullptr) {
     // The posterior information at the result: the inliers without kernel and the prior.
-    active.clear();
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (result.point_inlier[i]) active.push_back(&point_terms[i]);
-    }
-    for (size_t i = 0; i < line_terms.size(); ++i) {
-      if (result.line_inlier[i]) active.push_back(&line_terms[i]);
-    }
+    ActiveTerms(result, point_terms, line_terms, &active);
     active.push_back(&prior_term);
     PoseNormalEquations at_result;
     if (EvaluatePoseTerms(active, /*robust=*/false, pose.data(), &at_result)) {

@@ -153,9 +153,10 @@ void SensorModel::Check() const {
                "sensor read_noise_dn must be >= 0, got ", read_noise_dn);
 }
 
-void ShadeImage(const ShadingInput& input, int height, int width, const ShadingCamera& camera,
-                const Lighting& lighting, const SensorModel& sensor, uint64_t frame_index,
-                uint8_t* image) {
+namespace {
+// ShadeImage's arguments checked (each names what is wrong).
+void CheckShadeImage(const ShadingInput& input, int height, int width, const ShadingCamera& camera,
+                     const Lighting& lighting, const SensorModel& sensor, const uint8_t* image) {
   SLSLAM_CHECK(height > 0 && width > 0, "image size must be positive, got ", height, "x", width);
   input.Check();
   SLSLAM_CHECK(input.count == static_cast<std::size_t>(height) * static_cast<std::size_t>(width),
@@ -166,6 +167,13 @@ void ShadeImage(const ShadingInput& input, int height, int width, const ShadingC
   lighting.Check();
   sensor.Check();
   RequireKnownMaterials(input.material, input.count);
+}
+}  // namespace
+
+void ShadeImage(const ShadingInput& input, int height, int width, const ShadingCamera& camera,
+                const Lighting& lighting, const SensorModel& sensor, uint64_t frame_index,
+                uint8_t* image) {
+  CheckShadeImage(input, height, width, camera, lighting, sensor, image);
 
   // Everything the inner loop needs, in float.
   const Vec3 cam = camera.position.cast<float>();

@@ -519,13 +519,12 @@ TrackResult HandedBack() {
 }
 }  // namespace
 
-TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
-  TrackResult result;
-  Require(!frame->left_lines_pending || (complete_left_lines_ && *complete_left_lines_),
+void Tracker::CheckFrameInput(const StereoFrame& frame) {
+  Require(!frame.left_lines_pending || (complete_left_lines_ && *complete_left_lines_),
           "a frame built without its left lines (lines_on_demand) needs Track's "
           "complete_left_lines");
-  if (loaded_descriptor_type_ >= 0 && frame->NumKeypoints() > 0) {
-    const cv::Mat& d = frame->keypoints.descriptors;
+  if (loaded_descriptor_type_ >= 0 && frame.NumKeypoints() > 0) {
+    const cv::Mat& d = frame.keypoints.descriptors;
     SLSLAM_CHECK(d.type() == loaded_descriptor_type_ && d.cols == loaded_descriptor_cols_,
                  loaded_path_, ": the map was made with another point front end (descriptors of ",
                  loaded_descriptor_cols_, " ",
@@ -533,6 +532,40 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
                  d.cols, ")");
     loaded_descriptor_type_ = -1;  // checked once
   }
+}
+
+void Tracker::Recover(const StereoFrame& frame, const Rigid3d& predicted, TrackResult* result,
+                      LocalTracking* tracking, bool* tracked, bool* relocalised) {
+  if (mode_ != Mode::kTracking) {
+    // Recently lost: the active map only; lost: every map, the active one first, then the newest.
+    std::vector<int> order = {active_};
+    if (mode_ == Mode::kLost) {
+      for (int m = atlas_.size() - 1; m >= 0; --m) {
+        if (m != active_ && !atlas_.merged(m)) order.push_back(m);
+      }
+    }
+    *relocalised = Relocalise(frame, order, result, tracking);
+  }
+  if (!*relocalised && mode_ == Mode::kLost && have_pose_) {
+    bool confirmed = false;
+    *tracking = TrackAlongLossMotion(frame, predicted, &confirmed);  // lost: it was empty
+    // (a confirmed attempt holds min_inliers: TrackAlongLossMotion's candidate rule)
+    *tracked = tracking->pose.success &&
+               (confirmed || tracking->weighted_inliers >= 2.0 * options_.min_inliers);
+  }
+}
+
+void Tracker::CountMatches(const LocalTracking& tracking, TrackResult* result) {
+  result->matched_points = static_cast<int>(tracking.point_ids.size());
+  result->matched_lines = static_cast<int>(tracking.line_ids.size());
+  result->inlier_points = tracking.pose.point_inliers;
+  result->inlier_lines = tracking.pose.line_inliers;
+  result->weighted_inliers = tracking.weighted_inliers;
+}
+
+TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
+  TrackResult result;
+  CheckFrameInput(*frame);
   // projected_max_frames: a frame given without its keypoints is tracked on the map's points
   // placed in it, or handed back (before anything changed) to come again with them. A frame
   // given with its keypoints is tracked on them: the caller decides which frames are detected
@@ -631,28 +664,8 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   // The local map's pose optimisation (with the IMU prior), for the inertial state's weak
   // correction when the frame is not tracked; relocalisation below overwrites `tracking`.
   const PoseOptimizerResult local_pose = tracking.pose;
-  if (!tracked && mode_ != Mode::kTracking) {
-    // Recently lost: the active map only; lost: every map, the active one first, then the newest.
-    std::vector<int> order = {active_};
-    if (mode_ == Mode::kLost) {
-      for (int m = atlas_.size() - 1; m >= 0; --m) {
-        if (m != active_ && !atlas_.merged(m)) order.push_back(m);
-      }
-    }
-    relocalised = Relocalise(*frame, order, &result, &tracking);
-  }
-  if (!tracked && !relocalised && mode_ == Mode::kLost && have_pose_) {
-    bool confirmed = false;
-    tracking = TrackAlongLossMotion(*frame, predicted, &confirmed);  // lost: it was empty
-    // (a confirmed attempt holds min_inliers: TrackAlongLossMotion's candidate rule)
-    tracked = tracking.pose.success &&
-              (confirmed || tracking.weighted_inliers >= 2.0 * options_.min_inliers);
-  }
-  result.matched_points = static_cast<int>(tracking.point_ids.size());
-  result.matched_lines = static_cast<int>(tracking.line_ids.size());
-  result.inlier_points = tracking.pose.point_inliers;
-  result.inlier_lines = tracking.pose.line_inliers;
-  result.weighted_inliers = tracking.weighted_inliers;
+  if (!tracked) Recover(*frame, predicted, &result, &tracking, &tracked, &relocalised);
+  CountMatches(tracking, &result);
   result.matching_ms = tracking.matching_ms;
   result.optimisation_ms = tracking.optimisation_ms;
 
@@ -828,11 +841,7 @@ void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, Track
       map.mutex().AssertHeld();  // locked by LockActiveMap
       AcceptLines(map, with_lines, &line_match);
       tracking = std::move(with_lines);
-      result.matched_points = static_cast<int>(tracking.point_ids.size());
-      result.matched_lines = static_cast<int>(tracking.line_ids.size());
-      result.inlier_points = tracking.pose.point_inliers;
-      result.inlier_lines = tracking.pose.line_inliers;
-      result.weighted_inliers = tracking.weighted_inliers;
+      CountMatches(tracking, &result);
     }
   }
 }

@@ -418,6 +418,15 @@ class Tracker {
   };
   enum class Mode { kTracking, kRecentlyLost, kLost };
 
+  // TrackFrame's steps. The frame's inputs checked (complete lines; a loaded map's descriptors).
+  void CheckFrameInput(const StereoFrame& frame);
+  // A frame the local map did not track: relocalised (recently lost: in the active map; lost: in
+  // every map), else, lost, tracked along the motion before the loss.
+  void Recover(const StereoFrame& frame, const Rigid3d& predicted, TrackResult* result,
+               LocalTracking* tracking, bool* tracked, bool* relocalised);
+  // The match and inlier counts of `tracking` into the result.
+  static void CountMatches(const LocalTracking& tracking, TrackResult* result);
+
   double Weighted(int points, int lines) const {
     return points + options_.line_inlier_weight * lines;
   }
@@ -518,6 +527,10 @@ class Tracker {
   bool RelocaliseInMap(const StereoFrame& frame, const BowVector& bow,
                        const FeatureVector& features, int map_index, LocalTracking* tracking,
                        int* keyframe_id);
+  // The poses TrackAlongLossMotion starts from (cam_from_world each): the frozen pose, then the
+  // pose before the loss moved on by fractions of the frames since, with the full pre-loss motion
+  // and with its translation only.
+  std::vector<Rigid3d> LossMotionHypotheses(const Rigid3d& frozen_cam_from_world) const;
   // Lost: the local map tracked from poses along the motion before the loss and from the frozen
   // pose, ranked by point inliers with a stereo depth: the best-ranked attempt with
   // lost_reentry_min_point_ratio of its point matches as inliers, else the local map searched

@@ -87,14 +87,7 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
   return false;
 }
 
-Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
-                                                     const Rigid3d& frozen_cam_from_world,
-                                                     bool* confirmed) {
-  *confirmed = false;
-  // The robot most likely kept moving through the dark as before the loss: the local map is
-  // tried from poses along the pre-loss motion (a fraction of the frames since the last
-  // estimate) and from the frozen pose, with a wide window; the best-ranked attempt (below) whose
-  // points agree is offered to the caller.
+std::vector<Rigid3d> Tracker::LossMotionHypotheses(const Rigid3d& frozen_cam_from_world) const {
   const int since = lost_count_ + 1;  // frames since the last estimated pose
   std::vector<Rigid3d> hypotheses = {frozen_cam_from_world};  // cam_from_world each
   // With the full pre-loss motion, and with its translation only: one frame's rotation may be
@@ -114,6 +107,18 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
     for (int k = 0; k < static_cast<int>(steps); ++k) moved = loss_velocity_ * moved;
     hypotheses.push_back(moved);
   }
+  return hypotheses;
+}
+
+Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
+                                                     const Rigid3d& frozen_cam_from_world,
+                                                     bool* confirmed) {
+  *confirmed = false;
+  // The robot most likely kept moving through the dark as before the loss: the local map is
+  // tried from poses along the pre-loss motion (a fraction of the frames since the last
+  // estimate) and from the frozen pose, with a wide window; the best-ranked attempt (below) whose
+  // points agree is offered to the caller.
+  const std::vector<Rigid3d> hypotheses = LossMotionHypotheses(frozen_cam_from_world);
   // Attempts are ranked by their inlier points with a stereo depth, then by all their point
   // inliers, then by the weighted inliers. Lines and far points cannot tell poses apart along
   // the roadway (its edges run along it, and a far point moves little with the camera), the
