@@ -22,7 +22,6 @@ waiting for it.
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import logging
 import math
 import numbers
@@ -52,6 +51,7 @@ from slslam.config import (
 from slslam.datasets.euroc import RectifiedStereoCamera
 from slslam.datasets.images import GrayImageReader
 from slslam.errors import InputError, SlslamError
+from slslam.features.frontend import PointFrontEnd, frontend_capabilities
 from slslam.features.keypoints import Keypoints, check_gray_image
 from slslam.features.low_light import LowLightEnhancer
 
@@ -393,27 +393,31 @@ class Tracker:
         camera: rectified stereo intrinsics and baseline (``EurocSequence.camera``).
         config: configuration (``slslam.load_config``); ``slslam.default_config()`` (ORB
             with its preset) when None.
-        frontend: a point front end with ``detect(image) -> Keypoints``; by default the one the
-            config names (SuperPoint, or ORB when no SuperPoint weights are configured).
+        frontend: a point front end with ``detect(image) -> Keypoints`` and the capabilities it
+            declares (:class:`slslam.features.PointFrontEnd`; a ``TypeError`` names what is
+            wrong with one that does not fit); by default the one the config names (SuperPoint,
+            or ORB when no SuperPoint weights are configured).
     """
 
     def __init__(
         self,
         camera: RectifiedStereoCamera,
         config: Config | None = None,
-        frontend: Any = None,
+        frontend: PointFrontEnd | None = None,
         load_map: str | Path | None = None,
         localise_only: bool = False,
     ) -> None:
         self.config = config or default_config()
         self.camera = camera
-        self.frontend: Any = (  # duck-typed: any object with detect(image, ...) -> Keypoints
+        self.frontend: PointFrontEnd = (
             frontend if frontend is not None else make_point_frontend(self.config.features)
         )
         self.frontend_name = type(self.frontend).__name__
-        # Whether the point front end sees the pair smoothed for the core (a front end without
-        # the attribute does, as ORB and XFeat).
-        self._detect_smoothed = bool(getattr(self.frontend, "smoothed_input", True))
+        # What its detect takes, as it declares (slslam.features.frontend; defaults for a front
+        # end that leaves an attribute out; TypeError for one without detect).
+        capabilities = frontend_capabilities(self.frontend)
+        # Whether the point front end sees the pair smoothed for the core (ORB, XFeat).
+        self._detect_smoothed = capabilities.smoothed_input
         self._low_light = LowLightEnhancer(self.config.features.low_light)
         grid = self.config.features.grid
         self._grid = _core.GridLimitOptions()
@@ -423,13 +427,12 @@ class Tracker:
         # grid keep the weak keypoints only in cells without a strong one (ORB does it inside).
         self._weak_threshold: float | None = None
         features = self.config.features
-        threshold = getattr(getattr(self.frontend, "options", None), "detection_threshold", None)
-        parameters = inspect.signature(self.frontend.detect).parameters
-        accepts = "threshold" in parameters
-        self._detect_selects = "select" in parameters
+        threshold = capabilities.detection_threshold
+        accepts = capabilities.detect_takes_threshold
+        self._detect_selects = capabilities.detect_takes_select
         # A front end that takes denoised_above_noise (ORB, XFeat) is told that the image it
         # sees came through this tracker's smoothing, so that it does not check the noise again.
-        self._detect_denoised = self._detect_smoothed and "denoised_above_noise" in parameters
+        self._detect_denoised = self._detect_smoothed and capabilities.detect_takes_denoised
         if features.low_texture_fallback and threshold is not None and accepts:
             self._weak_threshold = threshold * features.low_texture_ratio
             self._grid.strong_score = threshold
@@ -561,9 +564,10 @@ class Tracker:
             options["threshold"] = self._weak_threshold
         if self._detect_denoised and self.config.tracking.denoise_above_noise > 0.0:
             options["denoised_above_noise"] = self.config.tracking.denoise_above_noise
+        detect = cast(Any, self.frontend).detect  # (its keywords: as it declares them)
         if self._detect_selects:
-            return self.frontend.detect(image, select=limit, **options)
-        keypoints = self.frontend.detect(image, **options)
+            return cast(Keypoints, detect(image, select=limit, **options))
+        keypoints = cast(Keypoints, detect(image, **options))
         if len(keypoints) == 0:
             return keypoints
         return keypoints.select(limit(keypoints.uv, keypoints.scores))
