@@ -30,6 +30,11 @@ class Orb:
     #: The tracker hands ORB the pair it smoothed when noisy (``tracking.denoise_above_noise``):
     #: ORB would smooth a noisy image itself the same way, so this saves that second blur.
     smoothed_input = True
+    # Its detect's keywords (slslam.features.PointFrontEnd): denoised_above_noise only (ORB's
+    # adaptive FAST threshold is its own low-texture fallback; the tracker limits per cell after).
+    detect_takes_threshold = False
+    detect_takes_select = False
+    detect_takes_denoised = True
 
     def __init__(self, options: OrbOptions = OrbOptions(), adaptive: bool = True):
         """``adaptive``: per-cell FAST threshold fallback (20 -> 7 in cells without a corner at

@@ -224,6 +224,10 @@ class SuperPoint:
     #: 0.0195 m on the smoothed ones (benchmarks/log/realtime.md, 2026-11-26). Bright frames are
     #: quiet, so the two are the same image there.
     smoothed_input = False
+    # Its detect's keywords (slslam.features.PointFrontEnd): threshold (the low-texture fallback).
+    detect_takes_threshold = True
+    detect_takes_select = False
+    detect_takes_denoised = False
 
     def __init__(self, options: SuperPointOptions = SuperPointOptions()):
         options.check()

@@ -226,6 +226,11 @@ class XFeat:
     #: The tracker hands the network the pair it smoothed for lines and stereo matching when
     #: noisy (``tracking.denoise_above_noise``); on the raw dark images XFeat never initialised.
     smoothed_input = True
+    # Its detect's keywords (slslam.features.PointFrontEnd): threshold, select (the grid limit
+    # before descriptors are sampled) and denoised_above_noise.
+    detect_takes_threshold = True
+    detect_takes_select = True
+    detect_takes_denoised = True
 
     def __init__(self, options: XFeatOptions = XFeatOptions()):
         options.check()

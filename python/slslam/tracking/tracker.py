@@ -16,22 +16,21 @@ frame k. The hand-over holds ``tracking.pipeline_frames_ahead`` frames (default 
 reads a frame only while fewer than that wait for the core, so the queue is bounded and the
 poses are the same as ``track`` in a loop (the front end has no state from frame to frame). With
 more than one the front end goes on through a keyframe's inline local mapping instead of
-waiting for it.
+waiting for it. The threads (that worker, and the right image's and the lines' helpers of each
+frame) are in ``slslam.tracking.pipeline``; this module gives them the work.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import logging
 import math
 import numbers
-import queue
-import threading
 import time
 import warnings
 from collections.abc import Generator, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
@@ -52,8 +51,10 @@ from slslam.config import (
 from slslam.datasets.euroc import RectifiedStereoCamera
 from slslam.datasets.images import GrayImageReader
 from slslam.errors import InputError, SlslamError
+from slslam.features.frontend import PointFrontEnd, frontend_capabilities
 from slslam.features.keypoints import Keypoints, check_gray_image
 from slslam.features.low_light import LowLightEnhancer
+from slslam.tracking.pipeline import FrontEndThreads, run_ahead
 
 log = logging.getLogger(__name__)
 
@@ -191,9 +192,6 @@ class _Prepared:
     raw_left: np.ndarray  #: the checked gray images as given (to detect keypoints on later)
     raw_right: np.ndarray
     lines: Future | None  #: the left image's lines extracted beside it (reused when redone)
-
-
-_END = object()  # the pipeline's worker has read every frame
 
 
 @dataclass(frozen=True)
@@ -393,27 +391,31 @@ class Tracker:
         camera: rectified stereo intrinsics and baseline (``EurocSequence.camera``).
         config: configuration (``slslam.load_config``); ``slslam.default_config()`` (ORB
             with its preset) when None.
-        frontend: a point front end with ``detect(image) -> Keypoints``; by default the one the
-            config names (SuperPoint, or ORB when no SuperPoint weights are configured).
+        frontend: a point front end with ``detect(image) -> Keypoints`` and the capabilities it
+            declares (:class:`slslam.features.PointFrontEnd`; a ``TypeError`` names what is
+            wrong with one that does not fit); by default the one the config names (SuperPoint,
+            or ORB when no SuperPoint weights are configured).
     """
 
     def __init__(
         self,
         camera: RectifiedStereoCamera,
         config: Config | None = None,
-        frontend: Any = None,
+        frontend: PointFrontEnd | None = None,
         load_map: str | Path | None = None,
         localise_only: bool = False,
     ) -> None:
         self.config = config or default_config()
         self.camera = camera
-        self.frontend: Any = (  # duck-typed: any object with detect(image, ...) -> Keypoints
+        self.frontend: PointFrontEnd = (
             frontend if frontend is not None else make_point_frontend(self.config.features)
         )
         self.frontend_name = type(self.frontend).__name__
-        # Whether the point front end sees the pair smoothed for the core (a front end without
-        # the attribute does, as ORB and XFeat).
-        self._detect_smoothed = bool(getattr(self.frontend, "smoothed_input", True))
+        # What its detect takes, as it declares (slslam.features.frontend; defaults for a front
+        # end that leaves an attribute out; TypeError for one without detect).
+        capabilities = frontend_capabilities(self.frontend)
+        # Whether the point front end sees the pair smoothed for the core (ORB, XFeat).
+        self._detect_smoothed = capabilities.smoothed_input
         self._low_light = LowLightEnhancer(self.config.features.low_light)
         grid = self.config.features.grid
         self._grid = _core.GridLimitOptions()
@@ -423,13 +425,12 @@ class Tracker:
         # grid keep the weak keypoints only in cells without a strong one (ORB does it inside).
         self._weak_threshold: float | None = None
         features = self.config.features
-        threshold = getattr(getattr(self.frontend, "options", None), "detection_threshold", None)
-        parameters = inspect.signature(self.frontend.detect).parameters
-        accepts = "threshold" in parameters
-        self._detect_selects = "select" in parameters
+        threshold = capabilities.detection_threshold
+        accepts = capabilities.detect_takes_threshold
+        self._detect_selects = capabilities.detect_takes_select
         # A front end that takes denoised_above_noise (ORB, XFeat) is told that the image it
         # sees came through this tracker's smoothing, so that it does not check the noise again.
-        self._detect_denoised = self._detect_smoothed and "denoised_above_noise" in parameters
+        self._detect_denoised = self._detect_smoothed and capabilities.detect_takes_denoised
         if features.low_texture_fallback and threshold is not None and accepts:
             self._weak_threshold = threshold * features.low_texture_ratio
             self._grid.strong_score = threshold
@@ -460,22 +461,29 @@ class Tracker:
         # first takes those up to its timestamp (so offline runs may give them all at once).
         self._imu_pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._imu_last_t: float = -math.inf
-        self._right_side = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-right")
-        # The left image's lines beside the point front end (a thread of their own: LSD + LBD
-        # cost about what ORB of both images costs, and XFeat's network half of it); with the
-        # right image's lines every frame (right_lines_on_keyframes false) the core extracts
-        # both side by side instead.
+        # The right image on a helper thread, and the left image's lines beside the point front
+        # end (a thread of their own: LSD + LBD cost about what ORB of both images costs, and
+        # XFeat's network half of it); with the right image's lines every frame
+        # (right_lines_on_keyframes false) the core extracts both side by side instead.
         tracking = self.config.tracking
-        self._lines_side = (
-            ThreadPoolExecutor(max_workers=1, thread_name_prefix="slslam-lines")
-            if tracking.use_lines and tracking.right_lines_on_keyframes
-            else None
+        self._threads = FrontEndThreads(
+            lines=tracking.use_lines and tracking.right_lines_on_keyframes
         )
         self._closed = False
         self._to_gray = GrayImageReader()  # 16-bit scale chosen on the first 16-bit frame
         #: The rectified left image and its keypoints (N, 2) of the latest result (viewers).
         self.last_image: np.ndarray | None = None
         self.last_keypoints_uv: np.ndarray | None = None
+
+    @property
+    def _lines_side(self) -> ThreadPoolExecutor | None:
+        """The lines thread (``FrontEndThreads.lines``); set to None, the core extracts the
+        left image's lines itself (tests compare the two)."""
+        return self._threads.lines
+
+    @_lines_side.setter
+    def _lines_side(self, executor: ThreadPoolExecutor | None) -> None:
+        self._threads.lines = executor
 
     # -- per frame -----------------------------------------------------------------------------
     def add_imu(self, t_s: np.ndarray, gyro_radps: np.ndarray, acc_mps2: np.ndarray) -> None:
@@ -561,9 +569,10 @@ class Tracker:
             options["threshold"] = self._weak_threshold
         if self._detect_denoised and self.config.tracking.denoise_above_noise > 0.0:
             options["denoised_above_noise"] = self.config.tracking.denoise_above_noise
+        detect = cast(Any, self.frontend).detect  # (its keywords: as it declares them)
         if self._detect_selects:
-            return self.frontend.detect(image, select=limit, **options)
-        keypoints = self.frontend.detect(image, **options)
+            return cast(Keypoints, detect(image, select=limit, **options))
+        keypoints = cast(Keypoints, detect(image, **options))
         if len(keypoints) == 0:
             return keypoints
         return keypoints.select(limit(keypoints.uv, keypoints.scores))
@@ -615,56 +624,20 @@ class Tracker:
         if isinstance(ahead, bool) or not isinstance(ahead, numbers.Integral) or ahead < 1:
             raise ValueError(f"frames_ahead must be an integer >= 1, got {ahead!r}")
         ahead = int(ahead)  # numpy integers too
-        handoff: queue.Queue = queue.Queue()
-        slot = threading.Semaphore(ahead)  # frames prepared and not yet taken by the core
-        stop = threading.Event()
-        worker = threading.Thread(
-            target=self._prepare_frames,
-            args=(frames, handoff, slot, stop),
-            name="slslam-frontend",
-            daemon=True,
-        )
-        worker.start()
-        try:
-            while True:
-                item = handoff.get()
-                slot.release()  # the worker may start the next frame now
-                if item is _END:
-                    return
-                if isinstance(item, BaseException):
-                    raise item
-                yield self._track_prepared(item)
-        finally:
-            stop.set()
-            slot.release()  # a worker waiting for the slot sees the stop
-            worker.join(timeout=60.0)
-
-    def _prepare_frames(
-        self,
-        frames: Iterable[tuple[np.ndarray, np.ndarray, float]],
-        handoff: queue.Queue,
-        slot: threading.Semaphore,
-        stop: threading.Event,
-    ) -> None:
-        """The pipeline's worker: reads and prepares frames one at a time while fewer than the
-        slot's count wait for the core; ends with _END or the exception that stopped it."""
-        index = len(self._results)
+        first = len(self._results)
         previous = self._results[-1].timestamp if self._results else None
-        try:
-            iterator = iter(frames)
-            while True:
-                slot.acquire()
-                if stop.is_set():
-                    return
-                try:
-                    left, right, timestamp = next(iterator)
-                except StopIteration:
-                    handoff.put(_END)
-                    return
-                handoff.put(self._prepare(index, left, right, timestamp, previous))
-                index, previous = index + 1, timestamp
-        except BaseException as exc:  # handed to the consumer, raised there in frame order
-            handoff.put(exc)
+
+        def prepare(position: int, frame: tuple[np.ndarray, np.ndarray, float]) -> _Prepared:
+            """The worker's part of one frame (slslam.tracking.pipeline.run_ahead)."""
+            nonlocal previous
+            left, right, timestamp = frame
+            prepared = self._prepare(first + position, left, right, timestamp, previous)
+            previous = timestamp
+            return prepared
+
+        with closing(run_ahead(frames, prepare, ahead, name="slslam-frontend")) as prepared:
+            for frame in prepared:
+                yield self._track_prepared(frame)
 
     def _prepare(
         self,
@@ -722,12 +695,12 @@ class Tracker:
         # for its lines, its detection and the core.
         row_search = self.config.tracking.stereo_row_search
         # (row search: left only, the core searches each keypoint's patch along its right row)
-        right_side = self._right_side.submit(
+        right_side = self._threads.submit_right(
             self._smooth if row_search or not detect else self._smooth_and_detect, right
         )
         left = self._smooth(left)
-        if lines is None and self._lines_side is not None and self._lines_ahead():
-            lines = self._lines_side.submit(self._core.extract_left_lines, left, denoised=True)
+        if lines is None and self._threads.lines is not None and self._lines_ahead():
+            lines = self._threads.submit_lines(self._core.extract_left_lines, left, denoised=True)
         if detect:
             kl = self._detect_either(raw_left, left)
             if self._no_keypoints is None:
@@ -987,9 +960,7 @@ class Tracker:
     def close(self) -> None:
         """Finishes local mapping. The results and the map stay readable."""
         if not self._closed:
-            self._right_side.shutdown()
-            if self._lines_side is not None:
-                self._lines_side.shutdown()
+            self._threads.shutdown()
             self._core.flush()
             self._closed = True
 
