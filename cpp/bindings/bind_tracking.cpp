@@ -248,6 +248,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("acc_random_walk", &InertialOptions::acc_random_walk)
       .def_readwrite("gravity_mps2", &InertialOptions::gravity_mps2)
       .def_readwrite("gravity_tolerance_mps2", &InertialOptions::gravity_tolerance_mps2)
+      .def_readwrite("acc_bias_prior_mps2", &InertialOptions::acc_bias_prior_mps2)
       .def_readwrite("window_s", &InertialOptions::window_s)
       .def_readwrite("min_window_s", &InertialOptions::min_window_s)
       .def_readwrite("refine_after_s", &InertialOptions::refine_after_s)

@@ -217,6 +217,7 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "acc_random_walk",
             "gravity_mps2",
             "gravity_tolerance_mps2",
+            "acc_bias_prior_mps2",
             "window_s",
             "min_window_s",
             "refine_after_s",
@@ -401,6 +402,9 @@ class ImuConfig:
     gravity_mps2: float = _imu("gravity_mps2", "(0, 20)")  # expected |g| [m/s^2]
     # an initialisation whose unconstrained gravity is further off is refused [m/s^2]
     gravity_tolerance_mps2: float = _imu("gravity_tolerance_mps2", "(0, 100]")
+    # sigma of the accelerometer bias about zero before motion shows it: the initialisation's
+    # prior, and the state's sigma after it (at most 0.1) [m/s^2]
+    acc_bias_prior_mps2: float = _imu("acc_bias_prior_mps2", "(0, 100]")
     window_s: float = _imu("window_s", "[0.1, 1000]")  # tracked poses the initialisation uses [s]
     # the initialisation needs tracked poses spanning at least this [s] (at most window_s)
     min_window_s: float = _imu("min_window_s", "[0.05, 1000]")

@@ -29,13 +29,14 @@ constexpr double kInitRetryS = 0.25;
 
 // The initial covariance, gravity's uncertainty across its direction only (its magnitude is
 // known).
-Matrix18d InitialCovariance(const Eigen::Vector3d& g_world) {
+Matrix18d InitialCovariance(const Eigen::Vector3d& g_world, double acc_bias_sigma_mps2) {
   Eigen::Matrix<double, 18, 1> sigma;
   sigma << Eigen::Vector3d::Constant(kInitRotationSigmaRad),
       Eigen::Vector3d::Constant(kInitPositionSigmaM),
       Eigen::Vector3d::Constant(kInitVelocitySigmaMps),
       Eigen::Vector3d::Constant(kInitGyroBiasSigmaRadps),
-      Eigen::Vector3d::Constant(kInitAccBiasSigmaMps2), Eigen::Vector3d::Zero();
+      Eigen::Vector3d::Constant(std::min(acc_bias_sigma_mps2, kInitAccBiasSigmaMps2)),
+      Eigen::Vector3d::Zero();
   Matrix18d P = sigma.cwiseAbs2().asDiagonal();
   const Eigen::Vector3d u = g_world.normalized();
   P.bottomRightCorner<3, 3>() = kInitGravitySigmaMps2 * kInitGravitySigmaMps2 *
@@ -59,6 +60,7 @@ InertialInitOptions InertialOptions::Init() const {
   InertialInitOptions init;
   init.gravity_mps2 = gravity_mps2;
   init.gravity_tolerance_mps2 = gravity_tolerance_mps2;
+  init.acc_bias_prior_mps2 = acc_bias_prior_mps2;
   return init;
 }
 
@@ -144,7 +146,7 @@ void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
     predicted.nav.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
     predicted.nav.p_world_body = world_from_body.translation;
     const Matrix18d kept = predicted.covariance;
-    predicted.covariance = InitialCovariance(predicted.g_world);
+    predicted.covariance = InitialCovariance(predicted.g_world, options_.acc_bias_prior_mps2);
     predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
   }
   state_ = predicted;
@@ -250,7 +252,7 @@ void InertialEstimator::TryInitialise(bool refine) {
   state_.nav.v_world_body = r.v_world.back();
   state_.bias = r.bias;
   state_.g_world = r.g_world;
-  state_.covariance = InitialCovariance(r.g_world);
+  state_.covariance = InitialCovariance(r.g_world, options_.acc_bias_prior_mps2);
   state_t_s_ = times.back();
   last_visual_s_ = state_t_s_;
   last_visual_p_ = state_.nav.p_world_body;
@@ -278,6 +280,7 @@ void InertialOptions::Check() const {
   SLSLAM_CHECK(gravity_mps2 > 0.0 && gravity_mps2 < 20.0,
                "tracking.imu.gravity_mps2 must be in (0, 20), got ", gravity_mps2);
   CheckAboveInRange("tracking.imu.gravity_tolerance_mps2", gravity_tolerance_mps2, 0.0, 100.0);
+  CheckAboveInRange("tracking.imu.acc_bias_prior_mps2", acc_bias_prior_mps2, 0.0, 100.0);
   CheckInRange("tracking.imu.window_s", window_s, 0.1, 1000.0);
   CheckInRange("tracking.imu.min_window_s", min_window_s, 0.05, 1000.0);
   SLSLAM_CHECK(min_window_s <= window_s, "tracking.imu.window_s (", window_s,
