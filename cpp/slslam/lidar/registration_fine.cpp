@@ -16,6 +16,59 @@
 namespace slslam::lidar::registration_detail {
 namespace {
 
+// One Gauss-Newton step of the point-to-plane distance of the inlier pairs (moved source point
+// i, target point index[i][0]), from the normal equations summed per thread and then in thread
+// order (deterministic); adds their squared error and count. False when fewer than six pairs or
+// the step is not finite.
+bool PointToPlaneStep(const CloudN& moved, const CloudN& target,
+                      const std::vector<pcl::Indices>& index, const std::vector<char>& inlier,
+                      int threads, Eigen::Matrix4d* step, double* squared_error, int* count) {
+  const int n = static_cast<int>(moved.size());
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  using Vector6 = Eigen::Matrix<double, 6, 1>;
+  const int teams = n > 2048 ? threads : 1;
+  std::vector<Matrix6> Hs(teams, Matrix6::Zero());
+  std::vector<Vector6> gs(teams, Vector6::Zero());
+  std::vector<double> errors(teams, 0.0);
+  std::vector<int> counts(teams, 0);
+#pragma omp parallel for num_threads(teams) schedule(static, 1)
+  for (int team = 0; team < teams; ++team) {
+    for (int i = int(std::int64_t(n) * team / teams); i < int(std::int64_t(n) * (team + 1) / teams);
+         ++i) {
+      if (!inlier[i]) continue;
+      const PointN& q = target[index[i][0]];
+      const Eigen::Vector3d p = moved[i].getVector3fMap().cast<double>();
+      const Eigen::Vector3d normal = q.getNormalVector3fMap().cast<double>();
+      const double r = normal.dot(p - q.getVector3fMap().cast<double>());
+      Vector6 J;
+      J << p.cross(normal), normal;
+      Hs[team].selfadjointView<Eigen::Upper>().rankUpdate(J);
+      gs[team] += J * r;
+      errors[team] += r * r;
+      ++counts[team];
+    }
+  }
+  Matrix6 H = Matrix6::Zero();
+  Vector6 g = Vector6::Zero();
+  for (int team = 0; team < teams; ++team) {
+    H += Hs[team];
+    g += gs[team];
+    *squared_error += errors[team];
+    *count += counts[team];
+  }
+  if (*count < 6) return false;
+  H.triangularView<Eigen::Lower>() = H.transpose();
+  const Vector6 delta = H.ldlt().solve(-g);
+  if (!delta.allFinite()) return false;
+  const double angle = delta.head<3>().norm();
+  if (angle > 0) {
+    step->topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(angle, delta.head<3>() / angle).toRotationMatrix();
+  }
+  step->topRightCorner<3, 1>() = delta.tail<3>();
+  return true;
+}
+
 // One ICP level: Gauss-Newton on the point-to-plane distance (or the closed-form point-to-point
 // fit) of `source` points to their nearest `target` points within max_corr_m, from `transform`.
 void IcpLevel(const CloudN& source, Prepared* target_scan, bool fine, double max_corr_m,
@@ -70,49 +123,9 @@ void IcpLevel(const CloudN& source, Prepared* target_scan, bool fine, double max
     double squared_error = 0.0;
     int count = 0;
     if (options.point_to_plane) {
-      // Normal equations, summed per thread and then in thread order (deterministic).
-      using Matrix6 = Eigen::Matrix<double, 6, 6>;
-      using Vector6 = Eigen::Matrix<double, 6, 1>;
-      const int teams = n > 2048 ? threads : 1;
-      std::vector<Matrix6> Hs(teams, Matrix6::Zero());
-      std::vector<Vector6> gs(teams, Vector6::Zero());
-      std::vector<double> errors(teams, 0.0);
-      std::vector<int> counts(teams, 0);
-#pragma omp parallel for num_threads(teams) schedule(static, 1)
-      for (int team = 0; team < teams; ++team) {
-        for (int i = int(std::int64_t(n) * team / teams);
-             i < int(std::int64_t(n) * (team + 1) / teams); ++i) {
-          if (!inlier[i]) continue;
-          const PointN& q = target[index[i][0]];
-          const Eigen::Vector3d p = moved[i].getVector3fMap().cast<double>();
-          const Eigen::Vector3d normal = q.getNormalVector3fMap().cast<double>();
-          const double r = normal.dot(p - q.getVector3fMap().cast<double>());
-          Vector6 J;
-          J << p.cross(normal), normal;
-          Hs[team].selfadjointView<Eigen::Upper>().rankUpdate(J);
-          gs[team] += J * r;
-          errors[team] += r * r;
-          ++counts[team];
-        }
+      if (!PointToPlaneStep(moved, target, index, inlier, threads, &step, &squared_error, &count)) {
+        break;
       }
-      Matrix6 H = Matrix6::Zero();
-      Vector6 g = Vector6::Zero();
-      for (int team = 0; team < teams; ++team) {
-        H += Hs[team];
-        g += gs[team];
-        squared_error += errors[team];
-        count += counts[team];
-      }
-      if (count < 6) break;
-      H.triangularView<Eigen::Lower>() = H.transpose();
-      const Vector6 delta = H.ldlt().solve(-g);
-      if (!delta.allFinite()) break;
-      const double angle = delta.head<3>().norm();
-      if (angle > 0) {
-        step.topLeftCorner<3, 3>() =
-            Eigen::AngleAxisd(angle, delta.head<3>() / angle).toRotationMatrix();
-      }
-      step.topRightCorner<3, 1>() = delta.tail<3>();
     } else {
       Eigen::Matrix3Xf from(3, n), to(3, n);
       for (int i = 0; i < n; ++i) {

@@ -118,6 +118,10 @@ class Solver {
                       const std::vector<Eigen::Matrix<double, D, D>>& inverse,
                       const Eigen::VectorXd& pose_step,
                       std::vector<Eigen::Matrix<double, D, 1>>* step) const;
+  void Candidate(const NormalEquations& current, const Eigen::VectorXd& pose_step,
+                 const std::vector<Eigen::Vector3d>& point_step,
+                 const std::vector<Eigen::Vector4d>& line_step, State* candidate,
+                 double* step_squared, double* state_squared, double* gd, double* dhd) const;
   void WriteBack() const;
 
   const std::vector<SchurTerm>& terms_;
@@ -342,6 +346,45 @@ void StepLandmarks(const LandmarkEquations<D>& eq, const std::vector<bool>& used
   }
 }
 
+// The candidate state_ + step (pose, point and line steps), with the step's and the state's
+// squared norms and the terms g^T d and d^T H d of its model decrease -(g^T d + 1/2 d^T H d)
+// (H undamped; the couplings' cross terms included).
+void Solver::Candidate(const NormalEquations& current, const Eigen::VectorXd& pose_step,
+                       const std::vector<Eigen::Vector3d>& point_step,
+                       const std::vector<Eigen::Vector4d>& line_step, State* candidate,
+                       double* step_squared, double* state_squared, double* gd, double* dhd) const {
+  *step_squared = *state_squared = *gd = *dhd = 0.0;
+  const PoseManifold pose_manifold;
+  const LineManifold line_manifold;
+  for (int f = 0; f < num_free_; ++f) {
+    const Vector6d d = pose_step.segment<6>(6 * f);
+    *step_squared += d.squaredNorm();
+    *gd += current.pose_gradient[f].dot(d);
+    *dhd += d.dot(current.pose_information[f] * d);
+    const int i = free_poses_[f];
+    for (double v : state_.poses[i]) *state_squared += v * v;
+    pose_manifold.Plus(state_.poses[i].data(), d.data(), candidate->poses[i].data());
+  }
+  const auto point_plus = [](const double* x, const double* d, double* out) {
+    for (int k = 0; k < kPointSize; ++k) out[k] = x[k] + d[k];
+  };
+  const auto line_plus = [&](const double* x, const double* d, double* out) {
+    line_manifold.Plus(x, d, out);
+  };
+  StepLandmarks(current.points, point_used_, point_step, state_.points, point_plus,
+                &candidate->points, step_squared, state_squared, gd, dhd);
+  StepLandmarks(current.lines, line_used_, line_step, state_.lines, line_plus, &candidate->lines,
+                step_squared, state_squared, gd, dhd);
+  for (size_t i = 0; i < terms_.size(); ++i) {  // the couplings' cross terms, twice
+    const SchurTerm& t = terms_[i];
+    const int f = free_index_[t.pose];
+    if (f < 0) continue;
+    const Vector6d dp = pose_step.segment<6>(6 * f);
+    *dhd += 2.0 * (t.line ? dp.dot(current.line_coupling[slot_[i]] * line_step[t.landmark])
+                          : dp.dot(current.point_coupling[slot_[i]] * point_step[t.landmark]));
+  }
+}
+
 SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort,
                               const std::atomic<bool>* interrupt) {
   SchurSolveSummary summary;
@@ -361,8 +404,6 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
     if (line_used_[l]) line_scale[l] = Scale<4>(current.lines.information[l]);
   }
   double radius = 1e4, decrease_factor = 2.0;
-  const PoseManifold pose_manifold;
-  const LineManifold line_manifold;
   const int n = 6 * num_free_;
   Eigen::MatrixXd reduced(n, n);
   Eigen::VectorXd rhs(n), pose_step(n);
@@ -413,33 +454,8 @@ SchurSolveSummary Solver::Run(int max_iterations, const std::atomic<bool>* abort
                       pose_step, &line_step);
     // The step's size, its model decrease -(g^T d + 1/2 d^T H d) (H undamped), the candidate.
     double step_squared = 0.0, state_squared = 0.0, gd = 0.0, dhd = 0.0;
-    for (int f = 0; f < num_free_; ++f) {
-      const Vector6d d = pose_step.segment<6>(6 * f);
-      step_squared += d.squaredNorm();
-      gd += current.pose_gradient[f].dot(d);
-      dhd += d.dot(current.pose_information[f] * d);
-      const int i = free_poses_[f];
-      for (double v : state_.poses[i]) state_squared += v * v;
-      pose_manifold.Plus(state_.poses[i].data(), d.data(), candidate.poses[i].data());
-    }
-    const auto point_plus = [](const double* x, const double* d, double* out) {
-      for (int k = 0; k < kPointSize; ++k) out[k] = x[k] + d[k];
-    };
-    const auto line_plus = [&](const double* x, const double* d, double* out) {
-      line_manifold.Plus(x, d, out);
-    };
-    StepLandmarks(current.points, point_used_, point_step, state_.points, point_plus,
-                  &candidate.points, &step_squared, &state_squared, &gd, &dhd);
-    StepLandmarks(current.lines, line_used_, line_step, state_.lines, line_plus, &candidate.lines,
-                  &step_squared, &state_squared, &gd, &dhd);
-    for (size_t i = 0; i < terms_.size(); ++i) {  // the couplings' cross terms, twice
-      const SchurTerm& t = terms_[i];
-      const int f = free_index_[t.pose];
-      if (f < 0) continue;
-      const Vector6d dp = pose_step.segment<6>(6 * f);
-      dhd += 2.0 * (t.line ? dp.dot(current.line_coupling[slot_[i]] * line_step[t.landmark])
-                           : dp.dot(current.point_coupling[slot_[i]] * point_step[t.landmark]));
-    }
+    Candidate(current, pose_step, point_step, line_step, &candidate, &step_squared, &state_squared,
+              &gd, &dhd);
     const bool finite = solved && std::isfinite(step_squared) && std::isfinite(dhd);
     ++summary.steps;
     if (finite && std::sqrt(step_squared) <= 1e-8 * (std::sqrt(state_squared) + 1e-8)) {

@@ -35,10 +35,14 @@ struct InertialOptions {
   double gravity_mps2 = 9.81;             ///< expected magnitude of gravity [m/s^2]
   double gravity_tolerance_mps2 = 0.5;    ///< initialisation refused further off [m/s^2]
   /// Standard deviation of the accelerometer bias about zero before any motion showed it: the
-  /// initialisation's prior on it, and (at most kInitAccBiasSigmaMps2) its sigma in the state
-  /// after. Over the first seconds a bias cannot be told from a tilt of gravity or the poses'
-  /// own noise, so a weak prior lets the fit take noise for bias [m/s^2]
-  double acc_bias_prior_mps2 = 1.0;
+  /// initialisation's prior on it, and (at most 0.1 m/s^2) its sigma in the state after. Over
+  /// the initialisation's window (1 s) a bias of 0.1 m/s^2 moves the body by 5 cm, about a dim
+  /// frame's pose error, and cannot be told from a tilt of gravity: a weak prior lets the fit
+  /// take the poses' noise for bias. A turn-on bias the prior holds back shows as a tilt of the
+  /// estimated gravity, which is the same for dead reckoning until the body turns, and the
+  /// state's updates move it into the bias as the body turns (as ORB-SLAM3's first
+  /// initialisation, which holds the bias at zero) [m/s^2]
+  double acc_bias_prior_mps2 = 0.02;
   double window_s = 3.0;           ///< tracked poses the initialisation uses, before the last [s]
   double min_window_s = 1.0;       ///< the initialisation needs poses spanning at least this [s]
   double refine_after_s = 10.0;    ///< initialisation run again this long after the first [s]
