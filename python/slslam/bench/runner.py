@@ -46,6 +46,20 @@ class BenchInterrupted(KeyboardInterrupt):
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
 
 
+#: The signal _sigterm_as_interrupt's handler last received. A library the interrupt passes
+#: through (Ray's get / wait) may replace the handler's exception by a plain KeyboardInterrupt,
+#: which would otherwise read as SIGINT.
+_received: list[int] = []
+
+
+def _signum_of(exc: KeyboardInterrupt) -> int:
+    """The signal behind an interrupt: its own, else the last one received, else SIGINT."""
+    signum = getattr(exc, "signum", None)
+    if isinstance(signum, int):
+        return signum
+    return _received[-1] if _received else int(signal.SIGINT)
+
+
 @dataclass
 class BenchRun:
     """What one invocation did."""
@@ -126,6 +140,7 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         return
 
     def handler(signum: int, frame: Any) -> None:
+        _received.append(signum)
         raise BenchInterrupted(signum)
 
     previous = signal.signal(signal.SIGTERM, handler)
@@ -179,7 +194,7 @@ def _run_inline(
         try:
             record = execute_cell(cell, out, data_dir)
         except KeyboardInterrupt as exc:
-            raise BenchInterrupted(getattr(exc, "signum", signal.SIGINT)) from None
+            raise BenchInterrupted(_signum_of(exc)) from None
         bar.set_running(0)
         save(cell, record)
         bar.done(record)
@@ -300,7 +315,7 @@ def _run_ray(
                     ray.cancel(ref, force=False)  # KeyboardInterrupt in the task: it stops
                 except Exception as cancel_error:  # a task that finished meanwhile
                     log.debug("cancel: %s", cancel_error)
-        raise BenchInterrupted(getattr(exc, "signum", signal.SIGINT)) from None
+        raise BenchInterrupted(_signum_of(exc)) from None
     finally:
         if started_here:
             with _signals_held():
@@ -323,6 +338,7 @@ def run_bench(
     """Runs the spec's missing or changed cells and returns every cell's record. ``on_done`` is
     called with what is finished, also when the sweep is interrupted (then BenchInterrupted is
     raised after it)."""
+    _received.clear()
     start = time.perf_counter()
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -363,7 +379,7 @@ def run_bench(
             elif todo:
                 _run_ray(todo, out, data_dir, save, bar, address, workers, ray_temp_dir)
     except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM) anywhere in the sweep
-        stop = exc if isinstance(exc, BenchInterrupted) else BenchInterrupted(signal.SIGINT)
+        stop = exc if isinstance(exc, BenchInterrupted) else BenchInterrupted(_signum_of(exc))
         run.wall_s = time.perf_counter() - start
         if on_done is not None:
             with _signals_held():  # the pages of the finished cells are written whole
