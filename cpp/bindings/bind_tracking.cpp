@@ -258,6 +258,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("lost_sigma_min_m", &InertialOptions::lost_sigma_min_m)
       .def_readwrite("max_gap_s", &InertialOptions::max_gap_s)
       .def_readwrite("weak_update_min_inliers", &InertialOptions::weak_update_min_inliers)
+      .def_readwrite("weak_update_min_lines", &InertialOptions::weak_update_min_lines)
+      .def_readwrite("keyframe_min_stereo_lines", &InertialOptions::keyframe_min_stereo_lines)
       .def_readwrite("keyframe_interval_s", &InertialOptions::keyframe_interval_s)
       .def_readwrite("visual_information_scale", &InertialOptions::visual_information_scale)
       .def_property(

@@ -227,6 +227,8 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "lost_sigma_min_m",
             "max_gap_s",
             "weak_update_min_inliers",
+            "weak_update_min_lines",
+            "keyframe_min_stereo_lines",
             "keyframe_interval_s",
             "visual_information_scale",
         )
@@ -422,6 +424,12 @@ class ImuConfig:
     # a frame not tracked (fewer than min_inliers) still corrects the state with this many
     # inliers (0: never)
     weak_update_min_inliers: int = _imu("weak_update_min_inliers", "[0, 100000]")
+    # ... and with this many line inliers (0: never): a lining's wall-floor edges, where the
+    # points are noise
+    weak_update_min_lines: int = _imu("weak_update_min_lines", "[0, 100000]")
+    # an INERTIAL frame with too few stereo points becomes such a keyframe with this many stereo
+    # lines (0: points only)
+    keyframe_min_stereo_lines: int = _imu("keyframe_min_stereo_lines", "[0, 100000]")
     # an INERTIAL frame with stereo points for a map becomes a keyframe at the IMU's pose when the
     # last keyframe is this old: the map goes on where it did not reach (0: never) [s]
     keyframe_interval_s: float = _imu("keyframe_interval_s", "[0, 1000000]")

@@ -73,6 +73,17 @@ void Map::UpdateConnections(int keyframe_id) {
       if (other != keyframe_id) ++counts[other];
     }
   }
+  if (counts.empty()) {
+    // A keyframe sharing no point (a stretch where the points are noise): its shared lines.
+    for (int lid : kf->line_ids) {
+      auto l = lid >= 0 ? line(lid) : nullptr;
+      if (!l || l->bad) continue;
+      for (const auto& [other, idx] : l->observations) {
+        (void)idx;
+        if (other != keyframe_id) ++counts[other];
+      }
+    }
+  }
   // ORB-SLAM keeps edges with at least 15 shared points, or the single best one.
   constexpr int kMinShared = 15;
   int best = -1;

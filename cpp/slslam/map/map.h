@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,6 +43,9 @@ struct MapLine {
   Eigen::Vector3d end = Eigen::Vector3d::Zero();
   cv::Mat descriptor;               ///< LBD row from the first observation
   std::map<int, int> observations;  ///< keyframe id -> segment index
+  /// Stereo endpoints of its segments in keyframes with the IMU's pose (world frame [m]) with
+  /// their weights: the line is their weighted fit (KeyFrame::pose_from_imu; not in map files)
+  std::vector<std::pair<Eigen::Vector3d, double>> stereo_support;
   int visible = 0;
   int found = 0;
   int first_keyframe = -1;
@@ -62,6 +66,11 @@ struct KeyFrame {
   /// local mapping has triangulated its new points, which sample their patches from it
   /// (TriangulationOptions::patch_window_px); released then. Empty otherwise; not in map files.
   cv::Mat left_image;
+  /// The pose is the IMU's (a keyframe made while the camera did not track, in the tracker's
+  /// line-aided mode, TrackerOptions::imu.weak_update_min_lines): local BA holds it and the lines
+  /// it observes, since its own observations (a few lines, noise points) leave them
+  /// undetermined. Not in map files.
+  bool pose_from_imu = false;
   bool bad = false;
 
   Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]

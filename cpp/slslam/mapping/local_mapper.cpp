@@ -165,7 +165,7 @@ bool LocalMapper::Prepare(Window* window) {
     const int anchor = std::find(local.begin(), local.end(), first_keyframe) != local.end()
                            ? first_keyframe
                            : *std::min_element(local.begin(), local.end());
-    for (int id : local) add_pose(id, id == anchor);
+    for (int id : local) add_pose(id, id == anchor || map->keyframe(id)->pose_from_imu);
     ba.AddWindowLandmarks(*map, local, &pose_index, options_.max_fixed_keyframes,
                           options_.point_sigma_px, options_.line_sigma_px);
   }

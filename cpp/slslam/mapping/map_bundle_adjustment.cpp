@@ -36,9 +36,22 @@ void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<i
     auto p = map.point(pid);
     if (p && !p->bad) AddPoint(map, *p, point_sigma_px, pose_of);
   }
+  // A line a keyframe with the IMU's pose observes is held: in a stretch without points the camera
+  // drives along such lines (a lining's wall-floor edges), which leaves their depth to stereo alone
+  // (the left-image distances this problem has do not fix it), and the keyframes around them are
+  // held too.
+  const auto seen_from_imu_pose = [&](const MapLine& l) {
+    map.mutex().AssertHeld();  // held by this function's caller (a lambda is not followed)
+    for (const auto& [kf_id, segment] : l.observations) {
+      (void)segment;
+      auto kf = map.keyframe(kf_id);
+      if (kf && kf->pose_from_imu) return true;
+    }
+    return false;
+  };
   for (int lid : lines) {
     auto l = map.line(lid);
-    if (l && !l->bad) AddLine(map, *l, line_sigma_px, pose_of);
+    if (l && !l->bad && !seen_from_imu_pose(*l)) AddLine(map, *l, line_sigma_px, pose_of);
   }
 }
 

@@ -102,13 +102,20 @@ bool InertialEstimator::PosePriorAt(double t_s, PosePrior* prior) const {
 }
 
 void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
-                                      const Matrix6d& information, bool with_prior) {
+                                      const Matrix6d& information, bool with_prior,
+                                      const Eigen::Vector3d& unobserved_world) {
+  // A pose that leaves a direction unobserved (parallel lines alone) is no pose for the
+  // initialisation's window, and no visual fix for the lost rule: the distance driven goes on.
+  const bool full = unobserved_world.isZero(0.0);
+  if (!full && (!initialised_ || !(t_s > state_t_s_))) return;
   if (report_.first_pose_s < 0.0) report_.first_pose_s = t_s;
   const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
-  if (!window_.empty() && !(t_s > window_.back().t_s)) return;  // (a frame given twice)
-  window_.push_back({t_s, world_from_body});
-  while (window_.size() > 2 && t_s - window_[1].t_s >= options_.window_s) window_.pop_front();
-  imu_.DropBefore(window_.front().t_s - options_.time_offset_s);
+  if (full) {
+    if (!window_.empty() && !(t_s > window_.back().t_s)) return;  // (a frame given twice)
+    window_.push_back({t_s, world_from_body});
+    while (window_.size() > 2 && t_s - window_[1].t_s >= options_.window_s) window_.pop_front();
+    imu_.DropBefore(window_.front().t_s - options_.time_offset_s);
+  }
   if (!initialised_) {
     TryInitialise(/*refine=*/false);
     return;
@@ -129,8 +136,21 @@ void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
     const Vector6d d = LeftTangent(cam_from_world, predicted_cam);
     // Information of the images alone, and the images' estimate times it (in the tangent at the
     // prediction): from the optimiser's posterior (prior + images) when it had the prior.
-    const Matrix6d visual = with_prior ? Matrix6d(information - prior) : information;
-    const Vector6d visual_times_d = with_prior ? Vector6d(information * d) : Vector6d(visual * d);
+    Matrix6d visual = with_prior ? Matrix6d(information - prior) : information;
+    Vector6d visual_times_d = with_prior ? Vector6d(information * d) : Vector6d(visual * d);
+    if (!unobserved_world.isZero(0.0)) {
+      // The images' Gaussian marginalised over the direction (a camera moved by x along it has
+      // the left tangent (-R_cw x, 0)): the Schur complement of its information along u, not the
+      // projection, which would read the images as measuring zero motion along it.
+      Vector6d u = Vector6d::Zero();
+      u.head<3>() = (predicted_cam.rotation * unobserved_world).normalized();
+      const Vector6d Vu = visual * u;
+      const double uVu = u.dot(Vu);
+      if (uVu > 1e-12 * std::max(1.0, visual.trace())) {
+        visual_times_d -= Vu * (u.dot(visual_times_d) / uVu);
+        visual -= Vu * Vu.transpose() / uVu;
+      }
+    }
     const Matrix6d posterior = prior + s * visual;
     const Eigen::LDLT<Matrix6d> ldlt(posterior);
     if (ldlt.info() == Eigen::Success && ldlt.isPositive() && posterior.allFinite()) {
@@ -149,11 +169,15 @@ void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
     predicted.covariance = InitialCovariance(predicted.g_world, options_.acc_bias_prior_mps2);
     predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
   }
+  if (full) {
+    last_visual_s_ = t_s;
+    last_visual_p_ = predicted.nav.p_world_body;
+    driven_m_ = 0.0;
+  } else {
+    driven_m_ += (predicted.nav.p_world_body - state_.nav.p_world_body).norm();
+  }
   state_ = predicted;
   state_t_s_ = t_s;
-  last_visual_s_ = t_s;
-  last_visual_p_ = state_.nav.p_world_body;
-  driven_m_ = 0.0;
   if (!refined_ && t_s - init_s_ >= options_.refine_after_s) TryInitialise(/*refine=*/true);
 }
 
@@ -292,6 +316,8 @@ void InertialOptions::Check() const {
   CheckInRange("tracking.imu.lost_sigma_min_m", lost_sigma_min_m, 0.0, 1e6);
   CheckInRange("tracking.imu.max_gap_s", max_gap_s, 0.0, 1e6);
   CheckInRange("tracking.imu.weak_update_min_inliers", weak_update_min_inliers, 0, 100000);
+  CheckInRange("tracking.imu.weak_update_min_lines", weak_update_min_lines, 0, 100000);
+  CheckInRange("tracking.imu.keyframe_min_stereo_lines", keyframe_min_stereo_lines, 0, 100000);
   CheckInRange("tracking.imu.keyframe_interval_s", keyframe_interval_s, 0.0, 1e6);
   CheckInRange("tracking.imu.visual_information_scale", visual_information_scale, 1e-6, 1e6);
 }

@@ -58,6 +58,14 @@ struct InertialOptions {
   /// shotcrete the few matches are sensor noise and pull the state away from the truth faster
   /// than the IMU alone drifts (benchmarks/hard_cases.py) [-]
   int weak_update_min_inliers = 0;
+  /// ... and when its pose optimisation (with the IMU's prior) keeps this many line inliers
+  /// (0: never): the edges where a lining's wall meets the floor are real structure where points
+  /// are noise; they fix the heading, the height and the lateral position, the prior the rest [-]
+  int weak_update_min_lines = 0;
+  /// An INERTIAL frame with too few stereo points for a map becomes such a keyframe when it has
+  /// this many stereo lines (0: points only), so that the lines of a stretch without points
+  /// enter the map for the frames after it [-]
+  int keyframe_min_stereo_lines = 0;
   /// An INERTIAL frame with stereo points for a map (as one that starts a map) becomes a keyframe
   /// at the IMU's pose when the last keyframe is this old, so that the map goes on through a
   /// stretch the local map does not cover (0: never) [s]
@@ -88,8 +96,12 @@ class InertialEstimator {
   // computed with the prior of PosePriorAt(t_s) when `with_prior`, without it otherwise (it is
   // then fused with the prediction); zero: a pose without an uncertainty (relocalised), taken as
   // it is. Before initialisation the pose joins the initialisation window and may complete it.
+  // `unobserved_world`: a unit world direction along which the images do not observe the
+  // camera's position (a pose from parallel lines alone): their information along it is dropped
+  // (zero: none).
   void AddVisualPose(double t_s, const Rigid3d& cam_from_world, const Matrix6d& information,
-                     bool with_prior);
+                     bool with_prior,
+                     const Eigen::Vector3d& unobserved_world = Eigen::Vector3d::Zero());
   // The frame at t_s keeps the propagated state (the camera contributed nothing). False when it
   // cannot be propagated (not initialised, samples missing): the caller then forgets the state.
   bool Propagate(double t_s);

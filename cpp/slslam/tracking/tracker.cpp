@@ -215,18 +215,27 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
   inertial_->AddVisualPose(frame.timestamp, cam_from_world, information, with_prior);
 }
 
-bool Tracker::InertialCarry(const StereoFrame& frame, const PoseOptimizerResult& local_pose,
-                            bool with_prior, Rigid3d* cam_from_world) {
+bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
+                            Rigid3d* cam_from_world, bool* by_lines) {
+  *by_lines = false;
   if (!inertial_ || !inertial_->initialised() || inertial_map_ != active_) return false;
   // Too few inliers to count as tracked, enough to correct the state (the optimisation had the
-  // prior: its information is the posterior's).
-  const int inliers = local_pose.point_inliers + local_pose.line_inliers;
-  const int weak = options_.imu.weak_update_min_inliers;
-  if (with_prior && local_pose.success && weak > 0 && inliers >= weak &&
-      !local_pose.information.isZero(0.0)) {
-    inertial_->AddVisualPose(frame.timestamp, local_pose.cam_from_world, local_pose.information,
+  // prior: its information is the posterior's): all its matches, or its lines alone.
+  const PoseOptimizerResult& all = weak.all;
+  const int min_inliers = options_.imu.weak_update_min_inliers;
+  const int min_lines = options_.imu.weak_update_min_lines;
+  const auto usable = [&](const PoseOptimizerResult& pose) {
+    return weak.with_prior && pose.success && !pose.information.isZero(0.0);
+  };
+  if (min_inliers > 0 && all.point_inliers + all.line_inliers >= min_inliers && usable(all)) {
+    inertial_->AddVisualPose(frame.timestamp, all.cam_from_world, all.information,
                              /*with_prior=*/true);
     ++stats_.inertial_weak_updates;
+  } else if (min_lines > 0 && weak.lines.line_inliers >= min_lines && usable(weak.lines)) {
+    inertial_->AddVisualPose(frame.timestamp, weak.lines.cam_from_world, weak.lines.information,
+                             /*with_prior=*/true, weak.lines_along_world);
+    ++stats_.inertial_weak_updates;
+    *by_lines = true;
   } else if (!inertial_->Propagate(frame.timestamp)) {
     inertial_->Reset();
     return false;
@@ -330,7 +339,7 @@ bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& 
 void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
                              Rigid3d cam_from_world, const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches,
-                             const std::vector<bool>& valid_keypoints) {
+                             const std::vector<bool>& valid_keypoints, bool pose_from_imu) {
   BowVector bow;
   FeatureVector bow_features;
   if (vocabulary_ && frame->NumKeypoints() > 0) {
@@ -352,6 +361,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     }
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
+    kf->pose_from_imu = pose_from_imu;
     if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)
@@ -381,6 +391,21 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
       for (int j = 0; j < frame->NumLines(); ++j) {
         if (line_matches[j] >= 0 && map.line(line_matches[j])) {
           map.AddLineObservation(line_matches[j], kf_id, j);
+          if (pose_from_imu) {
+            MapLine* line = map.line(line_matches[j]).get();
+            // (the stereo endpoints of every such keyframe refit it: the camera drives along it,
+            // which leaves its depth to stereo alone, and one stereo pair tilts it)
+            if (frame->line_has_depth[j]) {
+              if (line->stereo_support.empty()) {
+                line->stereo_support = {{line->start, 1.0}, {line->end, 1.0}};
+              }
+              tracker_detail::AddStereoSupport(world_from_cam, frame->line_endpoints[j], line);
+              tracker_detail::RefitToSupport(line);
+            }
+            tracker_detail::ExtendToSegment(
+                options_.rig.camera, cam_from_world, frame->lines[j],
+                options_.stereo.max_depth_baselines * options_.rig.baseline_m, line);
+          }
         } else if (frame->line_has_depth[j]) {
           const Eigen::Vector3d s = world_from_cam * frame->line_endpoints[j][0];
           const Eigen::Vector3d e = world_from_cam * frame->line_endpoints[j][1];
@@ -388,6 +413,9 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
           auto l = map.AddLine(PluckerLine::FromPoints(s, e), s, e, frame->line_descriptors.row(j),
                                kf_id);
           map.AddLineObservation(l->id, kf_id, j);
+          if (pose_from_imu) {
+            tracker_detail::AddStereoSupport(world_from_cam, frame->line_endpoints[j], l.get());
+          }
         }
       }
     }
@@ -663,7 +691,18 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   }
   // The local map's pose optimisation (with the IMU prior), for the inertial state's weak
   // correction when the frame is not tracked; relocalisation below overwrites `tracking`.
-  const PoseOptimizerResult local_pose = tracking.pose;
+  WeakVision weak;
+  weak.with_prior = have_prior;
+  weak.all = tracking.pose;
+  weak.lines = tracking.line_pose;
+  weak.lines_along_world = tracking.line_pose_along_world;
+  if (weak.lines.success) {
+    // (an INERTIAL keyframe observes these map lines rather than making new ones)
+    weak.line_match.assign(frame->NumLines(), -1);
+    for (size_t i = 0; i < tracking.segments.size(); ++i) {
+      if (weak.lines.line_inlier[i]) weak.line_match[tracking.segments[i]] = tracking.line_ids[i];
+    }
+  }
   if (!tracked) Recover(*frame, predicted, &result, &tracking, &tracked, &relocalised);
   CountMatches(tracking, &result);
   result.matching_ms = tracking.matching_ms;
@@ -673,7 +712,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
     return TrackedFrame(frame, std::move(result), std::move(tracking), relocalised, project,
                         std::move(valid), have_prior ? &prior : nullptr);
   }
-  return NotTracked(frame, std::move(result), local_pose, have_prior, predicted);
+  return NotTracked(frame, std::move(result), weak, predicted);
 }
 
 TrackResult Tracker::FirstFrame(std::shared_ptr<const StereoFrame>& frame, const Rigid3d& predicted,
@@ -846,9 +885,34 @@ void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, Track
   }
 }
 
+void Tracker::InertialKeyFrame(std::shared_ptr<const StereoFrame>& frame,
+                               const Rigid3d& cam_from_world, const std::vector<int>& line_match,
+                               TrackResult* result) {
+  const auto start = Clock::now();
+  const bool points = CouldStartMap(*frame);
+  const int min_lines = options_.imu.keyframe_min_stereo_lines;
+  if (!points && (!options_.use_lines || min_lines <= 0)) return;
+  if (frame->left_lines_pending) frame = WithLeftLines(std::move(frame), &result->left_lines_ms);
+  // (a frame with too few left lines needs no right ones)
+  if (!points && frame->NumLines() < min_lines) return;
+  std::shared_ptr<const StereoFrame> keyframe = frame;
+  if (options_.use_lines) keyframe = WithStereoLines(std::move(keyframe));
+  if (!points) {
+    const int stereo_lines = static_cast<int>(
+        std::count(keyframe->line_has_depth.begin(), keyframe->line_has_depth.end(), true));
+    if (stereo_lines < min_lines) return;
+  }
+  std::vector<int> lines = line_match;
+  lines.resize(keyframe->NumLines(), -1);
+  InsertKeyFrame(keyframe, cam_from_world, std::vector<int>(keyframe->NumKeypoints(), -1), lines,
+                 {}, /*pose_from_imu=*/LineAided());
+  ++stats_.inertial_keyframes;
+  result->keyframe = true;
+  result->mapping_ms = Ms(start);
+}
+
 TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
-                                const PoseOptimizerResult& local_pose, bool have_prior,
-                                const Rigid3d& predicted) {
+                                const WeakVision& weak, const Rigid3d& predicted) {
   // Not tracked. Recently lost: follow the prediction with a decaying velocity. Lost: freeze.
   anchor_ = Anchor{};
   last_point_inliers_ = 0;
@@ -879,7 +943,17 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
   // is the frame's, and the frame is recorded. Tracking goes on retrying the local map around it
   // (a wider window, as recently lost).
   Rigid3d inertial;
-  if (mode_ != Mode::kLost && InertialCarry(*frame, local_pose, have_prior, &inertial)) {
+  bool by_lines = false;
+  if (mode_ != Mode::kLost && InertialCarry(*frame, weak, &inertial, &by_lines)) {
+    if (by_lines) {
+      // (the lines it was corrected by were found where expected, as in a tracked frame)
+      const std::unique_lock<Mutex> lock = LockActiveMap();
+      Map& map = atlas_.map(active_);
+      map.mutex().AssertHeld();  // locked by LockActiveMap
+      for (int lid : weak.line_match) {
+        if (auto l = lid >= 0 ? map.line(lid) : nullptr) l->found += 1;
+      }
+    }
     mode_ = Mode::kRecentlyLost;
     ++stats_.inertial_frames;
     SetPose(inertial, /*update_velocity=*/true);
@@ -890,17 +964,9 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
     // whose features the map never saw): a lit frame becomes a keyframe at the IMU's pose, its
     // stereo points new map points for the frames after it.
     const double interval = options_.imu.keyframe_interval_s;
-    if (interval > 0.0 && !options_.localise_only && CouldStartMap(*frame) &&
+    if (interval > 0.0 && !options_.localise_only &&
         frame->timestamp - last_keyframe_time_s_ >= interval) {
-      const auto start = Clock::now();
-      if (frame->left_lines_pending) frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
-      std::shared_ptr<const StereoFrame> keyframe = frame;
-      if (options_.use_lines) keyframe = WithStereoLines(std::move(keyframe));
-      InsertKeyFrame(keyframe, inertial, std::vector<int>(keyframe->NumKeypoints(), -1),
-                     std::vector<int>(keyframe->NumLines(), -1));
-      ++stats_.inertial_keyframes;
-      result.keyframe = true;
-      result.mapping_ms = Ms(start);
+      InertialKeyFrame(frame, inertial, weak.line_match, &result);
     }
     RecordFrame(*frame, result.keyframe);
     return result;

@@ -407,6 +407,12 @@ class Tracker {
   // Matches of the local map around `reference_kf` in a frame, and the motion-only BA on them.
   struct LocalTracking {
     PoseOptimizerResult pose;
+    /// With the IMU's prior, for a frame the points do not track: the pose from the prior and
+    /// the matched lines alone (the inertial state's correction where the points are noise)
+    PoseOptimizerResult line_pose;
+    /// The world direction line_pose leaves unobserved (unit): the one its inlier lines share,
+    /// else the camera's viewing direction
+    Eigen::Vector3d line_pose_along_world = Eigen::Vector3d::Zero();
     std::vector<int> point_ids, keypoints, line_ids, segments;  ///< matched pairs
     /// matches of keypoints in invalid cells: left out of the pose, kept for the cell filter
     std::vector<int> masked_point_ids, masked_keypoints;
@@ -415,6 +421,16 @@ class Tracker {
     double weighted_inliers = 0.0;
     double matching_ms = 0.0;
     double optimisation_ms = 0.0;
+  };
+  // What the local map's pose optimisation of a frame the camera did not track may still give
+  // the inertial state.
+  struct WeakVision {
+    bool with_prior = false;    ///< the optimisations had the IMU's prior
+    PoseOptimizerResult all;    ///< with every match
+    PoseOptimizerResult lines;  ///< with the matched lines alone (LocalTracking::line_pose)
+    Eigen::Vector3d lines_along_world = Eigen::Vector3d::Zero();  ///< line_pose_along_world
+    /// per segment: the map line of its inlier match in `lines`, or -1 (empty: `lines` failed)
+    std::vector<int> line_match;
   };
   enum class Mode { kTracking, kRecentlyLost, kLost };
 
@@ -427,6 +443,10 @@ class Tracker {
   // The match and inlier counts of `tracking` into the result.
   static void CountMatches(const LocalTracking& tracking, TrackResult* result);
 
+  // Whether frames the camera does not track correct the inertial state with lines alone
+  // (imu.weak_update_min_lines): INERTIAL keyframes observe the map lines they matched and are
+  // held in local BA, and the local map's lines are cut to the part in front and in the image.
+  bool LineAided() const { return options_.use_lines && options_.imu.weak_update_min_lines > 0; }
   double Weighted(int points, int lines) const {
     return points + options_.line_inlier_weight * lines;
   }
@@ -441,9 +461,13 @@ class Tracker {
   TrackResult TrackedFrame(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
                            LocalTracking tracking, bool relocalised, bool project,
                            std::vector<bool> valid, const PosePrior* prior);
+  // An INERTIAL frame at the IMU's pose `cam_from_world` becomes a keyframe when it has stereo
+  // points for a map, or imu.keyframe_min_stereo_lines stereo lines.
+  // `line_match`: per segment, the map line it observes, or -1 (empty: none).
+  void InertialKeyFrame(std::shared_ptr<const StereoFrame>& frame, const Rigid3d& cam_from_world,
+                        const std::vector<int>& line_match, TrackResult* result);
   TrackResult NotTracked(std::shared_ptr<const StereoFrame>& frame, TrackResult result,
-                         const PoseOptimizerResult& local_pose, bool have_prior,
-                         const Rigid3d& predicted);
+                         const WeakVision& weak, const Rigid3d& predicted);
   // lines_on_demand: a keyframe tracked on its points takes its lines, matched to the local map
   // from that pose, and the pose is optimised again with them (TrackedFrame's part).
   void KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, TrackResult* result,
@@ -461,10 +485,12 @@ class Tracker {
   // (lines_on_demand) and Track was given a completer. Adds the time taken to `*ms`.
   std::shared_ptr<const StereoFrame> WithLeftLines(std::shared_ptr<const StereoFrame> frame,
                                                    double* ms = nullptr) const;
-  // (by value: the pose follows a correction written meanwhile, see FollowAnchor)
+  // (by value: the pose follows a correction written meanwhile, see FollowAnchor).
+  // pose_from_imu: a keyframe at the IMU's pose in the line-aided mode (KeyFrame::pose_from_imu);
+  // the map lines it observes are refitted to its stereo lines and extended to its segments.
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
                       const std::vector<int>& point_matches, const std::vector<int>& line_matches,
-                      const std::vector<bool>& valid_keypoints = {});
+                      const std::vector<bool>& valid_keypoints = {}, bool pose_from_imu = false);
   // What tracking needs of the local map around a reference keyframe, copied under the map
   // lock: the landmarks in front of the predicted camera, with their positions, descriptors and
   // predicted image positions, in id order. Matching and the motion-only BA run on it without
@@ -559,9 +585,10 @@ class Tracker {
   void InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
                     const Matrix6d& information, bool with_prior);
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
-  // carries it, after the weak visual correction `tracking` may give.
-  bool InertialCarry(const StereoFrame& frame, const PoseOptimizerResult& local_pose,
-                     bool with_prior, Rigid3d* cam_from_world);
+  // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone
+  // gave it.
+  bool InertialCarry(const StereoFrame& frame, const WeakVision& weak, Rigid3d* cam_from_world,
+                     bool* by_lines);
   void FillInertial(TrackResult* result) const;
   // Aligns matched keypoints to their map points' patches in `image` (track_refine_window_px;
   // null or empty: none): fills tracking->refined_uv (rows of the snapshot: called before they

@@ -10,6 +10,7 @@
 #include <limits>
 #include <set>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -107,14 +108,27 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
     for (int lid : line_ids) {
       auto l = map.line(lid);
       if (!l || l->bad) continue;
-      const Eigen::Vector3d s_c = pred_cam_from_world * l->start;
-      const Eigen::Vector3d e_c = pred_cam_from_world * l->end;
-      if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
       LineSegment proj;
-      proj.start = camera.Project(s_c).cast<float>();
-      proj.end = camera.Project(e_c).cast<float>();
-      const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
-      if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
+      if (LineAided()) {
+        // The part in front and inside the image: a long edge the camera drives along reaches
+        // behind it, and its near end leaves the image first.
+        Eigen::Vector3d s_c, e_c;
+        if (!tracker_detail::ClipToFront(pred_cam_from_world, l->start, l->end,
+                                         tracker_detail::kMinLineDepthM, &s_c, &e_c)) {
+          continue;
+        }
+        proj.start = camera.Project(s_c).cast<float>();
+        proj.end = camera.Project(e_c).cast<float>();
+        if (!tracker_detail::ClipToImage(camera, &proj) || proj.Length() < 5.0f) continue;
+      } else {
+        const Eigen::Vector3d s_c = pred_cam_from_world * l->start;
+        const Eigen::Vector3d e_c = pred_cam_from_world * l->end;
+        if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
+        proj.start = camera.Project(s_c).cast<float>();
+        proj.end = camera.Project(e_c).cast<float>();
+        const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
+        if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
+      }
       if (!SameKind(l->descriptor, frame.line_descriptors)) continue;
       l->visible += 1;
       lines.push_back(l);
@@ -229,9 +243,23 @@ Tracker::LocalTracking Tracker::TrackSnapshot(
     lines[i].sigma_px = options_.line_sigma_px;
   }
   out.pose = OptimizePose(options_.rig, pred_cam_from_world, points, lines, options_.pose, prior);
-  out.optimisation_ms = Ms(opt_start);
   out.weighted_inliers =
       out.pose.success ? Weighted(out.pose.point_inliers, out.pose.line_inliers) : 0.0;
+  const int weak_lines = options_.imu.weak_update_min_lines;
+  if (prior != nullptr && weak_lines > 0 && static_cast<int>(lines.size()) >= weak_lines &&
+      out.weighted_inliers < options_.min_inliers) {
+    // (the points' few matches on a smooth lining are noise: the lines alone with the prior)
+    out.line_pose =
+        OptimizePose(options_.rig, pred_cam_from_world, {}, lines, options_.pose, prior);
+    // The lines' pose leaves a direction to the IMU: the one parallel lines share, else the
+    // viewing direction, along which stereo lines are least determined.
+    out.line_pose_along_world = tracker_detail::SharedDirection(lines, out.line_pose.line_inlier);
+    if (out.line_pose_along_world.isZero(0.0)) {
+      out.line_pose_along_world =
+          pred_cam_from_world.rotation.transpose() * Eigen::Vector3d::UnitZ();
+    }
+  }
+  out.optimisation_ms = Ms(opt_start);
   // Snapshot rows to map ids.
   for (int& row : out.point_ids) row = local.point_ids[row];
   for (int& row : out.masked_point_ids) row = local.point_ids[row];
@@ -257,6 +285,119 @@ GuidedMatchOptions Tracker::GuidedOptions(int descriptor_type, float radius_scal
 }
 
 namespace tracker_detail {
+
+void ExtendToSegment(const PinholeCamera& camera, const Rigid3d& cam_from_world,
+                     const LineSegment& seg, double max_depth_m, MapLine* line) {
+  const Eigen::Vector3d along = line->end - line->start;
+  const double length = along.norm();
+  if (length < 1e-9) return;
+  const Eigen::Vector3d direction = along / length;
+  const PluckerLine line_c = line->line.Transformed(cam_from_world);
+  const Rigid3d world_from_cam = cam_from_world.Inverse();
+  double t_min = 0.0, t_max = length;
+  for (const Eigen::Vector2f& px : {seg.start, seg.end}) {
+    const Eigen::Vector3d x_c = line_c.ClosestPointToRay(camera.Unproject(px.cast<double>()));
+    // (a ray near the line's vanishing point meets it far away, or behind the camera)
+    if (!x_c.allFinite() || x_c.z() <= 0.05 || x_c.z() > max_depth_m) continue;
+    const double t = direction.dot(world_from_cam * x_c - line->start);
+    t_min = std::min(t_min, t);
+    t_max = std::max(t_max, t);
+  }
+  const Eigen::Vector3d start = line->start;
+  line->start = start + t_min * direction;
+  line->end = start + t_max * direction;
+}
+
+void AddStereoSupport(const Rigid3d& world_from_cam,
+                      const std::array<Eigen::Vector3d, 2>& endpoints_cam, MapLine* line) {
+  for (const Eigen::Vector3d& x_c : endpoints_cam) {
+    if (!x_c.allFinite() || x_c.z() <= 0.0) continue;
+    const double depth = std::max(x_c.z(), 0.5);  // (nearer: stereo is as good as it gets)
+    line->stereo_support.emplace_back(world_from_cam * x_c, 1.0 / (depth * depth));
+  }
+}
+
+void RefitToSupport(MapLine* line) {
+  double w_sum = 0.0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& [p, w] : line->stereo_support) {
+    centroid += w * p;
+    w_sum += w;
+  }
+  if (line->stereo_support.size() < 3 || w_sum <= 0.0) return;
+  centroid /= w_sum;
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& [p, w] : line->stereo_support) {
+    scatter += w * (p - centroid) * (p - centroid).transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+  if (eigen.info() != Eigen::Success) return;
+  const Eigen::Vector3d direction = eigen.eigenvectors().col(2);  // (ascending eigenvalues)
+  line->line = PluckerLine::FromPoints(centroid, centroid + direction);
+  line->start = line->line.ClosestPointTo(line->start);
+  line->end = line->line.ClosestPointTo(line->end);
+}
+
+Eigen::Vector3d SharedDirection(const std::vector<LineObservation>& lines,
+                                const std::vector<bool>& inlier) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> directions;
+  for (size_t i = 0; i < lines.size() && i < inlier.size(); ++i) {
+    if (!inlier[i]) continue;
+    Eigen::Vector3d v = lines[i].line_w.v.normalized();
+    if (!directions.empty() && v.dot(directions.front()) < 0.0) v = -v;
+    directions.push_back(v);
+    sum += v;
+  }
+  if (directions.empty() || sum.norm() < 1e-9) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d mean = sum.normalized();
+  const double min_cos = std::cos(kParallelLinesMaxRad);
+  for (const Eigen::Vector3d& v : directions) {
+    if (v.dot(mean) < min_cos) return Eigen::Vector3d::Zero();
+  }
+  return mean;
+}
+
+bool ClipToImage(const PinholeCamera& camera, LineSegment* seg) {
+  // Liang-Barsky: the segment start + t (end - start), t in [t0, t1], against the four borders.
+  const Eigen::Vector2f d = seg->end - seg->start;
+  float t0 = 0.0f, t1 = 1.0f;
+  const float lo[2] = {0.0f, 0.0f};
+  const float hi[2] = {static_cast<float>(camera.width - 1), static_cast<float>(camera.height - 1)};
+  for (int axis = 0; axis < 2; ++axis) {
+    const float p = seg->start[axis];
+    for (const auto& [q, r] : {std::pair<float, float>{-d[axis], p - lo[axis]},
+                               std::pair<float, float>{d[axis], hi[axis] - p}}) {
+      if (q == 0.0f) {
+        if (r < 0.0f) return false;  // parallel to this border and outside it
+        continue;
+      }
+      const float t = r / q;
+      if (q < 0.0f) {
+        t0 = std::max(t0, t);
+      } else {
+        t1 = std::min(t1, t);
+      }
+    }
+  }
+  if (t0 > t1) return false;
+  const Eigen::Vector2f start = seg->start;
+  seg->start = start + t0 * d;
+  seg->end = start + t1 * d;
+  return true;
+}
+
+bool ClipToFront(const Rigid3d& cam_from_world, const Eigen::Vector3d& start_w,
+                 const Eigen::Vector3d& end_w, double min_depth_m, Eigen::Vector3d* start_c,
+                 Eigen::Vector3d* end_c) {
+  Eigen::Vector3d s = cam_from_world * start_w, e = cam_from_world * end_w;
+  if (s.z() < min_depth_m && e.z() < min_depth_m) return false;
+  if (s.z() < min_depth_m) s = e + (s - e) * ((e.z() - min_depth_m) / (e.z() - s.z()));
+  if (e.z() < min_depth_m) e = s + (e - s) * ((s.z() - min_depth_m) / (s.z() - e.z()));
+  *start_c = s;
+  *end_c = e;
+  return true;
+}
 
 bool AlignPatch(const cv::Mat& image, const cv::Mat& patch, double scale, double min_ncc, double* u,
                 double* v) {

@@ -118,6 +118,41 @@ TEST(InertialEstimator, AtRestItInitialisesAndAnUncertaintyPastTheFloorIsLost) {
   EXPECT_FALSE(estimator.initialised());
 }
 
+TEST(InertialEstimator, APoseFromParallelLinesDoesNotMoveTheStateAlongThem) {
+  // Initialised, then 3 s without vision; then a pose that differs from the truth by 0.5 m
+  // along a world direction, with full information, given as unobserving that direction: the
+  // state must not move along it (the images' Gaussian is marginalised over it), while the same
+  // pose given as observing everything pulls the state most of the way.
+  SyntheticMotion motion;
+  motion.amplitude = 0.5;
+  InertialOptions options;
+  options.body_from_cam = kBodyFromCam;
+  const Eigen::Vector3d along = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+  const Matrix6d information = 1e6 * Matrix6d::Identity();
+  Eigen::Vector3d moved[2];
+  for (int marginalised = 0; marginalised < 2; ++marginalised) {
+    InertialEstimator estimator(options);
+    FeedImu(motion, 6.0, {}, &estimator);
+    for (int k = 0; k <= 40; ++k) {
+      estimator.AddVisualPose(0.05 * k, CameraPose(motion, 0.05 * k), information, false);
+    }
+    ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+    for (int k = 41; k < 100; ++k) ASSERT_TRUE(estimator.Propagate(0.05 * k));
+    const double t = 5.0;
+    InertialState predicted;
+    ASSERT_TRUE(estimator.Predict(t, &predicted));
+    // The true camera moved 0.5 m along the direction (world_from_cam translated).
+    const Rigid3d truth = CameraPose(motion, t);
+    Rigid3d shifted = truth;
+    shifted.translation -= truth.rotation * (0.5 * along);
+    estimator.AddVisualPose(t, shifted, information, /*with_prior=*/false,
+                            marginalised ? along : Eigen::Vector3d::Zero());
+    moved[marginalised] = estimator.state().nav.p_world_body - predicted.nav.p_world_body;
+  }
+  EXPECT_GT(moved[0].dot(along), 0.25) << moved[0].transpose();
+  EXPECT_LT(std::abs(moved[1].dot(along)), 0.01) << moved[1].transpose();
+}
+
 TEST(InertialEstimator, FollowsAWorldChangeAndRefusesBadOptions) {
   SyntheticMotion motion;
   InertialOptions options;
