@@ -89,8 +89,18 @@ TEST(PoseGraph, RejectsBadEdgesAndOptions) {
   e.b = 1;
   e.weight = std::nan("");
   EXPECT_THROW(OptimizePoseGraph(&poses, {e}), std::invalid_argument);
+  e.weight = 1.0;
+  e.information = Eigen::Matrix<double, 6, 6>::Identity();
+  (*e.information)(2, 3) = std::nan("");
+  EXPECT_THROW(OptimizePoseGraph(&poses, {e}), std::invalid_argument);
+  e.information.reset();
+  e.cauchy_scale = -1.0;
+  EXPECT_THROW(OptimizePoseGraph(&poses, {e}), std::invalid_argument);
   PoseGraphOptions options;
   options.translation_sigma_m = 0.0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = PoseGraphOptions();
+  options.gravity_in_world.setZero();
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 
