@@ -124,6 +124,124 @@ TEST(PoseGraph, RelativePoseIsAFromWorldTimesWorldFromB) {
   EXPECT_LT((a_from_b * x_b - a_from_world * (b_from_world.Inverse() * x_b)).norm(), 1e-12);
 }
 
+// --- Split-error edges: the visual loop closer's, bit for bit ---------------------------------
+
+// The solver before edges could carry an information (the visual loop closer's): its cost and
+// problem, kept as the reference that split-error edges must reproduce exactly.
+struct FormerRelativePoseCost {
+  template <typename T>
+  bool operator()(const T* qa_raw, const T* ta_raw, const T* qb_raw, const T* tb_raw,
+                  T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> qa(qa_raw), qb(qb_raw);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> ta(ta_raw), tb(tb_raw);
+    const Eigen::Quaternion<T> q_est = qa * qb.conjugate();
+    const Eigen::Matrix<T, 3, 1> t_est = ta - q_est * tb;
+    const Eigen::Quaternion<T> dq = q_ab.cast<T>().conjugate() * q_est;
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual);
+    r.template head<3>() = T(trans_scale) * (t_est - t_ab.cast<T>());
+    const T sign = dq.w() < T(0) ? T(-1) : T(1);
+    r.template tail<3>() = T(2.0 * rot_scale) * sign * dq.vec();
+    return true;
+  }
+
+  Eigen::Quaterniond q_ab;
+  Eigen::Vector3d t_ab;
+  double rot_scale, trans_scale;
+};
+
+void SolveLikeTheFormerVisualGraph(std::vector<BaPose>* poses,
+                                   const std::vector<PoseGraphEdge>& edges,
+                                   const PoseGraphOptions& options) {
+  const int n = static_cast<int>(poses->size());
+  std::vector<Eigen::Quaterniond> q(n);
+  std::vector<Eigen::Vector3d> t(n);
+  for (int i = 0; i < n; ++i) {
+    q[i] = Eigen::Quaterniond((*poses)[i].cam_from_world.rotation).normalized();
+    t[i] = (*poses)[i].cam_from_world.translation;
+  }
+  ceres::Problem problem;
+  for (const PoseGraphEdge& e : edges) {
+    const double w = std::sqrt(e.weight);
+    auto* cost = new ceres::AutoDiffCostFunction<FormerRelativePoseCost, 6, 4, 3, 4, 3>(
+        new FormerRelativePoseCost{Eigen::Quaterniond(e.a_from_b.rotation), e.a_from_b.translation,
+                                   w / options.rotation_sigma_rad,
+                                   w / options.translation_sigma_m});
+    problem.AddResidualBlock(cost, nullptr, q[e.a].coeffs().data(), t[e.a].data(),
+                             q[e.b].coeffs().data(), t[e.b].data());
+  }
+  for (int i = 0; i < n; ++i) {
+    problem.SetManifold(q[i].coeffs().data(), new ceres::EigenQuaternionManifold);
+    if ((*poses)[i].fixed) {
+      problem.SetParameterBlockConstant(q[i].coeffs().data());
+      problem.SetParameterBlockConstant(t[i].data());
+    }
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  for (int i = 0; i < n; ++i) {
+    if ((*poses)[i].fixed) continue;
+    (*poses)[i].cam_from_world.rotation = q[i].normalized().toRotationMatrix();
+    (*poses)[i].cam_from_world.translation = t[i];
+  }
+}
+
+// A drifted loop with covisibility-like edges and random weights (every pose in an edge), solved
+// by the shared solver and by the former one: the same bits.
+TEST(PoseGraph, SplitErrorEdgesGiveTheFormerSolversResultsBitForBit) {
+  const int n = 50;
+  const std::vector<Rigid3d> truth = MakeCircle(n);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::uniform_real_distribution<double> weight(0.2, 5.0);
+  std::vector<BaPose> poses(n);
+  poses[0] = {truth[0], true};
+  std::vector<PoseGraphEdge> edges;
+  const Eigen::Matrix3d bias =
+      Eigen::AngleAxisd(0.3 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (int i = 1; i < n; ++i) {
+    PoseGraphEdge e;
+    e.a = i - 1;
+    e.b = i;
+    e.a_from_b = RelativePose(truth[i - 1], truth[i]);
+    e.a_from_b.rotation = e.a_from_b.rotation * bias;
+    e.a_from_b.translation += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    e.weight = weight(rng);
+    edges.push_back(e);
+    poses[i].cam_from_world = e.a_from_b.Inverse() * poses[i - 1].cam_from_world;
+  }
+  for (int i = 2; i < n; i += 3) {
+    PoseGraphEdge e;
+    e.a = i - 2;
+    e.b = i;
+    e.a_from_b = RelativePose(truth[i - 2], truth[i]);
+    e.weight = weight(rng);
+    edges.push_back(e);
+  }
+  PoseGraphEdge loop;
+  loop.a = 0;
+  loop.b = n - 1;
+  loop.a_from_b = RelativePose(truth[0], truth[n - 1]);
+  edges.push_back(loop);
+  PoseGraphOptions options;
+  options.max_iterations = 15;
+  const std::vector<BaPose> initial = poses;
+  std::vector<BaPose> former = poses;
+  SolveLikeTheFormerVisualGraph(&former, edges, options);
+  ASSERT_TRUE(OptimizePoseGraph(&poses, edges, options).solved);
+  for (int i = 0; i < n; ++i) {
+    EXPECT_EQ(poses[i].cam_from_world.rotation, former[i].cam_from_world.rotation) << i;
+    EXPECT_EQ(poses[i].cam_from_world.translation, former[i].cam_from_world.translation) << i;
+  }
+  // A real solve: the end of the loop moved.
+  EXPECT_GT((poses[n - 1].cam_from_world.Center() - initial[n - 1].cam_from_world.Center()).norm(),
+            0.1);
+}
+
 // --- Edges with an information and a robust loss (the LiDAR back end's graph) ---------------
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
