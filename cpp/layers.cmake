@@ -15,7 +15,8 @@
 #   tracking      stereo matching, the stereo front end, the tracker, the inertial estimator
 #   pipeline      the per-frame session over the tracker (what slslam._core's TrackerCore binds)
 #   sim           the roadway simulator's renderer (beside the SLAM layers)
-#   lidar         LiDAR registration and LiDAR-inertial SLAM (beside; needs PCL)
+#   lidar         LiDAR registration and LiDAR-inertial SLAM (beside; needs PCL; its loops go to
+#                 optimization's pose graph)
 set(SLSLAM_LAYERS core features geometry inertial place map optimization mapping tracking pipeline sim
                   lidar)
 set(SLSLAM_LAYER_DEPS_core "")
@@ -29,7 +30,7 @@ set(SLSLAM_LAYER_DEPS_mapping map optimization)
 set(SLSLAM_LAYER_DEPS_tracking mapping)
 set(SLSLAM_LAYER_DEPS_pipeline tracking)
 set(SLSLAM_LAYER_DEPS_sim core)
-set(SLSLAM_LAYER_DEPS_lidar core geometry inertial)
+set(SLSLAM_LAYER_DEPS_lidar core geometry inertial optimization)
 
 # SLSLAM_LAYER_BELOW_<layer>: every layer it may include (transitive closure of the table).
 foreach(layer IN LISTS SLSLAM_LAYERS)

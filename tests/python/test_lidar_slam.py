@@ -216,3 +216,44 @@ def test_bad_bags_name_the_problem(tmp_path):
         decode_pointcloud2(Msg(), "cloud")
     with pytest.raises(DatasetError, match=r"not a ROS bag|not found|LiDAR ASL"):
         open_lidar_sequence(tmp_path / "none.bag")
+
+
+def _pose(yaw_rad: float, position) -> np.ndarray:
+    T = np.eye(4)
+    c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+    T[:2, :2] = [[c, -s], [s, c]]
+    T[:3, 3] = position
+    return T
+
+
+def test_pose_graph_binding_closes_a_drifted_loop_in_world_from_keyframe():
+    """optimize_lidar_pose_graph takes and returns world_from_keyframe (the shared solver works on
+    keyframe_from_world): odometry with 0.2 deg of extra yaw per step round a 20-keyframe circle,
+    one loop edge from the truth (its error within the Cauchy loss's scale); the first keyframe
+    stays bit for bit, the loop closes."""
+    n, radius = 20, 10.0
+    truth = [
+        _pose(a + np.pi / 2, [radius * np.cos(a), radius * np.sin(a), 0.0])
+        for a in 2 * np.pi * np.arange(n) / n
+    ]
+    bias = _pose(np.radians(0.2), [0.0, 0.0, 0.0])
+    odometry = [np.linalg.inv(truth[i - 1]) @ truth[i] @ bias for i in range(1, n)]
+    drifted = [truth[0]]
+    for T in odometry:
+        drifted.append(drifted[-1] @ T)
+    info = np.diag([1.0] * 3 + [100.0] * 3)  # 1 m, 0.1 rad
+    a, b = list(range(n - 1)) + [0], list(range(1, n)) + [n - 1]
+    rel = odometry + [np.linalg.inv(truth[0]) @ truth[n - 1]]
+    loop = [False] * (n - 1) + [True]
+    out = _core.optimize_lidar_pose_graph(drifted, a, b, rel, [info] * n, loop)
+    before = np.linalg.norm(drifted[-1][:3, 3] - truth[-1][:3, 3])
+    after = np.linalg.norm(out[-1][:3, 3] - truth[-1][:3, 3])
+    assert before > 0.5
+    assert after < 0.05 * before
+    assert np.array_equal(out[0][:3, 3], drifted[0][:3, 3])
+    with pytest.raises(ValueError, match="keyframe 1 is not a rigid transform"):
+        _core.optimize_lidar_pose_graph(
+            [np.eye(4), 2 * np.eye(4)], [0], [1], [np.eye(4)], [info], [False]
+        )
+    with pytest.raises(ValueError, match="does not join two of the 2 poses"):
+        _core.optimize_lidar_pose_graph([np.eye(4)] * 2, [0], [3], [np.eye(4)], [info], [False])

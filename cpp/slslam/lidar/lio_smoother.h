@@ -6,7 +6,8 @@
 //
 // Why Ceres and a window rather than GTSAM's iSAM2: Ceres is already the project's solver, the
 // window keeps each update at a few milliseconds, and loop closures are handled by a separate
-// keyframe pose graph (pose_graph.h) whose correction is applied to the odometry frame.
+// keyframe pose graph (optimization/pose_graph.h) whose correction is applied to the odometry
+// frame.
 #pragma once
 
 #include <deque>
