@@ -298,6 +298,8 @@ void BindTracking(py::module_& m) {
       .def_readwrite("max_correction_rad", &LoopClosingOptions::max_correction_rad)
       .def_readwrite("strong_covisibility", &LoopClosingOptions::strong_covisibility)
       .def_readwrite("global_ba", &LoopClosingOptions::global_ba)
+      .def_readwrite("yaw_and_position_with_gravity",
+                     &LoopClosingOptions::yaw_and_position_with_gravity)
       .def_readwrite("welding_keyframes", &LoopClosingOptions::welding_keyframes)
       .def_readwrite("pose_graph", &LoopClosingOptions::pose_graph)
       .def("check", &LoopClosingOptions::Check);

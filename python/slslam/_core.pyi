@@ -1234,6 +1234,7 @@ class LoopClosingOptions:
     global_ba: bool
     merge_maps: bool
     pose_graph: PoseGraphOptions
+    yaw_and_position_with_gravity: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:

@@ -198,6 +198,7 @@ LOOP_CLOSING_TO_CORE: dict[str, tuple[str, ...]] = {
         "enabled",
         "merge_maps",
         "global_ba",
+        "yaw_and_position_with_gravity",
         "min_inliers",
         "consistency",
         "max_correction_ratio",
@@ -371,6 +372,8 @@ class LoopClosingConfig:
     merge_maps: bool = _loop_closing("merge_maps")
     # global bundle adjustment over points and lines after a loop / merge
     global_ba: bool = _loop_closing("global_ba")
+    # a map whose gravity the IMU gave corrects loops in yaw and position only (4 DoF)
+    yaw_and_position_with_gravity: bool = _loop_closing("yaw_and_position_with_gravity")
     # weighted inliers (points + lines) of the candidate's local map a loop needs
     min_inliers: float = _loop_closing("min_inliers", "(0, 100000]")
     # consecutive keyframes whose verified loop transforms must agree

@@ -55,6 +55,7 @@ def test_loop_closing_defaults_agree_with_cpp():
         "enabled",
         "merge_maps",
         "global_ba",
+        "yaw_and_position_with_gravity",
         "consistency",
         "max_correction_ratio",
         "max_correction_floor_m",

@@ -6,6 +6,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <utility>
 #include <vector>
@@ -160,6 +161,15 @@ class Map {
   int correction_epoch() const SLSLAM_REQUIRES(mutex_) { return correction_epoch_; }
   void BumpCorrectionEpoch() SLSLAM_REQUIRES(mutex_) { ++correction_epoch_; }
 
+  // Gravity's direction in the map's world (unit), once the IMU initialised in it; empty
+  // without. Loop correction then moves the keyframes in yaw and position only.
+  const std::optional<Eigen::Vector3d>& gravity_direction() const SLSLAM_REQUIRES(mutex_) {
+    return gravity_direction_;
+  }
+  void set_gravity_direction(const Eigen::Vector3d& g_world) SLSLAM_REQUIRES(mutex_) {
+    if (g_world.allFinite() && g_world.norm() > 0.0) gravity_direction_ = g_world.normalized();
+  }
+
  private:
   mutable Mutex mutex_;
   std::shared_ptr<MapIds> ids_;
@@ -168,6 +178,7 @@ class Map {
   std::map<int, std::shared_ptr<MapLine>> lines_ SLSLAM_GUARDED_BY(mutex_);
   std::map<int, RetiredKeyFrame> retired_ SLSLAM_GUARDED_BY(mutex_);
   int correction_epoch_ SLSLAM_GUARDED_BY(mutex_) = 0;
+  std::optional<Eigen::Vector3d> gravity_direction_ SLSLAM_GUARDED_BY(mutex_);
 };
 
 }  // namespace slslam

@@ -521,7 +521,12 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
     loop.a_from_b = RelativePose(C, p);
     loop_edges_[verified.target_map].push_back(loop);
   }
-  const PoseGraphReport report = OptimizePoseGraph(&poses, edges, options_.pose_graph);
+  PoseGraphOptions pose_graph = options_.pose_graph;
+  if (options_.yaw_and_position_with_gravity && map->gravity_direction()) {
+    pose_graph.yaw_and_position_only = true;
+    pose_graph.gravity_in_world = *map->gravity_direction();
+  }
+  const PoseGraphReport report = OptimizePoseGraph(&poses, edges, pose_graph);
   if (!report.solved) {  // keep the rigid correction of the group at least
     for (size_t i = 0; i < ids.size(); ++i) {
       if (!group.count(ids[i])) poses[i] = {original[ids[i]], false};

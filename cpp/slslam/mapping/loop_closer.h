@@ -75,6 +75,10 @@ struct LoopClosingOptions {
   double point_sigma_px = 1.0;   ///< global BA point sigma [px] (the tracker sets its own)
   double line_sigma_px = 3.0;    ///< global BA line sigma [px]
   PoseGraphOptions pose_graph;
+  /// A map whose gravity the IMU gave (Map::gravity_direction) corrects a loop in yaw and
+  /// position only (the pose graph's 4-DoF mode, as ORB-SLAM3's visual-inertial mode): roll and
+  /// pitch are observable there, and a loop's error in them is the camera's, not the IMU's.
+  bool yaw_and_position_with_gravity = true;
   BundleAdjustmentOptions global_ba_options;
 
   void Check() const;

@@ -213,6 +213,16 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
     inertial_map_ = active_;
   }
   inertial_->AddVisualPose(frame.timestamp, cam_from_world, information, with_prior);
+  // The map learns gravity's direction from each (re)initialisation (loop correction in 4 DoF).
+  const InertialEstimator::Report& report = inertial_->report();
+  const int fits = report.initialisations + report.refinements;
+  if (inertial_->initialised() && fits != gravity_fits_) {
+    gravity_fits_ = fits;
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    map.set_gravity_direction(inertial_->g_world());
+  }
 }
 
 bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,

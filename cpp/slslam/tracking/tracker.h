@@ -577,6 +577,7 @@ class Tracker {
   std::unique_ptr<DynamicCellFilter> dynamic_;   ///< null when options_.dynamic_cells is off
   std::unique_ptr<InertialEstimator> inertial_;  ///< from the first IMU sample on (use_imu)
   int inertial_map_ = -1;                        ///< the map whose world the inertial state is in
+  int gravity_fits_ = 0;  ///< the estimator's fits (initialisations + refinements) given to a map
   // The inertial state's prior on the frame's pose; false when there is none (no IMU, not
   // initialised, another map's world, samples missing).
   bool InertialPrior(const StereoFrame& frame, PosePrior* prior) const;
