@@ -258,6 +258,15 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   return true;
 }
 
+bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const {
+  if (map_index < 0 || map_index >= atlas_.size()) return false;
+  Map& map = atlas_.map(map_index);
+  MutexLock lock(map.mutex());
+  if (!map.gravity_direction()) return false;
+  *g_world = *map.gravity_direction();
+  return true;
+}
+
 Tracker::InertialReport Tracker::inertial_report() const {
   InertialReport r;
   if (!inertial_) return r;

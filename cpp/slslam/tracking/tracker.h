@@ -391,7 +391,9 @@ class Tracker {
   };
   InertialReport inertial_report() const;
   int num_maps() const { return atlas_.size(); }  ///< maps started (merged ones included)
-  int live_maps() const;                          ///< maps not merged into another
+  /// Gravity's direction in map `map_index`'s world (unit) once the IMU gave it, else false.
+  bool MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const;
+  int live_maps() const;  ///< maps not merged into another
   int active_map() const { return active_; }
   bool has_vocabulary() const { return vocabulary_ != nullptr; }
   // Every estimated frame pose (OK, RELOCALISED, NEW_MAP), expressed in the final map.

@@ -409,6 +409,10 @@ TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
   EXPECT_GT(report.first_init_s, 0.9);
   EXPECT_LT(report.first_init_s, 2.0);
   EXPECT_LT((report.gyro_bias - Eigen::Vector3d(0.002, -0.001, 0.003)).norm(), 1e-3);
+  // The map knows gravity (+y in the first camera's frame): its loops correct in 4 DoF.
+  Eigen::Vector3d g_map;
+  ASSERT_TRUE(tracker.MapGravityDirection(0, &g_map));
+  EXPECT_GT(g_map.dot(Eigen::Vector3d::UnitY()), std::cos(1.0 * M_PI / 180.0));
 }
 
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
