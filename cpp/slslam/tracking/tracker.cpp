@@ -267,6 +267,23 @@ bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const
   return true;
 }
 
+Tracker::WeakVision Tracker::WeakVisionOf(const StereoFrame& frame, const LocalTracking& tracking,
+                                          bool have_prior) {
+  WeakVision weak;
+  weak.with_prior = have_prior;
+  weak.all = tracking.pose;
+  weak.lines = tracking.line_pose;
+  weak.lines_along_world = tracking.line_pose_along_world;
+  if (weak.lines.success) {
+    // (an INERTIAL keyframe observes these map lines rather than making new ones)
+    weak.line_match.assign(frame.NumLines(), -1);
+    for (size_t i = 0; i < tracking.segments.size(); ++i) {
+      if (weak.lines.line_inlier[i]) weak.line_match[tracking.segments[i]] = tracking.line_ids[i];
+    }
+  }
+  return weak;
+}
+
 Tracker::InertialReport Tracker::inertial_report() const {
   InertialReport r;
   if (!inertial_) return r;
@@ -710,18 +727,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   }
   // The local map's pose optimisation (with the IMU prior), for the inertial state's weak
   // correction when the frame is not tracked; relocalisation below overwrites `tracking`.
-  WeakVision weak;
-  weak.with_prior = have_prior;
-  weak.all = tracking.pose;
-  weak.lines = tracking.line_pose;
-  weak.lines_along_world = tracking.line_pose_along_world;
-  if (weak.lines.success) {
-    // (an INERTIAL keyframe observes these map lines rather than making new ones)
-    weak.line_match.assign(frame->NumLines(), -1);
-    for (size_t i = 0; i < tracking.segments.size(); ++i) {
-      if (weak.lines.line_inlier[i]) weak.line_match[tracking.segments[i]] = tracking.line_ids[i];
-    }
-  }
+  const WeakVision weak = WeakVisionOf(*frame, tracking, have_prior);
   if (!tracked) Recover(*frame, predicted, &result, &tracking, &tracked, &relocalised);
   CountMatches(tracking, &result);
   result.matching_ms = tracking.matching_ms;

@@ -435,6 +435,10 @@ class Tracker {
     std::vector<int> line_match;
   };
   enum class Mode { kTracking, kRecentlyLost, kLost };
+  // The weak vision of `tracking` (the local map's optimisation of `frame`) before relocalisation
+  // overwrites it.
+  static WeakVision WeakVisionOf(const StereoFrame& frame, const LocalTracking& tracking,
+                                 bool have_prior);
 
   // TrackFrame's steps. The frame's inputs checked (complete lines; a loaded map's descriptors).
   void CheckFrameInput(const StereoFrame& frame);
@@ -512,6 +516,9 @@ class Tracker {
   };
   // Caller holds map.mutex(). Marks the copied landmarks visible (found / visible culling); the
   // points not when `points_visible` is false (a frame tracked again: they were counted).
+  // The segment map line `line` projects to from cam_from_world, for matching; false when it is
+  // not in view (in front, long enough, inside the image: LineAided cuts it to that part).
+  bool ProjectMapLine(const MapLine& line, const Rigid3d& cam_from_world, LineSegment* proj) const;
   LocalMapSnapshot SnapshotLocalMap(const StereoFrame& frame, Map& map, int reference_kf,
                                     const Rigid3d& pred_cam_from_world,
                                     bool points_visible = true) const SLSLAM_REQUIRES(map.mutex());

@@ -109,26 +109,7 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
       auto l = map.line(lid);
       if (!l || l->bad) continue;
       LineSegment proj;
-      if (LineAided()) {
-        // The part in front and inside the image: a long edge the camera drives along reaches
-        // behind it, and its near end leaves the image first.
-        Eigen::Vector3d s_c, e_c;
-        if (!tracker_detail::ClipToFront(pred_cam_from_world, l->start, l->end,
-                                         tracker_detail::kMinLineDepthM, &s_c, &e_c)) {
-          continue;
-        }
-        proj.start = camera.Project(s_c).cast<float>();
-        proj.end = camera.Project(e_c).cast<float>();
-        if (!tracker_detail::ClipToImage(camera, &proj) || proj.Length() < 5.0f) continue;
-      } else {
-        const Eigen::Vector3d s_c = pred_cam_from_world * l->start;
-        const Eigen::Vector3d e_c = pred_cam_from_world * l->end;
-        if (s_c.z() <= 0.05 || e_c.z() <= 0.05) continue;
-        proj.start = camera.Project(s_c).cast<float>();
-        proj.end = camera.Project(e_c).cast<float>();
-        const Eigen::Vector2f mid = 0.5f * (proj.start + proj.end);
-        if (!InImage(camera, mid.cast<double>()) || proj.Length() < 5.0f) continue;
-      }
+      if (!ProjectMapLine(*l, pred_cam_from_world, &proj)) continue;
       if (!SameKind(l->descriptor, frame.line_descriptors)) continue;
       l->visible += 1;
       lines.push_back(l);
@@ -146,6 +127,30 @@ Tracker::LocalMapSnapshot Tracker::SnapshotLocalMap(const StereoFrame& frame, Ma
   }
   snap.ms = Ms(start);
   return snap;
+}
+
+bool Tracker::ProjectMapLine(const MapLine& line, const Rigid3d& cam_from_world,
+                             LineSegment* proj) const {
+  const PinholeCamera& camera = options_.rig.camera;
+  if (LineAided()) {
+    // The part in front and inside the image: a long edge the camera drives along reaches
+    // behind it, and its near end leaves the image first.
+    Eigen::Vector3d s_c, e_c;
+    if (!tracker_detail::ClipToFront(cam_from_world, line.start, line.end,
+                                     tracker_detail::kMinLineDepthM, &s_c, &e_c)) {
+      return false;
+    }
+    proj->start = camera.Project(s_c).cast<float>();
+    proj->end = camera.Project(e_c).cast<float>();
+    return tracker_detail::ClipToImage(camera, proj) && proj->Length() >= 5.0f;
+  }
+  const Eigen::Vector3d s_c = cam_from_world * line.start;
+  const Eigen::Vector3d e_c = cam_from_world * line.end;
+  if (s_c.z() <= 0.05 || e_c.z() <= 0.05) return false;
+  proj->start = camera.Project(s_c).cast<float>();
+  proj->end = camera.Project(e_c).cast<float>();
+  const Eigen::Vector2f mid = 0.5f * (proj->start + proj->end);
+  return InImage(camera, mid.cast<double>()) && proj->Length() >= 5.0f;
 }
 
 Tracker::LocalTracking Tracker::TrackSnapshot(
