@@ -4,9 +4,9 @@
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
-#include <Eigen/Eigenvalues>
 
 #include "slslam/core/check.h"
+#include "slslam/optimization/sqrt_information.h"
 
 namespace slslam::lidar {
 
@@ -23,14 +23,6 @@ void LioSmootherOptions::Check() const {
 namespace {
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
-
-// Square root of a symmetric positive semi-definite information matrix: L with L^T L = info.
-template <int N>
-Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& info) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(0.5 * (info + info.transpose()));
-  const Eigen::Matrix<double, N, 1> d = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return d.asDiagonal() * eig.eigenvectors().transpose();
-}
 
 // Residual of one preintegrated IMU interval (rotation, velocity, position) and the bias random
 // walk, between states i and j. Parameters: q_i (x, y, z, w), p_i, vb_i (v, bg, ba), q_j, p_j,

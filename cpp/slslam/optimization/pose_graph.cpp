@@ -8,11 +8,11 @@
 #include <ceres/problem.h>
 #include <ceres/rotation.h>
 #include <ceres/solver.h>
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "slslam/core/check.h"
 #include "slslam/geometry/rotation.h"
+#include "slslam/optimization/sqrt_information.h"
 
 namespace slslam {
 
@@ -29,11 +29,7 @@ class EdgeError {
       : q_ab_(edge.a_from_b.rotation), t_ab_(edge.a_from_b.translation) {
     if (edge.information) {
       left_tangent_ = true;
-      // S^T S = information (negative eigenvalues of a rounded PSD matrix clamped to 0).
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(
-          0.5 * (*edge.information + edge.information->transpose()));
-      sqrt_information_ =
-          eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
+      sqrt_information_ = SqrtInformation<6>(*edge.information);
     } else {
       const double w = std::sqrt(edge.weight);
       rot_scale_ = w / options.rotation_sigma_rad;

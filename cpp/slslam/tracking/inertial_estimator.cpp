@@ -138,7 +138,7 @@ void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
     // prediction): from the optimiser's posterior (prior + images) when it had the prior.
     Matrix6d visual = with_prior ? Matrix6d(information - prior) : information;
     Vector6d visual_times_d = with_prior ? Vector6d(information * d) : Vector6d(visual * d);
-    if (!unobserved_world.isZero(0.0)) {
+    if (!full) {
       // The images' Gaussian marginalised over the direction (a camera moved by x along it has
       // the left tangent (-R_cw x, 0)): the Schur complement of its information along u, not the
       // projection, which would read the images as measuring zero motion along it.

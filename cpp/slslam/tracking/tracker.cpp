@@ -344,6 +344,12 @@ std::shared_ptr<const StereoFrame> Tracker::WithStereoLines(
   return Completed(std::move(frame), &StereoFrame::stereo_lines_pending, complete_stereo_lines_);
 }
 
+int Tracker::StereoLines(const StereoFrame& frame) {
+  int stereo_lines = 0;
+  for (bool has : frame.line_has_depth) stereo_lines += has;
+  return stereo_lines;
+}
+
 int Tracker::StereoPoints(const StereoFrame& frame) {
   int stereo_points = 0;
   for (double d : frame.depth) stereo_points += d > 0.0;
@@ -361,7 +367,7 @@ bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& 
   int stereo_lines = 0;
   if (options_.use_lines) {
     frame = WithStereoLines(std::move(frame));
-    for (bool has : frame->line_has_depth) stereo_lines += has;
+    stereo_lines = StereoLines(*frame);
   }
   // A map needs some points: lines alone leave the first keyframe's pose weakly constrained.
   if (Weighted(stereo_points, stereo_lines) < options_.min_init_points) return false;
@@ -922,11 +928,7 @@ void Tracker::InertialKeyFrame(std::shared_ptr<const StereoFrame>& frame,
   if (!points && frame->NumLines() < min_lines) return;
   std::shared_ptr<const StereoFrame> keyframe = frame;
   if (options_.use_lines) keyframe = WithStereoLines(std::move(keyframe));
-  if (!points) {
-    const int stereo_lines = static_cast<int>(
-        std::count(keyframe->line_has_depth.begin(), keyframe->line_has_depth.end(), true));
-    if (stereo_lines < min_lines) return;
-  }
+  if (!points && StereoLines(*keyframe) < min_lines) return;
   std::vector<int> lines = line_match;
   lines.resize(keyframe->NumLines(), -1);
   InsertKeyFrame(keyframe, cam_from_world, std::vector<int>(keyframe->NumKeypoints(), -1), lines,

@@ -481,6 +481,7 @@ class Tracker {
                          const std::vector<bool>& valid, const PosePrior* prior);
   bool StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& cam_from_world);
   static int StereoPoints(const StereoFrame& frame);  ///< keypoints with a stereo depth
+  static int StereoLines(const StereoFrame& frame);   ///< segments with a stereo depth
   /// StartMap's first check: at least min(min_init_points, 15) stereo points (a lit frame)
   bool CouldStartMap(const StereoFrame& frame) const;
   // The frame with its stereo lines: itself, or a completed copy when they are pending and Track
