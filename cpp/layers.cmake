@@ -9,7 +9,7 @@
 #   geometry      rotations, Pluecker lines, reprojection residuals
 #   inertial      IMU preintegration, the inertial state and its covariance, inertial initialisation
 #   place         bag-of-words vocabulary and keyframe database
-#   map           keyframes, points, lines, covisibility, map files
+#   map           keyframes (with their IMU states), points, lines, covisibility, map files
 #   optimization  Ceres problems: pose, bundle adjustment, pose graph
 #   mapping       local mapping, triangulation, loop closing, the atlas
 #   tracking      stereo matching, the stereo front end, the tracker, the inertial estimator
@@ -24,7 +24,7 @@ set(SLSLAM_LAYER_DEPS_features core)
 set(SLSLAM_LAYER_DEPS_geometry core)
 set(SLSLAM_LAYER_DEPS_inertial core geometry)
 set(SLSLAM_LAYER_DEPS_place core)
-set(SLSLAM_LAYER_DEPS_map core features geometry place)
+set(SLSLAM_LAYER_DEPS_map core features geometry inertial place)
 set(SLSLAM_LAYER_DEPS_optimization core geometry inertial)
 set(SLSLAM_LAYER_DEPS_mapping map optimization)
 set(SLSLAM_LAYER_DEPS_tracking mapping)

@@ -61,6 +61,7 @@ py::dict MapDict(const SessionMap& session) {
   out["local_ba_solve_ms"] = s.ba_solve_ms;
   out["local_ba_iterations"] = s.ba_iterations;
   out["local_ba_rejected_steps"] = s.ba_rejected_steps;
+  out["local_ba_inertial_factors"] = s.ba_inertial_factors;
   out["inertial_frames"] = t.inertial_frames;
   out["inertial_weak_updates"] = t.inertial_weak_updates;
   out["inertial_keyframes"] = t.inertial_keyframes;
@@ -262,6 +263,7 @@ void BindTracking(py::module_& m) {
       .def_readwrite("keyframe_min_stereo_lines", &InertialOptions::keyframe_min_stereo_lines)
       .def_readwrite("keyframe_interval_s", &InertialOptions::keyframe_interval_s)
       .def_readwrite("visual_information_scale", &InertialOptions::visual_information_scale)
+      .def_readwrite("local_ba_keyframes", &InertialOptions::local_ba_keyframes)
       .def_property(
           "T_body_cam", [](const InertialOptions& o) { return o.body_from_cam.ToMatrix4(); },
           [](InertialOptions& o, const Eigen::Matrix4d& T) {

@@ -232,6 +232,7 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "keyframe_min_stereo_lines",
             "keyframe_interval_s",
             "visual_information_scale",
+            "local_ba_keyframes",
         )
     },
 }
@@ -438,6 +439,9 @@ class ImuConfig:
     keyframe_interval_s: float = _imu("keyframe_interval_s", "[0, 1000000]")
     # the pose optimiser's information is scaled by this before it corrects the state
     visual_information_scale: float = _imu("visual_information_scale", "[1e-06, 1000000]")
+    # local BA also estimates the velocity and IMU biases of the last this many keyframes of the
+    # IMU chain, with the preintegrated IMU between consecutive ones (0: a visual local BA)
+    local_ba_keyframes: int = _imu("local_ba_keyframes", "[0, 1000]")
 
     def relations_error(self, where: str) -> str | None:
         """The C++ check between two keys (InertialOptions::Check), as a message naming

@@ -177,4 +177,21 @@ void ImuBuffer::DropBefore(double t_s) {
   while (samples_.size() >= 2 && samples_[1].t_s <= t_s) samples_.pop_front();
 }
 
+ImuBuffer ImuBuffer::Slice(double t0_s, double t1_s) const {
+  ImuBuffer out;
+  for (size_t k = 0; k < samples_.size(); ++k) {
+    const Sample& s = samples_[k];
+    if (s.t_s >= t1_s) break;
+    const bool held_over_t0 = k + 1 < samples_.size() && samples_[k + 1].t_s <= t0_s;
+    if (!held_over_t0) out.samples_.push_back(s);
+  }
+  return out;
+}
+
+void ImuBuffer::Append(const ImuBuffer& later) {
+  for (const Sample& s : later.samples_) {
+    if (samples_.empty() || s.t_s > samples_.back().t_s) samples_.push_back(s);
+  }
+}
+
 }  // namespace slslam

@@ -87,6 +87,12 @@ class ImuBuffer {
                     ImuPreintegration* out) const;
   // Forgets samples no longer needed for intervals starting at or after t_s.
   void DropBefore(double t_s);
+  // The samples Preintegrate needs for [t0_s, t1_s]: from the last one at or before t0_s to the
+  // last one before t1_s.
+  ImuBuffer Slice(double t0_s, double t1_s) const;
+  // Appends the samples of `later` after this buffer's last one (those not after it are skipped).
+  void Append(const ImuBuffer& later);
+  double first_s() const { return samples_.empty() ? 1e300 : samples_.front().t_s; }
   bool empty() const { return samples_.empty(); }
   double last_s() const { return samples_.empty() ? -1e300 : samples_.back().t_s; }
   size_t size() const { return samples_.size(); }

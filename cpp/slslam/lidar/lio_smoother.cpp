@@ -6,6 +6,7 @@
 #include <ceres/rotation.h>
 
 #include "slslam/core/check.h"
+#include "slslam/optimization/inertial_factor.h"
 #include "slslam/optimization/sqrt_information.h"
 
 namespace slslam::lidar {
@@ -22,11 +23,8 @@ void LioSmootherOptions::Check() const {
 
 namespace {
 
-using Matrix15d = Eigen::Matrix<double, 15, 15>;
-
-// Residual of one preintegrated IMU interval (rotation, velocity, position) and the bias random
-// walk, between states i and j. Parameters: q_i (x, y, z, w), p_i, vb_i (v, bg, ba), q_j, p_j,
-// vb_j.
+// One preintegrated IMU interval between states i and j (optimization/inertial_factor.h) under
+// the z-up world's gravity. Parameters: q_i (x, y, z, w), p_i, vb_i (v, bg, ba), q_j, p_j, vb_j.
 struct ImuFactor {
   ImuFactor(const ImuPreintegration& imu, const Matrix15d& sqrt_info)
       : imu(imu), sqrt_info(sqrt_info) {}
@@ -36,33 +34,10 @@ struct ImuFactor {
                   const T* vbj_, T* out) const {
     using V3 = Eigen::Matrix<T, 3, 1>;
     const Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
-    const Eigen::Map<const V3> pi(pi_), pj(pj_), vi(vbi_), bgi(vbi_ + 3), bai(vbi_ + 6);
-    const Eigen::Map<const V3> vj(vbj_), bgj(vbj_ + 3), baj(vbj_ + 6);
-    const V3 dbg = bgi - imu.bias_hat().gyro.cast<T>();
-    const V3 dba = bai - imu.bias_hat().acc.cast<T>();
-    // Corrected rotation increment delta_R * Exp(dR_dbg dbg), as a quaternion.
-    const V3 dtheta = imu.dR_dbg().cast<T>() * dbg;
-    Eigen::Quaternion<T> q_corr;
-    T aa[3] = {dtheta(0), dtheta(1), dtheta(2)}, qc[4];
-    ceres::AngleAxisToQuaternion(aa, qc);  // w, x, y, z
-    q_corr = Eigen::Quaternion<T>(qc[0], qc[1], qc[2], qc[3]);
-    const Eigen::Quaternion<T> dq = Eigen::Quaterniond(imu.delta_R()).cast<T>() * q_corr;
-    const Eigen::Quaternion<T> err = dq.conjugate() * qi.conjugate() * qj;
-    T qe[4] = {err.w(), err.x(), err.y(), err.z()}, re[3];
-    ceres::QuaternionToAngleAxis(qe, re);
-    const double dt = imu.dt_s();
-    const V3 g = imu.gravity_world().cast<T>();
-    const Eigen::Matrix<T, 3, 3> Rit = qi.conjugate().toRotationMatrix();
-    const V3 dv =
-        imu.delta_v().cast<T>() + imu.dv_dbg().cast<T>() * dbg + imu.dv_dba().cast<T>() * dba;
-    const V3 dp =
-        imu.delta_p().cast<T>() + imu.dp_dbg().cast<T>() * dbg + imu.dp_dba().cast<T>() * dba;
+    const Eigen::Map<const V3> pi(pi_), pj(pj_);
     Eigen::Matrix<T, 15, 1> r;
-    r.template segment<3>(0) = V3(re[0], re[1], re[2]);
-    r.template segment<3>(3) = Rit * (vj - vi - g * T(dt)) - dv;
-    r.template segment<3>(6) = Rit * (pj - pi - vi * T(dt) - T(0.5 * dt * dt) * g) - dp;
-    r.template segment<3>(9) = bgj - bgi;
-    r.template segment<3>(12) = baj - bai;
+    ImuIntervalResidual(imu, imu.gravity_world(), Eigen::Quaternion<T>(qi), V3(pi), vbi_,
+                        Eigen::Quaternion<T>(qj), V3(pj), vbj_, &r);
     Eigen::Map<Eigen::Matrix<T, 15, 1>> residual(out);
     residual = sqrt_info.cast<T>() * r;
     return true;
@@ -250,18 +225,8 @@ LioState LioSmoother::Update(const ImuPreintegration& imu, const Eigen::Isometry
     if (k == 0 || !n.imu) continue;
     Node& m = *states_[k - 1];
     const ImuPreintegration& pre = *n.imu;
-    Matrix15d cov = Matrix15d::Zero();
-    cov.topLeftCorner<9, 9>() = pre.covariance();
-    const double dt = pre.dt_s();
-    cov.block<3, 3>(9, 9).diagonal().setConstant(noise_.gyro_random_walk * noise_.gyro_random_walk *
-                                                 dt);
-    cov.block<3, 3>(12, 12).diagonal().setConstant(noise_.acc_random_walk * noise_.acc_random_walk *
-                                                   dt);
-    // A floor on every variance keeps the square root finite for noise-free data.
-    cov.diagonal() = cov.diagonal().cwiseMax(1e-12);
-    const Matrix15d info = cov.inverse();
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImuFactor, 15, 4, 3, 9, 4, 3, 9>(
-                                 new ImuFactor(pre, SqrtInformation<15>(info))),
+                                 new ImuFactor(pre, ImuIntervalSqrtInformation(pre))),
                              nullptr, m.q.coeffs().data(), m.p.data(), m.vb.data(),
                              n.q.coeffs().data(), n.p.data(), n.vb.data());
   }

@@ -155,6 +155,17 @@ void Map::EraseKeyFrame(int keyframe_id) {
     (void)id;
     other->covisibility.erase(keyframe_id);
     if (other->parent == keyframe_id) other->parent = kf->parent;
+    // The IMU chain skips kf: its successor's interval starts where kf's did.
+    if (other->inertial && other->inertial->previous == keyframe_id) {
+      if (kf->inertial) {
+        ImuBuffer joined = kf->inertial->samples_from_previous;
+        joined.Append(other->inertial->samples_from_previous);
+        other->inertial->samples_from_previous = std::move(joined);
+        other->inertial->previous = kf->inertial->previous;
+      } else {
+        other->inertial->previous = -1;
+      }
+    }
   }
   keyframes_.erase(keyframe_id);
 }

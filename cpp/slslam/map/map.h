@@ -18,6 +18,8 @@
 #include "slslam/core/thread_annotations.h"
 #include "slslam/features/stereo_frame.h"
 #include "slslam/geometry/plucker_line.h"
+#include "slslam/inertial/imu_preintegration.h"
+#include "slslam/inertial/inertial_state.h"
 #include "slslam/place/vocabulary.h"
 
 namespace slslam {
@@ -53,6 +55,29 @@ struct MapLine {
   bool bad = false;
 };
 
+// The IMU at a keyframe: the body's (IMU frame's) velocity and the biases, and the samples from
+// the keyframe before it in the IMU chain (local BA's inertial factor between the two).
+struct KeyFrameInertial {
+  double t_s = 0.0;                                        ///< camera time of the keyframe [s]
+  Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();  ///< [m/s]
+  ImuBias bias;
+  int previous = -1;                ///< the keyframe the samples start at (-1: first of its chain)
+  ImuBuffer samples_from_previous;  ///< IMU times (t_cam - time_offset), covering the interval
+};
+
+// What a map's IMU terms need beside the keyframes' states (set by the tracker once the IMU
+// initialised in the map's world).
+struct MapInertial {
+  Rigid3d body_from_cam;                              ///< the left camera in the IMU frame
+  Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the map's world [m/s^2]
+  ImuNoiseOptions noise;
+  double time_offset_s = 0.0;      ///< t_cam = t_imu + time_offset_s [s]
+  double max_sample_gap_s = 0.05;  ///< no interval over a larger gap between samples [s]
+  /// No IMU factor over a longer interval between keyframes (ORB-SLAM3's bound: the first-order
+  /// bias correction of a longer one is poor, and its preintegration says little) [s]
+  double max_interval_s = 3.0;
+};
+
 struct KeyFrame {
   int id = -1;
   Rigid3d cam_from_world;  ///< world -> camera (x_c = R x_w + t)
@@ -72,6 +97,9 @@ struct KeyFrame {
   /// it observes, since its own observations (a few lines, noise points) leave them
   /// undetermined. Not in map files.
   bool pose_from_imu = false;
+  /// The IMU's state at the keyframe (a map with an IMU, after its initialisation): local BA
+  /// estimates velocity and biases with the poses. Not in map files.
+  std::optional<KeyFrameInertial> inertial;
   bool bad = false;
 
   Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]
@@ -169,6 +197,9 @@ class Map {
   void set_gravity_direction(const Eigen::Vector3d& g_world) SLSLAM_REQUIRES(mutex_) {
     if (g_world.allFinite() && g_world.norm() > 0.0) gravity_direction_ = g_world.normalized();
   }
+  // The IMU terms' settings (empty: a map without IMU factors).
+  const std::optional<MapInertial>& inertial() const SLSLAM_REQUIRES(mutex_) { return inertial_; }
+  void set_inertial(const MapInertial& inertial) SLSLAM_REQUIRES(mutex_) { inertial_ = inertial; }
 
  private:
   mutable Mutex mutex_;
@@ -179,6 +210,7 @@ class Map {
   std::map<int, RetiredKeyFrame> retired_ SLSLAM_GUARDED_BY(mutex_);
   int correction_epoch_ SLSLAM_GUARDED_BY(mutex_) = 0;
   std::optional<Eigen::Vector3d> gravity_direction_ SLSLAM_GUARDED_BY(mutex_);
+  std::optional<MapInertial> inertial_ SLSLAM_GUARDED_BY(mutex_);
 };
 
 }  // namespace slslam

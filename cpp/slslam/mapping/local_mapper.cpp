@@ -119,6 +119,26 @@ void LocalMapper::Run() {
   }
 }
 
+namespace {
+
+// Culling `kf` would join two IMU intervals into one longer than the map's bound
+// (MapInertial::max_interval_s): the chain would break there.
+bool LongImuInterval(const Map& map, const KeyFrame& kf) SLSLAM_REQUIRES(map.mutex()) {
+  if (!kf.inertial || !map.inertial()) return false;
+  const double max_interval_s = map.inertial()->max_interval_s;
+  auto previous = map.keyframe(kf.inertial->previous);
+  if (!previous || !previous->inertial) return false;
+  for (const auto& [id, other] : map.keyframes()) {
+    (void)id;
+    if (other->inertial && other->inertial->previous == kf.id) {
+      return other->inertial->t_s - previous->inertial->t_s > max_interval_s;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 void LocalMapper::Process(Map* map, int keyframe_id) {
   Window window;
   window.map = map;
@@ -155,6 +175,22 @@ bool LocalMapper::Prepare(Window* window) {
     for (int id : map->BestCovisible(keyframe_id, options_.local_keyframes)) {
       if (map->keyframe(id)) local.push_back(id);
     }
+    // With the IMU, the last keyframes of its chain too (a weak stretch's keyframes share few
+    // points with each other: the covisible ones alone leave the chain in pieces), back to where
+    // an interval is too long for a factor (beyond it, the two parts share nothing).
+    const bool inertial = options_.inertial_keyframes > 0 && map->inertial().has_value();
+    if (inertial) {
+      auto kf = current;
+      for (int n = 1; n < options_.inertial_keyframes && kf->inertial; ++n) {
+        auto previous = map->keyframe(kf->inertial->previous);
+        if (!previous || !previous->inertial ||
+            !(kf->inertial->t_s - previous->inertial->t_s <= map->inertial()->max_interval_s)) {
+          break;
+        }
+        kf = previous;
+        if (std::find(local.begin(), local.end(), kf->id) == local.end()) local.push_back(kf->id);
+      }
+    }
     std::unordered_map<int, int> pose_index;
     auto add_pose = [&](int kf_id, bool fixed) {
       map->mutex().AssertHeld();  // the lock above (a lambda is not followed by the analysis)
@@ -168,6 +204,7 @@ bool LocalMapper::Prepare(Window* window) {
     for (int id : local) add_pose(id, id == anchor || map->keyframe(id)->pose_from_imu);
     ba.AddWindowLandmarks(*map, local, &pose_index, options_.max_fixed_keyframes,
                           options_.point_sigma_px, options_.line_sigma_px);
+    if (inertial) ba.AddInertialFactors(*map, local, &pose_index);
   }
   window->ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -243,7 +280,8 @@ void LocalMapper::Finish(Window* window) {
           ++redundant;
         }
       }
-      if (total > 0 && redundant > options_.redundant_ratio * total) {
+      if (total > 0 && redundant > options_.redundant_ratio * total &&
+          !LongImuInterval(*map, *kf)) {
         map->EraseKeyFrame(kf_id);
         ++keyframes_culled;
       }
@@ -272,6 +310,7 @@ void LocalMapper::Finish(Window* window) {
   stats_.ba_solve_ms += window->solve_ms;
   stats_.ba_iterations += report.iterations;
   stats_.ba_rejected_steps += report.rejected_steps;
+  stats_.ba_inertial_factors += static_cast<int>(ba.problem().inertial.factors.size());
 }
 
 }  // namespace slslam

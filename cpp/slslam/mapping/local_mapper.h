@@ -36,6 +36,10 @@ struct LocalMapperOptions {
   TriangulationOptions triangulation;
   double point_sigma_px = 1.0;  ///< [px]
   double line_sigma_px = 3.0;   ///< [px]
+  /// With a map that has an IMU (Map::inertial): the last this many keyframes of the IMU chain
+  /// join the window, with the IMU factors between consecutive ones (velocity and biases
+  /// estimated); 0: none. Set by the tracker from tracking.imu.local_ba_keyframes [-]
+  int inertial_keyframes = 0;
   BundleAdjustmentOptions ba;
 
   void Check() const;  ///< mapping_options_check.cpp
@@ -48,11 +52,12 @@ struct LocalMappingStats {
   int lines_culled = 0;
   int points_triangulated = 0;
   int lines_triangulated = 0;
-  double total_ba_ms = 0.0;   ///< local mapping's time, all steps [ms]
-  int ba_interrupted = 0;     ///< local BAs stopped early by InterruptBA (threaded mode)
-  double ba_solve_ms = 0.0;   ///< of total_ba_ms, the local BAs' solves (Ceres) [ms]
-  int ba_iterations = 0;      ///< the local BAs' trust-region steps, both passes [-]
-  int ba_rejected_steps = 0;  ///< of which rejected (BundleAdjustmentReport) [-]
+  double total_ba_ms = 0.0;     ///< local mapping's time, all steps [ms]
+  int ba_interrupted = 0;       ///< local BAs stopped early by InterruptBA (threaded mode)
+  double ba_solve_ms = 0.0;     ///< of total_ba_ms, the local BAs' solves (Ceres) [ms]
+  int ba_iterations = 0;        ///< the local BAs' trust-region steps, both passes [-]
+  int ba_rejected_steps = 0;    ///< of which rejected (BundleAdjustmentReport) [-]
+  int ba_inertial_factors = 0;  ///< IMU factors between keyframes, all local BAs [-]
 };
 
 class LocalMapper {

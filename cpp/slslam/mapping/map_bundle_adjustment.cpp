@@ -1,5 +1,6 @@
 #include "slslam/mapping/map_bundle_adjustment.h"
 
+#include <algorithm>
 #include <set>
 #include <unordered_set>
 
@@ -55,6 +56,55 @@ void MapBundleAdjustment::AddWindowLandmarks(const Map& map, const std::vector<i
   }
 }
 
+int MapBundleAdjustment::AddInertialFactors(const Map& map, const std::vector<int>& window,
+                                            std::unordered_map<int, int>* pose_index) {
+  if (!map.inertial()) return 0;
+  const MapInertial& imu = *map.inertial();
+  BaInertial& inertial = problem_.inertial;
+  inertial.body_from_cam = imu.body_from_cam;
+  inertial.g_world = imu.g_world;
+  const std::unordered_set<int> free(window.begin(), window.end());
+  std::unordered_map<int, int> state_index;  // keyframe id -> speed-bias index
+  const auto state_of = [&](const KeyFrame& kf) {
+    auto [it, added] = state_index.try_emplace(kf.id, static_cast<int>(inertial.states.size()));
+    if (added) {
+      inertial.states.push_back({kf.inertial->v_world_body, kf.inertial->bias, !free.count(kf.id)});
+      state_kf_.push_back(kf.id);
+    }
+    return it->second;
+  };
+  std::vector<int> ordered(window.begin(), window.end());
+  std::sort(ordered.begin(), ordered.end());
+  int added = 0;
+  for (int id : ordered) {
+    auto kf = map.keyframe(id);
+    if (!kf || !kf->inertial || kf->inertial->previous < 0) continue;
+    auto previous = map.keyframe(kf->inertial->previous);
+    if (!previous || !previous->inertial) continue;
+    const KeyFrameInertial& from = *previous->inertial;
+    const KeyFrameInertial& to = *kf->inertial;
+    if (!(to.t_s - from.t_s <= imu.max_interval_s)) continue;
+    BaInertialFactor factor;
+    factor.pre = ImuPreintegration(from.bias, imu.noise);
+    if (!to.samples_from_previous.Preintegrate(from.t_s - imu.time_offset_s,
+                                               to.t_s - imu.time_offset_s, imu.max_sample_gap_s,
+                                               &factor.pre)) {
+      continue;
+    }
+    auto it = pose_index->find(previous->id);
+    if (it == pose_index->end()) {
+      it = pose_index->emplace(previous->id, AddPose(*previous, /*fixed=*/true)).first;
+    }
+    factor.pose_i = it->second;
+    factor.pose_j = pose_index->at(id);
+    factor.state_i = state_of(*previous);
+    factor.state_j = state_of(*kf);
+    inertial.factors.push_back(std::move(factor));
+    ++added;
+  }
+  return added;
+}
+
 int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
   const int index = static_cast<int>(problem_.poses.size());
   problem_.poses.push_back({kf.cam_from_world, fixed});
@@ -84,6 +134,13 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
       moved[kf->id] = after_from_before;
     }
     kf->cam_from_world = after;
+  }
+  for (size_t i = 0; i < state_kf_.size(); ++i) {
+    const BaSpeedBias& state = problem_.inertial.states[i];
+    auto kf = map->keyframe(state_kf_[i]);
+    if (state.fixed || !kf || !kf->inertial) continue;
+    kf->inertial->v_world_body = state.v_world_body;
+    kf->inertial->bias = state.bias;
   }
   for (size_t i = 0; i < point_id_.size(); ++i) {
     if (auto p = map->point(point_id_[i])) p->position = problem_.points[i];
@@ -144,6 +201,7 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
     Rigid3d& pose = kf->cam_from_world;
     pose.rotation = pose.rotation * correction.rotation.transpose();
     pose.translation = pose.translation - pose.rotation * correction.translation;
+    if (kf->inertial) kf->inertial->v_world_body = correction.rotation * kf->inertial->v_world_body;
     moved[kf->id] = correction;
     ++carried;
   }

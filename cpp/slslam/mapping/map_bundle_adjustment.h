@@ -35,6 +35,14 @@ class MapBundleAdjustment {
                           std::unordered_map<int, int>* pose_index, int max_fixed,
                           double point_sigma_px, double line_sigma_px) SLSLAM_REQUIRES(map.mutex());
 
+  // The IMU between consecutive keyframes of the map's IMU chain (KeyFrame::inertial): for every
+  // keyframe of `window` with a predecessor, the factor from it, the predecessor joining as a
+  // fixed pose (with fixed velocity and biases) when it is not in the problem yet. The window's
+  // velocities and biases are estimated. Nothing when the map has no MapInertial. Caller holds
+  // the map's lock. Returns the number of factors.
+  int AddInertialFactors(const Map& map, const std::vector<int>& window,
+                         std::unordered_map<int, int>* pose_index) SLSLAM_REQUIRES(map.mutex());
+
   BaProblem& problem() { return problem_; }
   const BaProblem& problem() const { return problem_; }
   int correction_epoch() const { return correction_epoch_; }
@@ -57,6 +65,7 @@ class MapBundleAdjustment {
   std::vector<int> pose_kf_;   // pose index -> keyframe id
   std::vector<int> point_id_;  // point index -> map point id
   std::vector<int> line_id_;
+  std::vector<int> state_kf_;                       // speed-bias index -> keyframe id
   std::vector<std::pair<int, int>> point_obs_ref_;  // (map point id, keyframe id) per observation
   std::vector<std::pair<int, int>> line_obs_ref_;
   int correction_epoch_ = 0;

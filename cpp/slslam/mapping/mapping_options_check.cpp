@@ -32,6 +32,7 @@ void LocalMapperOptions::Check() const {
   CheckInRange("mapping.min_found_ratio", min_found_ratio, 0.0, 1.0);
   CheckAboveInRange("mapping.point_sigma_px", point_sigma_px, 0.0, 1e4);
   CheckAboveInRange("mapping.line_sigma_px", line_sigma_px, 0.0, 1e4);
+  CheckInRange("tracking.imu.local_ba_keyframes", inertial_keyframes, 0, 1000);
   triangulation.Check();
   ba.Check();
 }

@@ -14,6 +14,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/optimization/cost_functions.h"
+#include "slslam/optimization/inertial_factor.h"
 #include "slslam/optimization/manifolds.h"
 #include "slslam/optimization/schur_levenberg_marquardt.h"
 
@@ -39,17 +40,23 @@ class StopCallback : public ceres::IterationCallback {
 };
 
 struct Parameters {
-  /// The poses' and then the lines' parameters (each line relative to its anchor) in one buffer:
-  /// both stay in the reduced system, one group of the elimination ordering, and Ceres orders a
-  /// group's blocks by address; in one buffer that order is theirs, the same in every run.
+  /// The poses', the lines' (each relative to its anchor) and then the speed-bias blocks'
+  /// parameters in one buffer: all stay in the reduced system, one group of the elimination
+  /// ordering, and Ceres orders a group's blocks by address; in one buffer that order is theirs,
+  /// the same in every run.
   std::vector<double> reduced;
   int num_poses = 0;
+  int num_lines = 0;
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3d> line_anchors;  ///< world points (LineCost's anchor)
 
-  void Resize(size_t poses, size_t lines) {
+  void Resize(size_t poses, size_t lines, size_t speed_biases) {
     num_poses = static_cast<int>(poses);
-    reduced.assign(kPoseSize * poses + kLineSize * lines, 0.0);
+    num_lines = static_cast<int>(lines);
+    reduced.assign(kPoseSize * poses + kLineSize * lines + kSpeedBiasSize * speed_biases, 0.0);
+  }
+  double* speed_bias(int i) {
+    return reduced.data() + kPoseSize * num_poses + kLineSize * num_lines + kSpeedBiasSize * i;
   }
   double* pose(int i) { return reduced.data() + kPoseSize * i; }
   const double* pose(int i) const { return reduced.data() + kPoseSize * i; }
@@ -262,6 +269,13 @@ ceres::Solver::Options CeresPassOptions(const BaProblem& ba, const BundleAdjustm
     for (size_t i = 0; i < ba.lines.size(); ++i) {
       if (line_used[i]) ordering->AddElementToGroup(params.line(i), 1);
     }
+    std::vector<bool> state_used(ba.inertial.states.size(), false);
+    for (const BaInertialFactor& f : ba.inertial.factors) {
+      state_used[f.state_i] = state_used[f.state_j] = true;
+    }
+    for (size_t i = 0; i < state_used.size(); ++i) {
+      if (state_used[i]) ordering->AddElementToGroup(params.speed_bias(static_cast<int>(i)), 1);
+    }
     solver_options.linear_solver_ordering = ordering;
   }
   return solver_options;
@@ -367,6 +381,23 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
     pose_used[o.pose] = true;
     ++blocks;
   }
+  // The IMU between keyframes: no loss (ORB-SLAM3's inertial edges are not robust either).
+  std::vector<bool> state_added(ba.inertial.states.size(), false);
+  for (const BaInertialFactor& f : ba.inertial.factors) {
+    solver_problem.AddResidualBlock(
+        new CameraImuFactor(f.pre, ba.inertial.g_world, ba.inertial.body_from_cam), nullptr,
+        params.pose(f.pose_i), params.speed_bias(f.state_i), params.pose(f.pose_j),
+        params.speed_bias(f.state_j));
+    pose_used[f.pose_i] = pose_used[f.pose_j] = true;
+    for (int state : {f.state_i, f.state_j}) {
+      if (state_added[state]) continue;
+      state_added[state] = true;
+      if (ba.inertial.states[state].fixed) {
+        solver_problem.SetParameterBlockConstant(params.speed_bias(state));
+      }
+    }
+    ++blocks;
+  }
   if (blocks == 0) return {};
   for (size_t i = 0; i < ba.poses.size(); ++i) {
     if (!pose_used[i]) continue;
@@ -417,10 +448,23 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
             "line observation refers to a missing pose or line");
   }
 
+  for (const BaInertialFactor& f : ba.inertial.factors) {
+    const int poses = static_cast<int>(ba.poses.size());
+    const int states = static_cast<int>(ba.inertial.states.size());
+    Require(f.pose_i >= 0 && f.pose_i < poses && f.pose_j >= 0 && f.pose_j < poses &&
+                f.state_i >= 0 && f.state_i < states && f.state_j >= 0 && f.state_j < states,
+            "IMU factor refers to a missing pose or speed-bias state");
+  }
+
   Parameters params;
-  params.Resize(ba.poses.size(), ba.lines.size());
+  params.Resize(ba.poses.size(), ba.lines.size(), ba.inertial.states.size());
   for (size_t i = 0; i < ba.poses.size(); ++i) {
     PoseToParameters(ba.poses[i].cam_from_world, params.pose(i));
+  }
+  for (size_t i = 0; i < ba.inertial.states.size(); ++i) {
+    const BaSpeedBias& state = ba.inertial.states[i];
+    Eigen::Map<Eigen::Matrix<double, kSpeedBiasSize, 1>> vb(params.speed_bias(static_cast<int>(i)));
+    vb << state.v_world_body, state.bias.gyro, state.bias.acc;
   }
   params.points = ba.points;
   // With the pull (line_prior_weight), each line anchored at the camera centre of its first
@@ -451,13 +495,13 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     report.line_outlier[i] = !std::isfinite(LineChi2(rig, params, ba.line_observations[i]));
   }
 
-  // The own solver takes the default problem (no pull, no dogleg, every line direction free)
-  // with a reduced system small enough to be dense: a local BA window.
-  const bool own = options.own_solver && options.line_prior_weight == 0.0 &&
-                   !options.dogleg_with_lines && options.line_min_information_per_rad2 == 0.0 &&
-                   std::count_if(ba.poses.begin(), ba.poses.end(), [](const BaPose& pose) {
-                     return !pose.fixed;
-                   }) <= kOwnSolverMaxFreePoses;
+  // The own solver takes the default problem (no pull, no dogleg, every line direction free, no
+  // IMU) with a reduced system small enough to be dense: a local BA window.
+  const bool own =
+      options.own_solver && options.line_prior_weight == 0.0 && ba.inertial.factors.empty() &&
+      !options.dogleg_with_lines && options.line_min_information_per_rad2 == 0.0 &&
+      std::count_if(ba.poses.begin(), ba.poses.end(),
+                    [](const BaPose& pose) { return !pose.fixed; }) <= kOwnSolverMaxFreePoses;
   for (int pass = 0; pass < 2; ++pass) {
     const bool robust = pass == 0;
     const PassSummary summary =
@@ -496,6 +540,13 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
   ba.points = params.points;
   for (size_t i = 0; i < ba.lines.size(); ++i) {
     ba.lines[i] = LineInWorld(params, static_cast<int>(i));
+  }
+  for (size_t i = 0; i < ba.inertial.states.size(); ++i) {
+    const double* vb = params.speed_bias(static_cast<int>(i));
+    BaSpeedBias& state = ba.inertial.states[i];
+    state.v_world_body = Eigen::Map<const Eigen::Vector3d>(vb);
+    state.bias.gyro = Eigen::Map<const Eigen::Vector3d>(vb + 3);
+    state.bias.acc = Eigen::Map<const Eigen::Vector3d>(vb + 6);
   }
   return report;
 }

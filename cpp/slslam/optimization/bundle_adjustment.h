@@ -11,6 +11,7 @@
 #include "slslam/core/rigid3.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/geometry/reprojection.h"
+#include "slslam/inertial/imu_preintegration.h"
 
 namespace slslam {
 
@@ -35,12 +36,36 @@ struct BaLineObservation {
   double sigma_px = 1.0;
 };
 
+/// A keyframe's velocity and IMU biases (the body = IMU frame).
+struct BaSpeedBias {
+  Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();  ///< [m/s]
+  ImuBias bias;
+  bool fixed = false;
+};
+
+/// The preintegrated IMU between two keyframes (optimization/inertial_factor.h), from pose_i's
+/// time to pose_j's, with the speed-bias blocks of the two.
+struct BaInertialFactor {
+  int pose_i = 0, pose_j = 0;    ///< indices into BaProblem::poses
+  int state_i = 0, state_j = 0;  ///< indices into BaInertial::states
+  ImuPreintegration pre;
+};
+
+/// The IMU terms of a visual-inertial bundle adjustment (none: a visual one).
+struct BaInertial {
+  Rigid3d body_from_cam;                              ///< the left camera in the IMU frame
+  Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the world [m/s^2]
+  std::vector<BaSpeedBias> states;
+  std::vector<BaInertialFactor> factors;
+};
+
 struct BaProblem {
   std::vector<BaPose> poses;
   std::vector<Eigen::Vector3d> points;
   std::vector<PluckerLine> lines;
   std::vector<BaPointObservation> point_observations;
   std::vector<BaLineObservation> line_observations;
+  BaInertial inertial;
 };
 
 struct BundleAdjustmentOptions {
@@ -86,8 +111,9 @@ struct BundleAdjustmentOptions {
   /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took as many
   /// steps in each, to the same cost within 1e-6 in 169 (1e-9 in 121, 0.15-0.7 % apart in 5),
   /// in 5.8x less time (benchmarks/log/realtime.md, 2026-11-29).
-  /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg or
-  /// held line directions above; Ceres solves the others (a large map's global BA) [-]
+  /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg,
+  /// held line directions above or IMU factors; Ceres solves the others (a large map's global
+  /// BA) [-]
   bool own_solver = true;
 
   void Check() const;

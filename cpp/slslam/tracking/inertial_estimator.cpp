@@ -318,6 +318,7 @@ void InertialOptions::Check() const {
   CheckInRange("tracking.imu.weak_update_min_inliers", weak_update_min_inliers, 0, 100000);
   CheckInRange("tracking.imu.weak_update_min_lines", weak_update_min_lines, 0, 100000);
   CheckInRange("tracking.imu.keyframe_min_stereo_lines", keyframe_min_stereo_lines, 0, 100000);
+  CheckInRange("tracking.imu.local_ba_keyframes", local_ba_keyframes, 0, 1000);
   CheckInRange("tracking.imu.keyframe_interval_s", keyframe_interval_s, 0.0, 1e6);
   CheckInRange("tracking.imu.visual_information_scale", visual_information_scale, 1e-6, 1e6);
 }

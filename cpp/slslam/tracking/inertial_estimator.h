@@ -73,6 +73,10 @@ struct InertialOptions {
   /// The pose optimiser's information scaled by this before it corrects the state (the
   /// observations' pixel sigmas are optimistic: matches correlate, the map has its own error) [-]
   double visual_information_scale = 0.25;
+  /// Local BA also estimates the velocity and biases of the last this many keyframes of the IMU
+  /// chain (KeyFrame::inertial), with the preintegrated IMU between consecutive ones as factors
+  /// (optimization/inertial_factor.h); 0: a visual local BA, the IMU in tracking only [-]
+  int local_ba_keyframes = 0;
 
   ImuNoiseOptions Noise() const;
   InertialInitOptions Init() const;

@@ -84,6 +84,7 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   mapping.triangulation.patch_window_px =
       options_.triangulated_point_patches ? options_.track_refine_window_px : 0;
   if (!options_.use_lines) mapping.ba.line_weight = 0.0;
+  mapping.inertial_keyframes = options_.use_imu ? options_.imu.local_ba_keyframes : 0;
   mapping.triangulation.Check();
   // (a keyframe's image is of use only to local mapping's triangulated points' patches)
   keyframe_images_ = mapping.triangulate && mapping.triangulation.points &&
@@ -198,6 +199,7 @@ void Tracker::AddImu(double t_s, const Eigen::Vector3d& gyro_radps,
   if (!options_.use_imu) return;
   if (!inertial_) inertial_ = std::make_unique<InertialEstimator>(options_.imu);
   inertial_->AddImu(t_s, gyro_radps, acc_mps2);
+  if (options_.imu.local_ba_keyframes > 0) keyframe_imu_.Add(t_s, gyro_radps, acc_mps2);
 }
 
 bool Tracker::InertialPrior(const StereoFrame& frame, PosePrior* prior) const {
@@ -208,6 +210,9 @@ bool Tracker::InertialPrior(const StereoFrame& frame, PosePrior* prior) const {
 void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
                            const Matrix6d& information, bool with_prior) {
   if (!inertial_) return;
+  // (without a chain to extend, the next keyframe's interval starts after this frame)
+  if (imu_chain_keyframe_ < 0)
+    keyframe_imu_.DropBefore(frame.timestamp - options_.imu.time_offset_s);
   if (inertial_map_ != active_) {  // another map's world: the state before does not fit
     inertial_->Reset();
     inertial_map_ = active_;
@@ -256,6 +261,39 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   }
   *cam_from_world = inertial_->cam_from_world();
   return true;
+}
+
+void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
+  if (options_.imu.local_ba_keyframes <= 0) return;
+  const bool stateful = inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
+                        inertial_->state_time_s() == t_s;
+  if (!stateful) {
+    imu_chain_keyframe_ = -1;
+    keyframe_imu_.DropBefore(t_s - options_.imu.time_offset_s);
+    return;
+  }
+  const double t_imu_s = t_s - options_.imu.time_offset_s;
+  KeyFrameInertial imu;
+  imu.t_s = t_s;
+  imu.v_world_body = inertial_->state().nav.v_world_body;
+  imu.bias = inertial_->state().bias;
+  auto previous = imu_chain_map_ == active_ ? map->keyframe(imu_chain_keyframe_) : nullptr;
+  if (previous && previous->inertial) {
+    imu.previous = previous->id;
+    imu.samples_from_previous =
+        keyframe_imu_.Slice(previous->inertial->t_s - options_.imu.time_offset_s, t_imu_s);
+  }
+  kf->inertial = std::move(imu);
+  keyframe_imu_.DropBefore(t_imu_s);
+  imu_chain_keyframe_ = kf->id;
+  imu_chain_map_ = active_;
+  MapInertial settings;
+  settings.body_from_cam = options_.imu.body_from_cam;
+  settings.g_world = inertial_->g_world();
+  settings.noise = options_.imu.Noise();
+  settings.time_offset_s = options_.imu.time_offset_s;
+  settings.max_sample_gap_s = options_.imu.max_sample_gap_s;
+  map->set_inertial(settings);
 }
 
 bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const {
@@ -404,6 +442,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
     kf->pose_from_imu = pose_from_imu;
+    AttachImu(frame->timestamp, &map, kf.get());
     if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)

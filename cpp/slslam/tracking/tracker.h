@@ -588,6 +588,10 @@ class Tracker {
   std::unique_ptr<InertialEstimator> inertial_;  ///< from the first IMU sample on (use_imu)
   int inertial_map_ = -1;                        ///< the map whose world the inertial state is in
   int gravity_fits_ = 0;  ///< the estimator's fits (initialisations + refinements) given to a map
+  /// The IMU samples since the last keyframe of the IMU chain (imu.local_ba_keyframes > 0).
+  ImuBuffer keyframe_imu_;
+  int imu_chain_keyframe_ = -1;  ///< the chain's last keyframe (-1: none)
+  int imu_chain_map_ = -1;       ///< ... and its map
   // The inertial state's prior on the frame's pose; false when there is none (no IMU, not
   // initialised, another map's world, samples missing).
   bool InertialPrior(const StereoFrame& frame, PosePrior* prior) const;
@@ -595,6 +599,10 @@ class Tracker {
   // world), with the pose optimiser's information (zero: none) and whether it had the prior.
   void InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
                     const Matrix6d& information, bool with_prior);
+  // A new keyframe (at camera time t_s) of the active map `map` joins the IMU chain with the
+  // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_s, in the
+  // map's world), and the map gets the IMU settings; else the chain ends. Caller holds the lock.
+  void AttachImu(double t_s, Map* map, KeyFrame* kf) SLSLAM_REQUIRES(map->mutex());
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
   // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone
   // gave it.

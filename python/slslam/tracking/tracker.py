@@ -221,6 +221,7 @@ class MapStats:
     #: them, those rejected because the cost rose (a rejected step costs a linear solve too)
     local_ba_iterations: int = 0
     local_ba_rejected_steps: int = 0
+    local_ba_inertial_factors: int = 0  #: IMU factors between keyframes (imu.local_ba_keyframes)
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0

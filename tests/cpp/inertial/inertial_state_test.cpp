@@ -201,5 +201,36 @@ TEST(ImuBuffer, PreintegratesPartialIntervalsAndRefusesGaps) {
   EXPECT_TRUE(buffer.Preintegrate(0.5, 0.7, 0.05, &refused));
 }
 
+// A keyframe's samples (Slice) integrate like the whole buffer over its interval, and two
+// consecutive keyframes' slices joined (Append, as culling the middle one does) like the buffer
+// over both.
+TEST(ImuBuffer, SlicesIntegrateAsTheBufferAndJoinAcrossAKeyframe) {
+  ImuBuffer buffer;
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 0.005 * k + 0.001;
+    buffer.Add(t, Eigen::Vector3d(0.1, 0.3 * std::sin(t), -0.1),
+               Eigen::Vector3d(0.5 * std::cos(t), 9.81, -0.2 * t));
+  }
+  const auto integrated = [](const ImuBuffer& b, double t0, double t1) {
+    ImuPreintegration pre;
+    EXPECT_TRUE(b.Preintegrate(t0, t1, 0.05, &pre)) << t0 << " " << t1;
+    return pre;
+  };
+  const ImuBuffer first = buffer.Slice(0.2031, 0.4502);
+  const ImuBuffer second = buffer.Slice(0.4502, 0.8007);
+  EXPECT_LT(first.size(), buffer.size());
+  const ImuPreintegration whole = integrated(buffer, 0.2031, 0.4502);
+  const ImuPreintegration sliced = integrated(first, 0.2031, 0.4502);
+  EXPECT_EQ(sliced.delta_p(), whole.delta_p());
+  EXPECT_EQ(sliced.delta_R(), whole.delta_R());
+  ImuBuffer joined = first;
+  joined.Append(second);
+  const ImuPreintegration both = integrated(buffer, 0.2031, 0.8007);
+  const ImuPreintegration from_joined = integrated(joined, 0.2031, 0.8007);
+  EXPECT_EQ(from_joined.delta_p(), both.delta_p());
+  EXPECT_EQ(from_joined.delta_v(), both.delta_v());
+  EXPECT_EQ(from_joined.covariance(), both.covariance());
+}
+
 }  // namespace
 }  // namespace slslam

@@ -38,6 +38,34 @@ TEST(Map, CulledKeyFrameKeepsItsPoseThroughItsParent) {
   EXPECT_FALSE(map.KeyFramePose(99, &pose));
 }
 
+// Culling a keyframe of the IMU chain joins its samples to its successor's, which then starts at
+// the culled one's predecessor.
+TEST(Map, CulledKeyFrameJoinsTheImuChainAcrossIt) {
+  Map map;
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (int k = 0; k < 3; ++k) {
+    kfs.push_back(map.AddKeyFrame(Rigid3d(), EmptyFrame()));
+    KeyFrameInertial imu;
+    imu.t_s = 0.5 * k;
+    imu.previous = k > 0 ? kfs[k - 1]->id : -1;
+    for (int s = 0; k > 0 && s <= 10; ++s) {
+      imu.samples_from_previous.Add(0.5 * (k - 1) + 0.05 * s, Eigen::Vector3d::Zero(),
+                                    Eigen::Vector3d::UnitZ());
+    }
+    kfs.back()->inertial = imu;
+  }
+  map.EraseKeyFrame(kfs[1]->id);
+  const KeyFrameInertial& last = *kfs[2]->inertial;
+  EXPECT_EQ(last.previous, kfs[0]->id);
+  EXPECT_EQ(last.samples_from_previous.size(), 21u);  // (the shared sample at 0.5 s once)
+  ImuPreintegration pre;
+  EXPECT_TRUE(last.samples_from_previous.Preintegrate(0.0, 1.0, 0.06, &pre));
+  EXPECT_NEAR(pre.dt_s(), 1.0, 1e-12);
+  // The chain's first keyframe culled: its successor starts a chain.
+  map.EraseKeyFrame(kfs[0]->id);
+  EXPECT_EQ(kfs[2]->inertial->previous, -1);
+}
+
 TEST(Map, PointsOfAscendingIdsAreTheLookedUpPoints) {
   // One walk along the ordered points (a few steps, else a search): every id as point(id) gives
   // it, missing and erased ids null, repeats, jumps beyond the walk's steps and ids past the end.

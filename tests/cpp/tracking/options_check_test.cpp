@@ -399,6 +399,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(imu.keyframe_min_stereo_lines, "tracking.imu.keyframe_min_stereo_lines", 0, 100000,
              "[]"),
        FIELD(imu.keyframe_interval_s, "tracking.imu.keyframe_interval_s", 0, 1e6, "[]"),
+       FIELD(imu.local_ba_keyframes, "tracking.imu.local_ba_keyframes", 0, 1000, "[]"),
        FIELD(imu.visual_information_scale, "tracking.imu.visual_information_scale", 1e-6, 1e6,
              "[]")},
       construct, base);

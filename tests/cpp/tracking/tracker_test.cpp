@@ -367,13 +367,16 @@ void FeedTrueImu(double duration, Tracker* tracker) {
   }
 }
 
-TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
-  // 10 s lit (the IMU initialises after 1 s; the rest pins its biases down), 10 s with no feature
-  // at all (lamp out: 200 frames, 10 m driven), 2 s lit again. Camera-only the tracker is lost
-  // after recently_lost_frames; with the IMU every dark frame is INERTIAL, its position within 3
-  // sigma of the truth by the uncertainty it reports, and tracking resumes in the same map.
+// 10 s lit (the IMU initialises after 1 s; the rest pins its biases down), 10 s with no feature
+// at all (lamp out: 200 frames, 10 m driven), 2 s lit again. Camera-only the tracker is lost
+// after recently_lost_frames; with the IMU every dark frame is INERTIAL, its position within 3
+// sigma of the truth by the uncertainty it reports, and tracking resumes in the same map. With
+// `local_ba_keyframes`, local BA also has the IMU between keyframes.
+void TenSecondsWithoutAnyFeature(int local_ba_keyframes) {
   const Scene scene;
-  Tracker tracker(Options(true, /*lines=*/false));
+  TrackerOptions options = Options(true, /*lines=*/false);
+  options.imu.local_ba_keyframes = local_ba_keyframes;
+  Tracker tracker(options);
   FeedTrueImu(22.0, &tracker);
   std::vector<TrackResult> results;
   for (int k = 0; k < 440; ++k) {
@@ -413,6 +416,20 @@ TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
   Eigen::Vector3d g_map;
   ASSERT_TRUE(tracker.MapGravityDirection(0, &g_map));
   EXPECT_GT(g_map.dot(Eigen::Vector3d::UnitY()), std::cos(1.0 * M_PI / 180.0));
+  if (local_ba_keyframes == 0) {
+    EXPECT_EQ(tracker.mapping_stats().ba_inertial_factors, 0);
+  } else {  // (every keyframe after the initialisation but each chain's first)
+    EXPECT_GT(tracker.mapping_stats().ba_inertial_factors,
+              tracker.mapping_stats().keyframes_processed);
+  }
+}
+
+TEST(TrackerTest, WithTheImuTenSecondsWithoutAnyFeatureStayInOneMap) {
+  TenSecondsWithoutAnyFeature(0);
+}
+
+TEST(TrackerTest, WithTheImuInLocalBaTenSecondsWithoutAnyFeatureStayInOneMap) {
+  TenSecondsWithoutAnyFeature(10);
 }
 
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
