@@ -1,5 +1,5 @@
-"""Defaults read from the C++ option structs, the one place they are written (issue 12): the
-Python config sections and the front ends' option dataclasses take their defaults from here."""
+"""Defaults read from the C++ option structs, the one place they are written: the Python config
+sections and the front ends' option dataclasses take their defaults from here."""
 
 from __future__ import annotations
 

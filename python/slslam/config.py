@@ -316,7 +316,8 @@ FLOAT_FALLBACK = Range(-math.inf, math.inf, True, True)
 
 @dataclass(frozen=True)
 class GridConfig:
-    """Per-cell keypoint limit (SPEC A2); mirrors C++ ``GridLimitOptions``."""
+    """Per-cell keypoint limit (the SL-SLAM paper's grid limitation); mirrors C++
+    ``GridLimitOptions``."""
 
     cell_size_px: int = _grid("cell_size_px", "[4, 4096]")  # P: cell side [px]
     max_per_cell: int = _grid("max_per_cell", "[1, 10000]")  # keypoints kept per cell
@@ -324,7 +325,7 @@ class GridConfig:
 
 @dataclass(frozen=True)
 class DynamicCellConfig:
-    """Invalid-cell filter for moving objects (SPEC A2), applied in tracking; mirrors C++
+    """Invalid-cell filter for moving objects (SL-SLAM paper), applied in tracking; mirrors C++
     ``DynamicCellOptions`` (``TrackerOptions.dynamic``; ``enabled`` is ``dynamic_cells``)."""
 
     enabled: bool = _dynamic_cells("enabled")
@@ -456,7 +457,7 @@ class ImuConfig:
 
 @dataclass(frozen=True)
 class TrackingConfig:
-    """Tracking and local mapping (SPEC A5-A6); mirrors C++ ``TrackerOptions``."""
+    """Tracking and local mapping (SL-SLAM paper, ORB-SLAM3); mirrors C++ ``TrackerOptions``."""
 
     use_lines: bool = _tracking("use_lines")  # line features in tracking and mapping
     # local mapping inline: exactly reproducible; false: own thread
@@ -471,9 +472,8 @@ class TrackingConfig:
     # point front end of frame k+1 on a worker thread while the core tracks frame k (same poses)
     pipeline: bool = True
     # frames the pipeline's worker may have prepared and the core not yet taken: more lets the
-    # front end run on through a keyframe's local mapping (benchmarks/log/realtime.md, 2026-11-27 c:
-    # 10-24 % more frames/s offline at 3 than at 1; a live camera's frames are taken as they come
-    # either way)
+    # front end run on through a keyframe's local mapping (more frames/s offline at 3 than at 1,
+    # benchmarks/log/realtime.md; a live camera's frames are taken as they come either way)
     pipeline_frames_ahead: int = _option(3, "[1, 64]")
     # stereo points a frame needs to start a map
     min_init_points: int = _tracking("min_init_points", "[3, 1000000]")
@@ -510,9 +510,8 @@ class TrackingConfig:
     local_keyframes: int = _tracking("local_keyframes", "[1, 10000]")
     # local mapping also makes points from pairs of keyframes, out of the keypoints stereo left
     # without a match (flat, ambiguous along the row, far), from their detected positions; false:
-    # points from stereo only (measured: at 1 degree, without them XFeat + lines drifted half as
-    # much on the dark 600-frame sequences but 1.6x as much on the short dark loops,
-    # benchmarks/log/realtime.md, 2026-11-29 g)
+    # points from stereo only (at 1 degree, without them XFeat + lines drifted less on the dark
+    # 600-frame sequences but more on the short dark loops, benchmarks/log/realtime.md)
     triangulate_points: bool = _tracking("triangulate_points")
     # ... and only where the two rays meet at this angle at least [deg]
     triangulation_min_parallax_deg: float = _tracking("triangulation_min_parallax_deg", "[0, 180]")
@@ -521,27 +520,25 @@ class TrackingConfig:
     # scale of the bounded angle term e3 [px] (0: endpoint distances only)
     line_angle_weight: float = _tracking("line_angle_weight", "[0, 1000000]")
     # local BA: each line's pull towards its value at the start of each pass [1/rad] (0: none);
-    # with local_ba_dogleg a local BA with lines takes about 40 % less time, but the drift moved
-    # both ways over three seeds (benchmarks/log/realtime.md, 2026-11-27 f), so off
+    # with local_ba_dogleg a local BA with lines takes less time, but the drift moved both ways
+    # over three seeds (benchmarks/log/realtime.md), so off
     local_ba_line_prior_weight: float = _tracking("local_ba_line_prior_weight", "[0, 1000000]")
     # local BA with lines: Powell's dogleg instead of Levenberg-Marquardt (a rejected step costs
     # no linear solve); needs local_ba_line_prior_weight > 0
     local_ba_dogleg: bool = _tracking("local_ba_dogleg")
     # motion-only BA by slslam's own 6-parameter Levenberg-Marquardt instead of a Ceres problem
-    # per outlier round (the same costs and trust-region rules; about 3x faster, 2.28 -> 0.72 ms on
-    # 400 stereo points); false: a Ceres problem per round, the default until 2026-11-28 i
-    # (benchmarks/log/realtime.md)
+    # per outlier round (the same costs and trust-region rules, faster: no problem to build);
+    # false: a Ceres problem per round (benchmarks/log/realtime.md)
     own_pose_solver: bool = _tracking("own_pose_solver")
     # local BA by slslam's own Levenberg-Marquardt with the points and lines eliminated (the same
     # costs, trust-region rules and steps, a dense reduced system over the window's free
-    # keyframes; about 5x faster) instead of Ceres' sparse Schur solver; false: Ceres, the
-    # default until 2026-11-29 (benchmarks/log/realtime.md)
+    # keyframes; faster) instead of Ceres' sparse Schur solver (benchmarks/log/realtime.md);
+    # false: Ceres
     own_local_ba_solver: bool = _tracking("own_local_ba_solver")
     # local BA: each line moves only in the directions of its tangent whose information (its
     # observations' J^T J eigenvalues, in sigmas) reaches this, held in the others [1/rad^2]
     # (0: free in all four; 1: less drift in the dark with the IMU over five simulator seeds,
-    # but camera-only recovery after a blackout came out worse, so off; benchmarks/log/realtime.md,
-    # 2026-11-27 g)
+    # but camera-only recovery after a blackout came out worse, so off; benchmarks/log/realtime.md)
     local_ba_line_min_information_per_rad2: float = _tracking(
         "local_ba_line_min_information_per_rad2", "[0, 1e12]"
     )
@@ -586,7 +583,7 @@ class TrackingConfig:
     # in a frame smoothed as noisy with at least unaligned_min_aligned matches aligned to their
     # map points' patches, the matches that could not be aligned enter the motion-only BA with
     # their sigma times this (detected keypoints follow a small image motion only in part; see
-    # benchmarks/log/realtime.md, 2026-11-29 j) [-]; 1: all alike
+    # benchmarks/log/realtime.md) [-]; 1: all alike
     unaligned_sigma_factor: float = _tracking("unaligned_sigma_factor", "[1, 1000]")
     # aligned matches a noisy frame needs for unaligned_sigma_factor to apply [-]
     unaligned_min_aligned: int = _tracking("unaligned_min_aligned", "[0, 1000000000]")
@@ -618,10 +615,9 @@ class TrackingConfig:
     # segment detector: lsd (the paper's, ours), lsd_opencv (OpenCV's LSD) or fld (OpenCV's
     # FastLineDetector)
     line_detector: Literal["lsd", "lsd_opencv", "fld"] = _lines("line_detector")
-    # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor's bytes, computed here at about
-    # 20 us a segment with AVX2) or lbd (ours, from the LBD paper, about 10 us a segment on the
-    # half-size image; less accurate tracking so far, see benchmarks/log/realtime.md, 2026-11-25); a
-    # saved map keeps the kind it was made with
+    # segment descriptor: opencv_lbd (OpenCV's BinaryDescriptor's bytes, computed here) or lbd
+    # (ours, from the LBD paper, cheaper on the half-size image but less accurate tracking, see
+    # benchmarks/log/realtime.md); a saved map keeps the kind it was made with
     line_descriptor: Literal["opencv_lbd", "lbd"] = _lines("line_descriptor")
     # keep at most this many segments per image after preprocessing, the longest (0: all)
     max_lines: int = _lines("max_lines", "[0, 100000]")
@@ -637,8 +633,7 @@ class TrackingConfig:
     lost_search_scale: float = _tracking("lost_search_scale", "[1, 1000]")
     # lost: the motion before the loss, along which the local map is tried, is the mean per-frame
     # motion over this many frames (1: the last frame's; one frame's jitter extrapolated over a
-    # blackout of 20 frames re-entered a repeated roadway 0.9 m off; benchmarks/log/realtime.md,
-    # 2026-11-29)
+    # blackout re-entered a repeated roadway off the truth; benchmarks/log/realtime.md)
     lost_motion_frames: int = _tracking("lost_motion_frames", "[1, 1000]")
     # lost: a re-entry along the motion before the loss needs this share of its point matches
     # as inliers (lines do not count: a wrong pose gathers line inliers along the lines)

@@ -92,7 +92,7 @@ float DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   if (a.type() == CV_8U) {
     // (not cv::norm: its two row headers and dispatch per call cost more than the count, and
     // this runs for every candidate of every guided, stereo, line and triangulation match;
-    // benchmarks/log/realtime.md, 2026-11-27 b)
+    // benchmarks/log/realtime.md)
     return static_cast<float>(HammingBytes(a.ptr<uint8_t>(i), b.ptr<uint8_t>(j), a.cols));
   }
   const float* x = a.ptr<float>(i);
@@ -123,7 +123,7 @@ Eigen::VectorXi GuidedMatch(
   // Bucket the keypoints; a window of radius r around a point lies in the 3 x 3 buckets around it.
   // The buckets are one flat grid over the keypoints' cells (counted, then filled: the keypoints
   // of a bucket in index order, as pushing them one by one gave), not a hash map of vectors: its
-  // allocations were most of this function's time (benchmarks/log/realtime.md, 2026-11-29 i).
+  // allocations were most of this function's time (benchmarks/log/realtime.md).
   const float cell = options.radius_px;
   const Eigen::Index n_keypoints = keypoints.rows();
   std::vector<int64_t> cell_x(n_keypoints), cell_y(n_keypoints);

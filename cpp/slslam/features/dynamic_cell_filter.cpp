@@ -53,10 +53,9 @@ const std::vector<bool>& DynamicCellFilter::Update(const PixelArray& observed,
   // G's width: sigma_px, or with sigma_median_ratio > 0 more when the frame's matches are noisy
   // as a whole. A front end whose keypoints repeat less precisely (XFeat: a median frame-to-frame
   // residual of about 2 px against ORB's 1 px on the simulated loop) otherwise flags most static
-  // cells: on 150 frames of the bright loop the fixed width masked 1,900 of XFeat's 2,500
-  // keypoints a frame. A mover still stands out against the consensus of the frame. ORB keeps
-  // the fixed width: on the dark dusty sequences it tracked better with it
-  // (benchmarks/log/realtime.md, 2026-11-25 later).
+  // cells: on the bright simulated loop the fixed width masked most of XFeat's keypoints. A mover
+  // still stands out against the consensus of the frame. ORB keeps the fixed width: on the dark
+  // dusty sequences it tracked better with it (benchmarks/log/realtime.md).
   double sigma = options_.sigma_px;
   if (options_.sigma_median_ratio > 0.0) {
     std::vector<double> all;

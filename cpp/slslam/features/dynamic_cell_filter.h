@@ -1,5 +1,5 @@
-// Invalid-cell filter for moving objects (SPEC A2): cells whose matched keypoints disagree with
-// the camera motion are dropped, together with their 8 neighbours.
+// Invalid-cell filter for moving objects (SL-SLAM paper): cells whose matched keypoints disagree
+// with the camera motion are dropped, together with their 8 neighbours.
 //
 // Per cell g at frame t, over its m matched keypoints: d = median ||p_i - p'_i|| (the paper: the
 // mean; the median ignores a few mismatches in repetitive texture), where p_i is

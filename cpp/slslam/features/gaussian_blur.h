@@ -14,10 +14,10 @@ namespace slslam {
 // view is reflected at its own edges (where OpenCV would read the pixels around it).
 //
 // Why not cv::GaussianBlur itself: this runs on both images of every dark frame, and OpenCV 4.6's
-// 8-bit path spreads a 752 x 480 image over its thread pool at about 1.3 ms of CPU (sigma 1.3),
-// which the frame's other threads are waiting for. This is the same integer arithmetic (8-bit
-// taps, exact sums, one rounding) on one thread, in 16-bit lanes the compiler vectorises (AVX2
-// clone, core/cpu_dispatch.h): benchmarks/log/realtime.md, 2026-11-30 d, has the times.
+// 8-bit path spreads an image over its thread pool, taking CPU the frame's other threads are
+// waiting for. This is the same integer arithmetic (8-bit taps, exact sums, one rounding) on one
+// thread, in 16-bit lanes the compiler vectorises (AVX2 clone, core/cpu_dispatch.h):
+// benchmarks/log/realtime.md has the times.
 cv::Mat GaussianBlur8u(const cv::Mat& image, double sigma_px, int radius_px = -1);
 
 // The kernel GaussianBlur8u uses, from the centre out: tap k in 1/256, the centre and twice the

@@ -1,5 +1,5 @@
-// Per-cell keypoint limit (SPEC A2, "grid limitation"): the image is divided into cells of
-// P x P pixels and each cell keeps only its highest-scoring keypoints. Replaces ORB-SLAM's
+// Per-cell keypoint limit (the SL-SLAM paper's "grid limitation"): the image is divided into cells
+// of P x P pixels and each cell keeps only its highest-scoring keypoints. Replaces ORB-SLAM's
 // quadtree distribution: it spreads keypoints evenly at a cost linear in their number.
 #pragma once
 

@@ -16,12 +16,11 @@
 // The segment's frame is oriented by its gradient (the normal points up the mean gradient across
 // the central band), so a segment and its reversal get the same descriptor. Long segments are
 // sampled at `max_samples_along` points along their length, so the cost per segment is bounded.
-// Why: OpenCV's BinaryDescriptor took 57-67 us per segment (10 ms for the 150 segments of a
-// 752 x 480 mine frame, the largest cost of the line front end; its bytes now come from
-// features/opencv_lbd.h at about 20 us a segment). The line front end computes
-// this one on the half-size image LSD ran on, about 7x cheaper. It is not the default: it
-// matched as well in isolation but degraded faster as the views moved apart, and the tracker
-// was less accurate with it (benchmarks/log/realtime.md, 2026-11-25).
+// Why: OpenCV's BinaryDescriptor was the largest cost of the line front end (the default takes
+// its bytes from features/opencv_lbd.h, which computes them faster). The line front end computes
+// this one on the half-size image LSD ran on, which makes it cheaper. It is not the default: it
+// matched as well in isolation but degraded faster as the views moved apart, and the tracker was
+// less accurate with it (benchmarks/log/realtime.md).
 #pragma once
 
 #include <string>

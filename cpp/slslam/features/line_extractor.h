@@ -1,5 +1,5 @@
-// Line features: OpenCV's LSD segments, preprocessing (SPEC A3) and LBD descriptors (ours,
-// features/lbd.h, or OpenCV contrib line_descriptor's).
+// Line features: LSD segments (ours or OpenCV's), the SL-SLAM paper's preprocessing and LBD
+// descriptors (ours, features/lbd.h, or OpenCV contrib line_descriptor's).
 #pragma once
 
 #include <string>
@@ -36,7 +36,7 @@ struct LineExtractorOptions {
   /// full resolution; LBD and everything after work at full resolution. 0.5 cuts LSD's time about
   /// 4x and keeps the long segments preprocessing keeps anyway; with max_lines 150 and
   /// keyframe_min_frames 2 it gave equal or lower ATE on the four hard simulated sequences of
-  /// benchmarks/tracking_recovery.py (benchmarks/log/tracking_recovery.md, 2026-11-24) [-], (0, 1]
+  /// benchmarks/tracking_recovery.py (benchmarks/log/tracking_recovery.md) [-], (0, 1]
   float detection_scale = 0.5f;
   LineDetector detector = LineDetector::kLsd;
   /// Keep at most this many segments after preprocessing, the longest (0: all). The LBD costs
@@ -45,9 +45,8 @@ struct LineExtractorOptions {
   int max_lines = 150;
   /// Descriptor of the segments: OpenCV's BinaryDescriptor's bytes at full resolution
   /// (computed by features/opencv_lbd.h, the same bytes three times faster), or our LBD
-  /// (features/lbd.h) on the image LSD ran on (the detection scale): about 7x cheaper, but it
-  /// tracked less accurately on the simulated sequences so far (benchmarks/log/realtime.md,
-  /// 2026-11-25).
+  /// (features/lbd.h) on the image LSD ran on (the detection scale): cheaper, but it tracked less
+  /// accurately on the simulated sequences (benchmarks/log/realtime.md).
   LineDescriptor descriptor = LineDescriptor::kOpenCvLbd;
   LbdOptions lbd;  ///< our LBD's settings (in pixels of the detection image)
 

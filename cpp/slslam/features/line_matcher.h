@@ -1,5 +1,5 @@
-// Line matching: between frames driven by point matches (SPEC A4), and across a rectified stereo
-// pair with triangulation of 3-D segments.
+// Line matching: between frames driven by point matches (as in the SL-SLAM paper), and across a
+// rectified stereo pair with triangulation of 3-D segments.
 #pragma once
 
 #include <vector>

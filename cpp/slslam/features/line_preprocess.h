@@ -1,5 +1,5 @@
-// Line preprocessing (SPEC A3): long segments first; short, fragmented and duplicated LSD
-// segments are merged into or deleted against longer "source" segments.
+// Line preprocessing (the SL-SLAM paper's): long segments first; short, fragmented and duplicated
+// LSD segments are merged into or deleted against longer "source" segments.
 #pragma once
 
 #include "slslam/features/line_segment.h"
@@ -19,7 +19,7 @@ struct LinePreprocessOptions {
   void Check() const;
 };
 
-// The angle gate of SPEC A3: delta = 1 - 1 / (1 + exp(-4 lambda + 5)), lambda = length / l.
+// The SL-SLAM paper's angle gate: delta = 1 - 1 / (1 + exp(-4 lambda + 5)), lambda = length / l.
 float AngleGateFactor(float candidate_length, float length_threshold);
 
 // Preprocesses LSD segments of a width x height image. Returns the kept segments, longest first.

@@ -1,16 +1,15 @@
 // LSD, the line segment detector of R. Grompone von Gioi, J. Jakubowicz, J.-M. Morel and G.
-// Randall (IPOL 2012), written for speed: the SPEC's line detector, as OpenCV's
+// Randall (IPOL 2012), written for speed: the SL-SLAM paper's line detector, as OpenCV's
 // LineSegmentDetector runs it with its standard refinement (LSD_REFINE_STD: no NFA test; regions
 // of low density re-grown with a tighter angle, then cut to a smaller radius). The seeds' order
 // and a region's neighbour order are the paper's reference code's, which differ from OpenCV's in
 // how ties fall; the segments agree with OpenCV's to 97-98 % of their length (lsd_test.cpp).
 //
-// Why not OpenCV's: on the half-size 752 x 480 images the tracker feeds it, OpenCV's LSD took
-// 12-15 ms a call on these 2-core machines (the largest stage of ORB + lines after ORB). It
-// works in double precision on angles, with a sine and a cosine for every pixel a region takes;
-// this one keeps each pixel's level-line direction as a unit vector and tests alignment by a dot
-// product, so growing a region needs no trigonometry (benchmarks/log/realtime.md, 2026-11-29 d, for
-// the time and for how its segments compare with OpenCV's).
+// Why not OpenCV's: on the half-size images the tracker feeds it, OpenCV's LSD was the largest
+// stage of ORB + lines after ORB. It works in double precision on angles, with a sine and a
+// cosine for every pixel a region takes; this one keeps each pixel's level-line direction as a
+// unit vector and tests alignment by a dot product, so growing a region needs no trigonometry
+// (benchmarks/log/realtime.md has the times and how its segments compare with OpenCV's).
 #pragma once
 
 #include <vector>

@@ -307,9 +307,8 @@ Keypoints ExtractOrb(const cv::Mat& image, const OrbOptions& options) {
   // parallel: each resizes from the full image, so they share nothing. One task per level, taken
   // by OpenCV's pool as its threads come free (level 0 holds a third of the pixels: on two
   // threads one takes it while the other works through levels 1, 2, ...); the levels' keypoints
-  // and descriptors are joined in level order, so the result is the same on any thread count.
-  // Two threads: 10.1 -> 5.3 ms median an image of the simulated loop, the same keypoints and
-  // descriptors (benchmarks/log/realtime.md, 2026-11-29 i).
+  // and descriptors are joined in level order, so the result is the same on any thread count
+  // (benchmarks/log/realtime.md has the times).
   std::vector<double> scales;
   std::vector<cv::Size> sizes;
   double scale = 1.0;  // level-0 pixels per level pixel

@@ -34,9 +34,8 @@ struct OrbOptions {
   double denoise_above_noise = 6.0;
   /// The descriptors of a frame smoothed for detection come from the smoothed image too (BRIEF's
   /// own 7 x 7 box blur leaves the noise of a light-0.15 frame in its bits); false: from the
-  /// image as given. Until 2026-11-26 the smoothing wrote into the caller's image, so this is
-  /// what every earlier ORB result in the dark used: on the dark dusty loop (ORB + lines, 600
-  /// frames) 0.13 m ATE, against 0.19 m with descriptors from the raw image.
+  /// image as given. On the dark dusty loop (ORB + lines) descriptors from the raw image drifted
+  /// more (benchmarks/log/realtime.md).
   bool describe_smoothed = true;
 
   void Check() const;

@@ -1,5 +1,5 @@
-// Point-line association on the keypoint grid (SPEC A4): each line keeps the ids of the keypoints
-// that lie on it, so lines can later be matched through the point matches.
+// Point-line association on the keypoint grid (the SL-SLAM paper's): each line keeps the ids of
+// the keypoints that lie on it, so lines can later be matched through the point matches.
 #pragma once
 
 #include <vector>

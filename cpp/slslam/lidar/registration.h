@@ -1,6 +1,6 @@
-// Pairwise LiDAR scan registration (SPEC part B1): outlier removal, voxel pyramid, normals, FPFH
-// on downsampled keypoints, SAC-IA coarse alignment and point-to-plane ICP fine alignment, plus the
-// paper's comparison methods (NDT, PFH + SAC-IA + ICP, plain ICP) behind the same call.
+// Pairwise LiDAR scan registration (the LiDAR paper's): outlier removal, voxel pyramid, normals,
+// FPFH on downsampled keypoints, SAC-IA coarse alignment and point-to-plane ICP fine alignment,
+// plus the paper's comparison methods (NDT, PFH + SAC-IA + ICP, plain ICP) behind the same call.
 //
 // This header is PCL-free (Eigen in, Eigen out) so that the bindings and other modules can use it
 // without PCL's include paths; the PCL work lives in registration*.cpp (registration_internal.h).

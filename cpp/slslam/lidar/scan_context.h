@@ -1,7 +1,7 @@
-// Scan Context place descriptor (Kim & Kim, IROS 2018; SPEC B2): the scan around the sensor in a
-// polar grid of rings x sectors holding the maximum point height per bin; a ring key (mean of
-// each ring, rotation invariant) for fast candidate search; and the column-shift distance that
-// also returns the yaw between two scans.
+// Scan Context place descriptor (Kim & Kim, IROS 2018; the LiDAR SLAM's loop candidates): the scan
+// around the sensor in a polar grid of rings x sectors holding the maximum point height per bin;
+// a ring key (mean of each ring, rotation invariant) for fast candidate search; and the
+// column-shift distance that also returns the yaw between two scans.
 #pragma once
 
 #include <vector>

@@ -1,9 +1,9 @@
-// New landmarks from pairs of keyframes (SPEC A6, ORB-SLAM3's CreateNewMapPoints), run by local
-// mapping for every new keyframe against its covisible keyframes. Stereo already gives the close
-// keypoints and the non-horizontal segments a 3-D position when the keyframe is made; what is left
-// is what one stereo pair cannot fix: keypoints without a stereo match (far, or seen by one camera)
-// and segments along the epipolar lines (near-horizontal: roof edges, rails, cables). Two
-// keyframes a motion apart can.
+// New landmarks from pairs of keyframes (the SL-SLAM paper's local mapping, ORB-SLAM3's
+// CreateNewMapPoints), run by local mapping for every new keyframe against its covisible
+// keyframes. Stereo already gives the close keypoints and the non-horizontal segments a 3-D
+// position when the keyframe is made; what is left is what one stereo pair cannot fix: keypoints
+// without a stereo match (far, or seen by one camera) and segments along the epipolar lines
+// (near-horizontal: roof edges, rails, cables). Two keyframes a motion apart can.
 //
 // Points: keypoints of both keyframes without a map point are paired along the epipolar line
 // (distance to it, depth range, descriptor distance with a ratio test, one-to-one), triangulated
@@ -11,8 +11,9 @@
 // bound and have enough parallax.
 // Lines: segments of both keyframes without a map line are paired by LBD distance (mutual best
 // with a ratio test); the 3-D line is the intersection of the two back-projected planes (the
-// dual Pluecker matrix of SPEC A5), kept when the planes are not near-parallel, the line lies in
-// front of both cameras and its projection is within the chi-square bound of both observations.
+// dual Pluecker matrix, geometry/plucker_line.h), kept when the planes are not near-parallel, the
+// line lies in front of both cameras and its projection is within the chi-square bound of both
+// observations.
 #pragma once
 
 #include <vector>
@@ -29,12 +30,10 @@ struct TriangulationOptions {
   float max_distance_binary = 50.0f;  ///< descriptor bound, ORB (Hamming) [bits]
   float max_distance_float = 0.7f;    ///< descriptor bound, SuperPoint (L2) [-]
   float ratio = 0.8f;                 ///< best / second best descriptor distance [-]
-  /// Smallest angle between the two rays [deg]. 1 (about ORB-SLAM3's) until 2026-11-29: the
-  /// points that stereo left without depth, triangulated at 1-3 degrees, had poor depths, and in
-  /// the dark dusty stretch of the 600-frame loops they pulled the poses. With 3, means of 3
-  /// seeds of the four hard sequences: ORB + lines 0.0130 / 0.136 / 0.124 / 0.0178 -> 0.0126 /
-  /// 0.101 / 0.111 / 0.0160 m, XFeat + lines 0.0198 / 0.304 / 0.298 / 0.0245 -> 0.0151 / 0.159 /
-  /// 0.173 / 0.0171 m (benchmarks/log/realtime.md, 2026-11-29 g)
+  /// Smallest angle between the two rays [deg]. 3, more than ORB-SLAM3's (about 1): the points
+  /// that stereo left without depth, triangulated at 1-3 degrees, had poor depths, and in the
+  /// dark dusty stretch of the 600-frame loops they pulled the poses; with 3 both ORB + lines and
+  /// XFeat + lines drifted less on the four hard sequences (benchmarks/log/realtime.md)
   double min_parallax_deg = 3.0;
   double max_depth_baselines = 60.0;  ///< farther points are not made (stereo baselines) [-]
   double chi2 = 5.991;                ///< reprojection bound in both views (2 dof, 95 %) [-]
@@ -44,9 +43,9 @@ struct TriangulationOptions {
   /// stereo match: flat, ambiguous along their row, or far; paired by descriptor and
   /// triangulated from the detected positions, with no patch to align later matches to
   /// (Tracker::RefineTracks). false: points come from stereo alone. At min_parallax_deg 1,
-  /// without them XFeat + lines drifted about half as much on the dark 600-frame sequences but
-  /// 1.6x as much on the 150- and 300-frame dark loops; min_parallax_deg 3 keeps both
-  /// (benchmarks/log/realtime.md, 2026-11-29 g) [-]
+  /// without them XFeat + lines drifted less on the dark 600-frame sequences but more on the
+  /// 150- and 300-frame dark loops; with min_parallax_deg 3 the points keep the short loops' gain
+  /// without the long sequences' loss (benchmarks/log/realtime.md) [-]
   bool points = true;
   /// Half size of the patch a triangulated point keeps of the new keyframe's left image around
   /// its keypoint (KeyFrame::left_image), as the points the tracker makes from stereo keep one

@@ -1,7 +1,7 @@
-// Ceres cost functions of the unified point-line cost (SPEC A5 eq. 17) with analytic Jacobians.
-// Residuals are whitened by 1 / sigma (pixels); pose blocks use PoseManifold, line blocks use
-// LineManifold (see manifolds.h for the Jacobian layout). Evaluate returns false when a landmark
-// falls behind the camera, which makes Ceres reject that step.
+// Ceres cost functions of the unified point-line cost (SL-SLAM paper, eq. 17) with analytic
+// Jacobians. Residuals are whitened by 1 / sigma (pixels); pose blocks use PoseManifold, line
+// blocks use LineManifold (see manifolds.h for the Jacobian layout). Evaluate returns false when a
+// landmark falls behind the camera, which makes Ceres reject that step.
 #pragma once
 
 #include <array>
@@ -44,9 +44,9 @@ class StereoPointCost final : public ceres::SizedCostFunction<3, kPoseSize, 3> {
 // (u_left, v), half 1 = (u_right, 0). Both halves together are StereoPointCost's rows plus a zero
 // row, the same least-squares problem; but every point block then has two rows, which lets Ceres'
 // Schur eliminator use its fixed-size <2, 3, 6> kernel (blocks of 2 and 3 rows make it fall back
-// to dynamic sizes: 1.6-2.4 times the linear solver's time in local BA; benchmarks/log/realtime.md,
-// 2026-11-28 h). A robust loss on each half would act on that half alone: bundle adjustment uses
-// the halves without one (its refine pass).
+// to dynamic sizes, which made local BA's linear solver slower: benchmarks/log/realtime.md). A
+// robust loss on each half would act on that half alone: bundle adjustment uses the halves
+// without one (its refine pass).
 class StereoPointHalfCost final : public ceres::SizedCostFunction<2, kPoseSize, 3> {
  public:
   StereoPointHalfCost(const StereoRig& rig, const Eigen::Vector3d& observed, double sigma_px,
@@ -86,7 +86,7 @@ class LineCost final : public ceres::SizedCostFunction<3, kPoseSize, kLineSize> 
 // residual 4 = weight * Minus(line, reference) [weight / rad]. Bundle adjustment gives every line
 // one towards its value at the start of each pass when BundleAdjustmentOptions::line_prior_weight
 // > 0: it bounds the Gauss-Newton step along directions the observations leave (nearly) free,
-// which otherwise made most trust-region steps fail (benchmarks/log/realtime.md, 2026-11-27 f).
+// which otherwise made most trust-region steps fail (benchmarks/log/realtime.md).
 class LinePriorCost final : public ceres::SizedCostFunction<4, kLineSize> {
  public:
   LinePriorCost(const double* reference, double weight);

@@ -152,14 +152,13 @@ bool EvaluatePoseTerms(const std::vector<const PoseTerm*>& terms, bool robust, c
 // 1e-10 or a step of 1e-8 relative to the parameters (both in the 6-dim tangent; Ceres measures
 // them in the 7 parameters), after a step that lowered the cost by at most 1e-6 of it (below), or
 // after `max_iterations` steps, rejected ones included.
-// The default (PoseOptimizerOptions::own_solver): on a 6-parameter problem 70 % of Ceres' time
-// went to building the problem and its bookkeeping (heap, maps; `perf` on 400 stereo points), 2.3
-// against 0.7 ms here, on every frame's tracking; on the long dark sequences its accuracy is
-// within the spread of simulator seeds of Ceres' (benchmarks/log/realtime.md, 2026-11-27 i and
-// 2026-11-28 i). Ceres solves by QR of the Jacobian, this by the normal equations, so steps differ
-// in the last digits (pose_optimizer_test compares steps with Huber losses and with scaled lines,
-// and the whole outlier rounds, with Ceres). When the starting pose cannot be evaluated the pose
-// stays as given, as Ceres' failed solve leaves it.
+// The default (PoseOptimizerOptions::own_solver): on a 6-parameter problem most of Ceres' time
+// goes to building the problem and its bookkeeping (heap, maps), on every frame's tracking; on
+// the long dark sequences this solver's accuracy is within the spread of simulator seeds of
+// Ceres' (benchmarks/log/realtime.md). Ceres solves by QR of the Jacobian, this by the normal
+// equations, so steps differ in the last digits (pose_optimizer_test compares steps with Huber
+// losses and with scaled lines, and the whole outlier rounds, with Ceres). When the starting pose
+// cannot be evaluated the pose stays as given, as Ceres' failed solve leaves it.
 void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool robust,
                                  int max_iterations, double* pose) {
   PoseNormalEquations current;
@@ -200,7 +199,7 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
       // candidate without taking it (and at a rise as small); this takes the lower cost. Taking
       // it or not moves later poses in the last digits, and those decide, through the long dark
       // runs' chaos, e.g. whether a camera-only blackout in test_tracking.py comes back into
-      // its map (benchmarks/log/realtime.md, 2026-11-27 i).
+      // its map (benchmarks/log/realtime.md).
       if (!(relative_decrease > 1e-6)) return;
     } else {
       radius /= decrease_factor;
@@ -210,9 +209,8 @@ void SolvePoseLevenbergMarquardt(const std::vector<const PoseTerm*>& terms, bool
   }
 }
 
-// The same problem solved by Ceres (DENSE_QR), as every release before 2026-11-28 i did
-// (PoseOptimizerOptions::own_solver false). The terms' costs stay theirs; the problem owns the
-// losses.
+// The same problem solved by Ceres (DENSE_QR), for PoseOptimizerOptions::own_solver false. The
+// terms' costs stay theirs; the problem owns the losses.
 void SolvePoseCeres(const std::vector<const PoseTerm*>& terms, bool robust, int max_iterations,
                     double* pose) {
   ceres::Problem::Options problem_options;

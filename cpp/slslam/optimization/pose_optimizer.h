@@ -38,9 +38,8 @@ struct PoseOptimizerOptions {
   double line_angle_weight = 10.0;  ///< scale of the bounded angle term e3 [px]
   double line_weight = 1.0;         ///< weight of the line terms against the point terms [-]
   /// true: each round solved by this library's 6-parameter Levenberg-Marquardt (Ceres' rules on
-  /// the same costs, 3-4x faster: no problem to build); false: by Ceres (the default until
-  /// 2026-11-28 i; the two agree within the spread of simulator seeds on the long sequences, and
-  /// each lost one run that the other kept: benchmarks/log/realtime.md, 2026-11-28 i).
+  /// the same costs, faster: there is no problem to build); false: by Ceres. The two agree within
+  /// the spread of simulator seeds on the long sequences (benchmarks/log/realtime.md).
   bool own_solver = true;
 
   void Check() const;

@@ -291,9 +291,9 @@ void MatchStereoByRowSearch(const cv::Mat& left, const cv::Mat& right, const Ste
   const int n = frame->NumKeypoints();
   frame->u_right.resize(n, -1.0);
   frame->depth.resize(n, -1.0);
-  // Keypoints in parallel stripes (each keypoint writes only its own entries; buffers per
-  // stripe): on two threads the stereo stage of ORB points (1,000 keypoints, realtime.py) went
-  // from 9.7 to 5.1 ms median, the same matches (benchmarks/log/realtime.md, 2026-11-29 i).
+  // Keypoints in parallel stripes, for the stereo stage's time on several cores
+  // (benchmarks/log/realtime.md); each keypoint writes only its own entries and the buffers are
+  // per stripe, so the matches are the same on any thread count.
   const auto search = [&](const cv::Range& range) {
     std::vector<float> patch(side * side);  // left patch minus its mean, row-major
     std::vector<float> strip;               // right rows of the search range, as float

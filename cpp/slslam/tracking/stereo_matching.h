@@ -26,12 +26,10 @@ struct StereoMatchOptions {
   /// the right image over the disparity range (MatchStereoByRowSearch). Lets a learned front end
   /// run its network on the left image only.
   bool row_search = false;
-  /// half size of the SAD patch of the row search [px]. 7 (15 x 15): XFeat + lines on 150 dark
-  /// frames of the simulated loop (subpixel patch 11 x 11) drifted 0.0353 m with 3, 0.0314 with
-  /// 4, 0.0219 with 5 and 0.0162 with 7 (bright: 0.0054, 0.0055, 0.0051, 0.0064, no trend): the
-  /// small patch of a noisy pair refused or biased matches, and the map's scale came out about
-  /// 2 % short. Keypoints within w px of the image's edge are not searched
-  /// (benchmarks/log/realtime.md, 2026-11-26 evening)
+  /// half size of the SAD patch of the row search [px]. 7 (15 x 15): on dark frames a smaller
+  /// patch of a noisy pair refused or biased matches, the map's scale came out short and XFeat +
+  /// lines drifted more on the simulated loop; in bright frames the size made no clear difference
+  /// (benchmarks/log/realtime.md). Keypoints within w px of the image's edge are not searched
   int row_search_window = 7;
   /// best cost / lowest other local minimum of the cost along the row must be below this [-]
   float row_search_ratio = 0.8f;

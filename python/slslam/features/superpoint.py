@@ -219,10 +219,9 @@ class SuperPoint:
     """SuperPoint on onnxruntime. ``detect(image)`` returns :class:`Keypoints`."""
 
     #: The tracker hands the network the image as it came, not the copy it smooths for lines and
-    #: stereo matching when it is noisy (``tracking.denoise_above_noise``): on 150 frames of the
-    #: simulated loop at light 0.15, SuperPoint + lines drifted 0.0134 m on the raw images and
-    #: 0.0195 m on the smoothed ones (benchmarks/log/realtime.md, 2026-11-26). Bright frames are
-    #: quiet, so the two are the same image there.
+    #: stereo matching when it is noisy (``tracking.denoise_above_noise``): on the dark simulated
+    #: loop SuperPoint + lines drifted less on the raw images than on the smoothed ones
+    #: (benchmarks/log/realtime.md). Bright frames are quiet, so the two are the same image there.
     smoothed_input = False
     # Its detect's keywords (slslam.features.PointFrontEnd): threshold (the low-texture fallback).
     detect_takes_threshold = True

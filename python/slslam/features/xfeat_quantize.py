@@ -6,15 +6,15 @@ Convolutions run with int8 weights (per output channel) and uint8 activations (Q
 layout onnxruntime's x86 kernels execute in integers, with VNNI where the processor has it). The
 weights use 7 of the 8 bits (``reduce_range``): on an x86 processor without VNNI (AVX2 only, e.g.
 AMD EPYC before Zen 4) onnxruntime multiplies uint8 by int8 with an instruction that saturates
-pairs of products at 16 bits, and full-range weights overflowed it. With full-range weights, 79 %
-of the float network's keypoints came back within 1 px there against 91 % on a VNNI Xeon; with 7
-bits 90 % on both, the same outputs on either processor (benchmarks/log/realtime.md, 2026-11-28 f).
+pairs of products at 16 bits, and full-range weights overflowed it: fewer of the float network's
+keypoints came back within 1 px there than on a VNNI processor, while with 7 bits the outputs are
+the same on either processor (benchmarks/log/realtime.md).
 Activation ranges come from calibration images (min / max over them): by default frames the
 simulator renders of the shaft-bottom loop at full light and at light 0.15 (seed 0), so the file
-is reproducible from slslam alone and no data set is needed. On 2-core machines with VNNI the
-network took about half the time of the float file, on one with AVX2 only about the same; the
-tracker's accuracy was the same within the run-to-run spread (benchmarks/log/realtime.md,
-2026-11-25 later and 2026-11-28 f). Needs only onnxruntime (its ``quantization`` package).
+is reproducible from slslam alone and no data set is needed. On a CPU with VNNI the network
+takes about half the time of the float file, on one with AVX2 only about the same; the tracker's
+accuracy was the same within the run-to-run spread (benchmarks/log/realtime.md). Needs only
+onnxruntime (its ``quantization`` package).
 """
 
 from __future__ import annotations
@@ -37,10 +37,8 @@ CALIBRATION_FRAMES = tuple(range(0, 84, 7))
 #: clipped gray levels above the calibration frames' brightest (176 on the simulated loop) before
 #: the network saw them. The keypoint head (four 1 x 1 convolutions on the 8 x 8 pixel blocks of
 #: the image, at an eighth of its rows and columns): its logits place the keypoints, to sub-pixel
-#: precision on their heatmap; in 8 bits the keypoints moved a median 0.072 px from the float
-#: network's (90th percentile 0.24 px), with the head in float 0.031 px (0.13 px), on six frames
-#: of the simulated loop at both light levels, in the same time (benchmarks/log/realtime.md,
-#: 2026-11-30).
+#: precision on their heatmap; with the head in float the keypoints stay about twice as close to
+#: the float network's as with it in 8 bits, in the same time (benchmarks/log/realtime.md).
 FLOAT_NODES = ("/net/norm/InstanceNormalization",) + tuple(
     f"/net/keypoint_head/keypoint_head.{i}/{'Conv' if i == 3 else 'layer/layer.0/Conv'}"
     for i in range(4)

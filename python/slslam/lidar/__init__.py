@@ -1,4 +1,4 @@
-"""LiDAR scan registration (SPEC part B1) through the C++ core, which must be built with PCL.
+"""LiDAR scan registration (the LiDAR paper's) through the C++ core, which must be built with PCL.
 
     import numpy as np
     from slslam.lidar import register

@@ -1,5 +1,5 @@
-"""Roadway dimensions measured on a LiDAR map (SPEC B2: the paper measures corridor length and
-width on its map against a laser range finder).
+"""Roadway dimensions measured on a LiDAR map (as in the LiDAR paper, which measures corridor
+length and width on its map against a laser range finder).
 
 Cross-sections are cut perpendicular to the driven path (the robot drives along the roadway): the
 map points within ``slab_m`` of each section plane, in the band of heights where the walls are

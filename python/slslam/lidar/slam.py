@@ -1,5 +1,5 @@
-"""LiDAR-inertial SLAM (SPEC B2): odometry in C++ (deskew, scan-to-map registration from the IMU
-prediction, fixed-lag IMU smoothing, bounded voxel map), keyframes with Scan Context loop
+"""LiDAR-inertial SLAM (the LiDAR paper's): odometry in C++ (deskew, scan-to-map registration from
+the IMU prediction, fixed-lag IMU smoothing, bounded voxel map), keyframes with Scan Context loop
 candidates verified by FPFH + SAC-IA and point-to-plane registration, and a keyframe pose graph.
 
 The per-point work runs in ``slslam._core``; this module orchestrates one sweep at a time.
