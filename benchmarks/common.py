@@ -92,6 +92,36 @@ def write_results(name: str, results: dict, out: Path | None = None) -> Path:
     return path
 
 
+def load_published_sources(path: Path, check_values: Callable[[str, object], None]) -> dict:
+    """The ``sources`` of a published-numbers file (published_ate.yaml, published_kitti.yaml):
+    ``{source: {label, citation, note?, values, ...}}``, each with a ``label`` and a non-empty
+    ``citation``; ``check_values(where, values)`` raises InputError for a source's bad
+    ``values`` (``where``: ``sources.<name>.values``). A bad file raises InputError naming the
+    file and the key."""
+    import yaml  # (imported here: the helpers above need neither)
+
+    from slslam.errors import InputError
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise InputError(path, f"cannot read published numbers ({exc})") from None
+    sources = data.get("sources") if isinstance(data, dict) else None
+    if not isinstance(sources, dict) or not sources:
+        raise InputError(path, "expected a 'sources' mapping")
+    for source, entry in sources.items():
+        where = f"sources.{source}"
+        if not isinstance(entry, dict) or not isinstance(entry.get("label"), str):
+            raise InputError(path, f"{where}: needs a 'label' string")
+        if not isinstance(entry.get("citation"), str) or not entry["citation"].strip():
+            raise InputError(path, f"{where}: needs a 'citation' naming where the numbers are from")
+        try:
+            check_values(f"{where}.values", entry.get("values"))
+        except InputError as exc:
+            raise InputError(path, exc.problem) from None
+    return sources
+
+
 def transfer_pixels(
     uv: np.ndarray, depth_a: np.ndarray, T_b_a: np.ndarray, cam
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -43,7 +43,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 from evo.core.trajectory import PoseTrajectory3D
 
 from slslam.config import Config, default_config
@@ -52,7 +51,7 @@ from slslam.errors import InputError
 from slslam.eval.report import evaluate
 from slslam.tracking import run_sequence
 
-from common import RESULTS_DIR, SHARED_DATA, write_results
+from common import RESULTS_DIR, SHARED_DATA, load_published_sources, write_results
 
 HERE = Path(__file__).resolve().parent
 PUBLISHED = HERE / "published_ate.yaml"
@@ -122,29 +121,18 @@ def groundtruth_for(name: str, folder: Path, gt_dir: Path | None) -> PoseTraject
 
 def load_published(path: Path) -> dict:
     """The published columns: ``{source: {label, citation, values {seq: m}, average}}``; a bad
-    file raises InputError naming the file and the key."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise InputError(path, f"cannot read published numbers ({exc})") from None
-    sources = data.get("sources") if isinstance(data, dict) else None
-    if not isinstance(sources, dict) or not sources:
-        raise InputError(path, "expected a 'sources' mapping")
-    for source, entry in sources.items():
-        where = f"sources.{source}"
-        if not isinstance(entry, dict) or not isinstance(entry.get("label"), str):
-            raise InputError(path, f"{where}: needs a 'label' string")
-        if not isinstance(entry.get("citation"), str) or not entry["citation"].strip():
-            raise InputError(path, f"{where}: needs a 'citation' naming where the numbers are from")
-        values = entry.get("values")
-        if not isinstance(values, dict):
-            raise InputError(path, f"{where}.values: expected a mapping sequence -> ATE [m]")
-        for seq, value in values.items():
-            if seq not in SEQUENCES:
-                raise InputError(path, f"{where}.values.{seq}: unknown sequence ({SEQUENCES})")
-            if not isinstance(value, int | float) or not 0 <= value < 100:
-                raise InputError(path, f"{where}.values.{seq}: {value!r} is not an ATE in metres")
-    return sources
+    file raises InputError naming the file and the key (common.load_published_sources)."""
+    return load_published_sources(path, _check_ate_values)
+
+
+def _check_ate_values(where: str, values) -> None:
+    if not isinstance(values, dict):
+        raise InputError(None, f"{where}: expected a mapping sequence -> ATE [m]")
+    for seq, value in values.items():
+        if seq not in SEQUENCES:
+            raise InputError(None, f"{where}.{seq}: unknown sequence ({SEQUENCES})")
+        if not isinstance(value, int | float) or not 0 <= value < 100:
+            raise InputError(None, f"{where}.{seq}: {value!r} is not an ATE in metres")
 
 
 # -- runs -------------------------------------------------------------------------------------
