@@ -62,6 +62,7 @@ struct KeyFrameInertial {
   Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();  ///< [m/s]
   ImuBias bias;
   int previous = -1;                ///< the keyframe the samples start at (-1: first of its chain)
+  int refined = 0;                  ///< local BAs that estimated this state [-]
   ImuBuffer samples_from_previous;  ///< IMU times (t_cam - time_offset), covering the interval
 };
 

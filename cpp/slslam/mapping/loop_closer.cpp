@@ -692,6 +692,12 @@ void LoopCloser::GlobalBundleAdjustment(Atlas* atlas, int map_index) {
         ba->AddLine(map, *l, options_.line_sigma_px, pose_of);
       }
     }
+    // With the IMU in the map (tracking.imu.local_ba_keyframes), the IMU between consecutive
+    // keyframes too, every velocity and bias estimated.
+    std::vector<int> all;
+    all.reserve(map.keyframes().size());
+    for (const auto& [id, kf] : map.keyframes()) all.push_back(id);
+    ba->AddInertialFactors(map, all, &pose_index);
   }
   const double build_ms = Ms(start);
   auto run = [this, atlas, map_index, ba, start, build_ms] {

@@ -141,6 +141,7 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
     if (state.fixed || !kf || !kf->inertial) continue;
     kf->inertial->v_world_body = state.v_world_body;
     kf->inertial->bias = state.bias;
+    ++kf->inertial->refined;
   }
   for (size_t i = 0; i < point_id_.size(); ++i) {
     if (auto p = map->point(point_id_[i])) p->position = problem_.points[i];

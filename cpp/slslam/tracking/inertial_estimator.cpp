@@ -197,6 +197,28 @@ bool InertialEstimator::Trustworthy() const {
   return state_.PositionSigma() <= bound && seconds_without_vision() <= options_.max_gap_s;
 }
 
+bool InertialEstimator::Rebase(double t_s, const Rigid3d& cam_from_world,
+                               const Eigen::Vector3d& v_world_body, const ImuBias& bias) {
+  if (!initialised_ || !(t_s <= state_t_s_)) return false;
+  const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
+  NavState at_keyframe;
+  at_keyframe.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
+  at_keyframe.p_world_body = world_from_body.translation;
+  at_keyframe.v_world_body = v_world_body;
+  NavState now = at_keyframe;
+  if (t_s < state_t_s_) {
+    ImuPreintegration pre(bias, noise_);
+    if (!imu_.Preintegrate(t_s - options_.time_offset_s, state_t_s_ - options_.time_offset_s,
+                           options_.max_sample_gap_s, &pre)) {
+      return false;
+    }
+    now = pre.Predict(at_keyframe, bias, state_.g_world);
+  }
+  state_.nav = now;
+  state_.bias = bias;
+  return true;
+}
+
 void InertialEstimator::ChangeWorld(const Rigid3d& new_from_old) {
   const Eigen::Matrix3d& R = new_from_old.rotation;
   for (TimedPose& pose : window_) pose.world_from_body = new_from_old * pose.world_from_body;

@@ -287,6 +287,7 @@ void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
   keyframe_imu_.DropBefore(t_imu_s);
   imu_chain_keyframe_ = kf->id;
   imu_chain_map_ = active_;
+  imu_chain_refined_ = 0;
   MapInertial settings;
   settings.body_from_cam = options_.imu.body_from_cam;
   settings.g_world = inertial_->g_world();
@@ -294,6 +295,28 @@ void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
   settings.time_offset_s = options_.imu.time_offset_s;
   settings.max_sample_gap_s = options_.imu.max_sample_gap_s;
   map->set_inertial(settings);
+}
+
+void Tracker::FollowLocalBa() {
+  if (options_.imu.local_ba_keyframes <= 0 || imu_chain_keyframe_ < 0 || !inertial_ ||
+      !inertial_->initialised() || inertial_map_ != active_ || imu_chain_map_ != active_) {
+    return;
+  }
+  KeyFrameInertial imu;
+  Rigid3d cam_from_world;
+  {
+    const std::unique_lock<Mutex> lock = LockActiveMap();
+    Map& map = atlas_.map(active_);
+    map.mutex().AssertHeld();  // locked by LockActiveMap
+    auto kf = map.keyframe(imu_chain_keyframe_);
+    if (!kf || !kf->inertial || kf->inertial->refined == imu_chain_refined_) return;
+    imu_chain_refined_ = kf->inertial->refined;
+    imu.t_s = kf->inertial->t_s;
+    imu.v_world_body = kf->inertial->v_world_body;
+    imu.bias = kf->inertial->bias;
+    cam_from_world = kf->cam_from_world;
+  }
+  inertial_->Rebase(imu.t_s, cam_from_world, imu.v_world_body, imu.bias);
 }
 
 bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const {
@@ -684,6 +707,7 @@ TrackResult Tracker::TrackFrame(std::shared_ptr<const StereoFrame>& frame) {
   // A loop correction or a merge may have moved the last pose (a merge into another map's
   // world): the prediction starts from where it is now.
   FollowCorrections();
+  FollowLocalBa();
   anchor_ = Anchor{};
   Rigid3d predicted;  // cam_from_world
   // With the IMU initialised its propagated state predicts the pose and gives the frame's pose

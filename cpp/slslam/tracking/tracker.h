@@ -592,6 +592,7 @@ class Tracker {
   ImuBuffer keyframe_imu_;
   int imu_chain_keyframe_ = -1;  ///< the chain's last keyframe (-1: none)
   int imu_chain_map_ = -1;       ///< ... and its map
+  int imu_chain_refined_ = 0;    ///< its local BAs the inertial state followed (FollowLocalBa)
   // The inertial state's prior on the frame's pose; false when there is none (no IMU, not
   // initialised, another map's world, samples missing).
   bool InertialPrior(const StereoFrame& frame, PosePrior* prior) const;
@@ -603,6 +604,10 @@ class Tracker {
   // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_s, in the
   // map's world), and the map gets the IMU settings; else the chain ends. Caller holds the lock.
   void AttachImu(double t_s, Map* map, KeyFrame* kf) SLSLAM_REQUIRES(map->mutex());
+  // Local BA estimated the IMU chain's last keyframe again: the inertial state restarts from it
+  // (its pose, velocity and biases, propagated to the state's time), as ORB-SLAM3's tracking
+  // predicts from the last keyframe once local mapping changed the map.
+  void FollowLocalBa();
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
   // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone
   // gave it.
