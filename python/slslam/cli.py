@@ -231,8 +231,9 @@ def demo_command(
 ) -> None:
     """Generate a mine-loop ground truth and a synthetic drifting estimate, then evaluate it.
 
-    A stand-in for the main job until the tracker exists: it exercises trajectory files,
-    evo alignment, APE/RPE, metrics JSON and plots end to end on data made on the spot.
+    A check of the evaluation path without the tracker (``slslam run`` tracks): it exercises
+    trajectory files, evo alignment, APE/RPE, metrics JSON and plots end to end on data made on
+    the spot.
     """
     from slslam.demo import run_demo
 

@@ -1,12 +1,12 @@
-"""The README's main command until the tracker lands: generate a mine-like trajectory and score it.
+"""The evaluation path without the tracker: generate a mine-like trajectory and score it.
 
 ``slslam demo`` writes a ground-truth trajectory of a robot driving once around a shaft-bottom yard
 loop (two straights joined by half circles, 0.8 m/s, 20 Hz, small track vibration), and a
 *synthetic* estimate of it: the ground truth seen from a rotated, shifted world frame with a
 slowly growing heading drift and white position noise, as a visual-odometry front end would give.
 The estimate is made up on purpose, from a fixed seed; it exercises reading, association, Umeyama
-alignment, APE/RPE and the plots end to end. Once ``slslam run`` exists the main command runs the
-tracker on a simulated sequence instead.
+alignment, APE/RPE and the plots end to end. ``slslam run`` runs the tracker itself, on a
+simulated sequence or a dataset.
 """
 
 from __future__ import annotations

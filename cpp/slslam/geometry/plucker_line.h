@@ -1,5 +1,6 @@
-// 3-D lines for the map (SPEC A5): Pluecker coordinates for initialisation, transformation and
-// projection; the 4-DoF orthonormal representation (U, W) for optimisation.
+// 3-D lines for the map (the SL-SLAM paper's line representation): Pluecker coordinates for
+// initialisation, transformation and projection; the 4-DoF orthonormal representation (U, W) for
+// optimisation.
 //
 // A Pluecker line L = (n, v): v is the direction, n = p x v for any point p on the line (the normal
 // of the plane through the line and the origin, scaled by the line's distance to the origin times

@@ -1,4 +1,5 @@
-// Reprojection residuals of points and lines with analytic Jacobians (SPEC A5, eq. 13-17).
+// Reprojection residuals of points and lines with analytic Jacobians (the SL-SLAM paper's
+// point-line cost, eqs. 13-17).
 //
 // Pose convention: cam_from_world (T_cw) maps world to camera, x_c = R x_w + t with R, t its
 // rotation and translation. Pose increments are 6-vectors
@@ -29,7 +30,7 @@ bool StereoPointResidual(const StereoRig& rig, const Rigid3d& cam_from_world,
                          Eigen::Vector3d* residual, Eigen::Matrix<double, 3, 6>* d_pose = nullptr,
                          Eigen::Matrix<double, 3, 3>* d_point = nullptr, double min_depth = 1e-6);
 
-// Line residual for an observed segment x1 -> x2 [px] (SPEC A5):
+// Line residual for an observed segment x1 -> x2 [px] (the SL-SLAM paper's):
 //   e1, e2 = signed distances of x1, x2 to the projected line l' [px],
 //   e3     = angle_weight * sin(angle between l' and the segment).
 // The paper's e3 is a slope difference, which is unbounded for vertical lines (props, bolts,

@@ -1,7 +1,7 @@
-// On-manifold IMU preintegration with bias (SPEC B2 eqs. 5-7; Forster et al., TRO 2017): the
-// rotation, velocity and position increments between two keyframes, their covariance, and their
-// first-order Jacobians with respect to the gyroscope and accelerometer biases, so a bias update
-// corrects the increments without integrating the samples again.
+// On-manifold IMU preintegration with bias (the LiDAR paper's eqs. 5-7; Forster et al., TRO
+// 2017): the rotation, velocity and position increments between two keyframes, their covariance,
+// and their first-order Jacobians with respect to the gyroscope and accelerometer biases, so a
+// bias update corrects the increments without integrating the samples again.
 //
 // One implementation for the LiDAR-inertial smoother and the visual-inertial tracker.
 //

@@ -1,4 +1,4 @@
-// The sparse map (SPEC A6): keyframes, map points, map lines, their observations, the
+// The sparse map (SL-SLAM paper): keyframes, map points, map lines, their observations, the
 // covisibility graph and the spanning tree. One mutex guards the whole map: tracking reads under
 // it, local mapping writes under it (coarse, but simple to reason about; the expensive parts of
 // local mapping run on copies outside the lock).

@@ -1,6 +1,6 @@
-// The atlas (ORB-SLAM3's, SPEC A1): the maps of one run, each with its keyframe database, and
-// which map each was merged into. Maps share one id source, so keyframe, point and line ids are
-// unique across the atlas and a merge moves entries without renumbering.
+// The atlas (ORB-SLAM3's, on which the SL-SLAM paper builds): the maps of one run, each with its
+// keyframe database, and which map each was merged into. Maps share one id source, so keyframe,
+// point and line ids are unique across the atlas and a merge moves entries without renumbering.
 //
 // Thread safety: the list of maps has its own mutex; entries are never removed, so references
 // returned stay valid for the atlas's lifetime. Each Map guards its content with its own mutex

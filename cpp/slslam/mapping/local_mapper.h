@@ -1,4 +1,4 @@
-// Local mapping (SPEC A6): for every new keyframe, new points and lines triangulated with its
+// Local mapping (SL-SLAM paper): for every new keyframe, new points and lines triangulated with its
 // covisible keyframes (triangulation.h), local bundle adjustment over the keyframe and
 // its covisible keyframes with the points and lines they see (keyframes outside that set that see
 // those landmarks stay fixed), removal of outlier observations, landmark culling and keyframe

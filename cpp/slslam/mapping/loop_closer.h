@@ -1,5 +1,5 @@
-// Loop closing and map merging (ORB-SLAM3's LoopClosing thread, SPEC A1/A6), for a stereo
-// point-line map.
+// Loop closing and map merging (ORB-SLAM3's LoopClosing thread, of the architecture the SL-SLAM
+// paper builds on), for a stereo point-line map.
 //
 // For every keyframe local mapping has finished:
 //  1. Candidates: keyframes of every map of the atlas whose bag of words scores at least as high

@@ -256,8 +256,8 @@ ceres::Solver::Options CeresPassOptions(const BaProblem& ba, const BundleAdjustm
   // eliminated with their tangent of four (what Ceres does left to itself), make it fall back to
   // dynamic sizes. The robust pass keeps each stereo observation whole: a Huber loss on half of
   // it would be another objective. The ordering names every parameter block, in two groups
-  // (with a third for the lines, local BA took longer than before this ordering; measured in
-  // benchmarks/log/realtime.md, 2026-11-28 h); Parameters keeps the second group's order fixed.
+  // (with a third group for the lines, Ceres' order of the reduced system makes local BA slower,
+  // benchmarks/log/realtime.md); Parameters keeps the second group's order fixed.
   if (std::any_of(point_used.begin(), point_used.end(), [](bool used) { return used; })) {
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
     for (size_t i = 0; i < ba.points.size(); ++i) {

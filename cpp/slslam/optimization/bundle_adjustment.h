@@ -81,15 +81,14 @@ struct BundleAdjustmentOptions {
   /// Each line's pull towards its value at the start of each pass (in the refine pass: the
   /// robust pass's result), in the tangent of its orthonormal representation (LinePriorCost; the
   /// line anchored at the camera centre of its first observation) [1 / rad]; 0: none, lines
-  /// relative to the world's origin as before. With lines, local BA's Levenberg-Marquardt
-  /// rejected 3 of 5 steps of the robust pass and 6 of 10 of the refine pass and always ran to its
-  /// cap (points alone: almost none rejected, 2-4 steps); with the lines held fixed it rejected
-  /// almost none. The full Gauss-Newton step raised the cost 10-1300x, which the pull cures
-  /// (likely cause: lines that their observers constrain in only two of four degrees of freedom,
-  /// as a roadway edge driven along). With `dogleg_with_lines` a local BA then took 42 % less time
-  /// (pull 10); but the pull biases each pass towards its start, and over three seeds of the hard
-  /// sequences 30 drifted more on the dark loop and 10 on the bright one, so both stay off
-  /// (benchmarks/log/realtime.md, 2026-11-27 f).
+  /// relative to the world's origin. With lines, local BA's Levenberg-Marquardt rejects more than
+  /// half its steps and runs to its iteration cap (points alone: almost none rejected, a few steps;
+  /// the lines held fixed: almost none rejected): the full Gauss-Newton step raises the cost many
+  /// times over, which the pull cures (likely cause: lines that their observers constrain in only
+  /// two of four degrees of freedom, as a roadway edge driven along). With `dogleg_with_lines` a
+  /// local BA then takes less time; but the pull biases each pass towards its start, and over
+  /// three seeds of the hard sequences the drift grew on the dark loop or the bright one
+  /// depending on the weight, so both stay off (benchmarks/log/realtime.md).
   double line_prior_weight = 0.0;
   /// Powell's dogleg instead of Levenberg-Marquardt when the problem has lines: a rejected step
   /// costs one evaluation, not a new linear solve (the Schur elimination, most of a solve). Use
@@ -101,16 +100,15 @@ struct BundleAdjustmentOptions {
   /// residuals in sigmas, the poses held, recomputed at the start of each pass) with an
   /// eigenvalue of at least this; it is held in the others (LineSubspaceManifold) [1 / rad^2].
   /// Nearly every line of a local window has a direction its observers barely see (cameras
-  /// driven along a roadway edge): the smallest eigenvalue was below 1 for 45 % of them and
-  /// below 10 for 97 %, and their free steps there made Levenberg-Marquardt reject 60 % of its
-  /// steps (benchmarks/log/realtime.md, 2026-11-27 g). 0: every line free in all four directions.
+  /// driven along a roadway edge: the smallest eigenvalue is below 10 for almost all of them),
+  /// and their free steps there make Levenberg-Marquardt reject most of its steps
+  /// (benchmarks/log/realtime.md). 0: every line free in all four directions.
   double line_min_information_per_rad2 = 0.0;
   /// true: each pass solved by this library's own Levenberg-Marquardt with the landmarks
   /// eliminated (schur_levenberg_marquardt.h: Ceres' trust-region rules on the same costs, no
-  /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR),
-  /// the default until 2026-11-29. On 187 local BAs of the dark dusty loop both took as many
-  /// steps in each, to the same cost within 1e-6 in 169 (1e-9 in 121, 0.15-0.7 % apart in 5),
-  /// in 5.8x less time (benchmarks/log/realtime.md, 2026-11-29).
+  /// Ceres problem, a dense reduced system over the free poses); false: by Ceres (SPARSE_SCHUR).
+  /// On the local BAs of the dark dusty loop both take as many steps, to the same cost within
+  /// 1e-6 in most, and the own solver takes several times less time (benchmarks/log/realtime.md).
   /// The own solver takes only problems of at most 64 free poses without the pull, the dogleg,
   /// held line directions above or IMU factors; Ceres solves the others (a large map's global
   /// BA) [-]

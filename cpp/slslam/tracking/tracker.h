@@ -1,6 +1,7 @@
-// Stereo point-line tracking (SPEC A5-A6, ORB-SLAM3's Tracking): constant-velocity prediction,
-// guided matching of the local map's points and lines into the frame, motion-only bundle
-// adjustment on the unified cost, keyframe decision and insertion, hand-off to local mapping.
+// Stereo point-line tracking (the SL-SLAM paper's tracking, after ORB-SLAM3's Tracking):
+// constant-velocity prediction, guided matching of the local map's points and lines into the
+// frame, motion-only bundle adjustment on the unified point-line cost, keyframe decision and
+// insertion, hand-off to local mapping.
 //
 // Tracking loss is a state, not an error. A frame that cannot be tracked enters RECENTLY_LOST:
 // for a few frames the tracker retries with a wider window around a prediction whose velocity
@@ -103,10 +104,10 @@ struct TrackerOptions {
   /// lost. The frames between keyframes of a well-textured stretch are tracked on their points:
   /// no line detection and no LBD there (the largest part of a frame's front end with ORB).
   /// Applies with right_lines_on_keyframes (without it both images' lines are extracted every
-  /// frame). Measured (benchmarks/log/realtime.md, 2026-11-27 h): five simulator seeds of the four
-  /// 600-frame sequences with the IMU, mean ATE dark dusty loop -16 %, hard junction -11 %,
-  /// bright loop +7 %, spin +6 %; about half the bright loop's frames skip their lines. Off:
-  /// every frame's lines
+  /// frame). Over five simulator seeds of the four 600-frame sequences with the IMU the two dark
+  /// sequences drifted less with it and the bright loop and the spin a little more; about half
+  /// the bright loop's frames skip their lines (benchmarks/log/realtime.md). Off: every frame's
+  /// lines
   bool lines_on_demand = true;
   /// With lines_on_demand: a frame after one tracked with fewer point inliers than this is
   /// tracked with its lines from the start [-]
@@ -118,8 +119,8 @@ struct TrackerOptions {
   bool sequential = true;  ///< local mapping inline (reproducible) or on its own thread
   /// Threaded mode only: ORB-SLAM3's brake on keyframes. While local mapping is busy the minimum
   /// gap alone asks for no keyframe, and a keyframe that is due interrupts the running local BA
-  /// (it keeps its estimate) and queues unless 3 wait. Measured (benchmarks/log/realtime.md,
-  /// 2026-11-26): 5-20 % more frames/s, but worse ATE on the hard dark sequences, so off.
+  /// (it keeps its estimate) and queues unless 3 wait. More frames/s, but worse ATE on the hard
+  /// dark sequences (benchmarks/log/realtime.md), so off.
   bool mapping_brake = false;
   /// Sequential mode only: each keyframe's local BA solves on a thread of its own, on the window's
   /// copy of the map, while tracking goes on; its solution is applied (and the landmarks and
@@ -131,9 +132,8 @@ struct TrackerOptions {
   /// frames between two keyframes are tracked against the map as it was before the first one's BA
   /// (ORB-SLAM3's tracking sees the same while its mapping thread is busy). Off: on two cores the
   /// solve competes with the frames' own work, so the 95th percentile of the per-frame latency
-  /// falls by 29-49 % but its median rises (ORB points, bright loop: 108-129 -> 64-70
-  /// ms and 21-23 -> 29-34 ms), frames/s gain only in the dark, and XFeat + lines drifted
-  /// 0.0114 -> 0.0207 m on the dark 150-frame loop (benchmarks/log/realtime.md, 2026-11-27 d).
+  /// falls but its median rises (ORB points, bright loop), frames/s gain only in the dark, and
+  /// XFeat + lines drifted more on the dark 150-frame loop (benchmarks/log/realtime.md).
   bool mapping_overlap = false;
   int min_init_points = 50;           ///< stereo points a frame needs to start a map [-]
   int min_inliers = 15;               ///< fewer inliers after motion-only BA: LOST [-]
@@ -151,10 +151,10 @@ struct TrackerOptions {
   int keyframe_max_frames = 20;  ///< a keyframe at least this often [frames]
   int keyframe_min_frames = 2;   ///< no keyframe sooner than this after the last [frames]
   /// ... in a noisy frame (StereoFrame::noisy: smoothed as dark) instead: keypoints repeat less
-  /// well there and fewer are tracked, so the map needs its keyframes sooner. XFeat + lines,
-  /// 150 frames of the simulated loop at light 0.15, seeds 0-4, mean ATE 0.0100 m with the gap
-  /// of 6 frames, 0.0082 with 5, 0.0079 with 4 (benchmarks/log/realtime.md, 2026-11-30 b). -1: the
-  /// same as keyframe_min_frames [frames]
+  /// well there and fewer are tracked, so the map needs its keyframes sooner: over five seeds of
+  /// the dark 150-frame simulated loop XFeat + lines drifted less with a gap of 5 or 4 frames in
+  /// noisy frames than with its preset's usual 6 (the preset sets 5 here;
+  /// benchmarks/log/realtime.md). -1: the same as keyframe_min_frames [frames]
   int keyframe_min_frames_noisy = -1;
   /// ... nor sooner than this after it, while tracking is strong: a gap in time, the same at any
   /// camera rate. Off by default: 0.075 s (2 frames at 20 Hz, 1 at 10 Hz) with no frame gap was
@@ -173,33 +173,33 @@ struct TrackerOptions {
   /// Gauss-Newton, zero-mean, the patch scaled by the point's change of depth, the detected
   /// position as the start; textured patches only, accepted at NCC >= 0.8). The motion-only BA
   /// and a keyframe take the aligned position, the stereo column shifted with it. Detected
-  /// keypoints repeat to 1-2 px against the ground truth (XFeat 1.8, SuperPoint and ORB 1.1 px
-  /// median on the simulated loop); aligned ones follow the point the map was made from.
-  /// Measured (benchmarks/log/realtime.md, 2026-11-27): XFeat + lines 0.0404 -> 0.015 m on the
-  /// 600-frame bright loop, ORB + lines 0.163 -> 0.089 m on the hard junction. Points that local
-  /// mapping triangulates and points loaded from a map file have no patch. 0: off
+  /// keypoints repeat to 1-2 px against the ground truth (median on the simulated loop); aligned
+  /// ones follow the point the map was made from. With it XFeat + lines drifted much less on the
+  /// 600-frame bright loop and ORB + lines on the hard junction (benchmarks/log/realtime.md).
+  /// Points that local mapping triangulates (unless triangulated_point_patches) and points loaded
+  /// from a map file have no patch. 0: off
   int track_refine_window_px = 5;
   /// Points that local mapping triangulates from keyframe pairs keep a patch too, of the new
   /// keyframe's left image (TriangulationOptions::patch_window_px, the keyframe holding its image
   /// until then): their later matches are aligned as the stereo points' are, instead of taken at
-  /// the detected position, which follows a small image motion only in part (XFeat's keypoints a
-  /// 0.5 % scale change by 0.84 of it, benchmarks/log/realtime.md, 2026-11-29 h). Needs
-  /// track_refine_window_px > 0. false: triangulated points have no patch, as before [-]
+  /// the detected position, which follows a small image motion only in part (XFeat's keypoints
+  /// follow most, not all, of a small scale change; benchmarks/log/realtime.md). Needs
+  /// track_refine_window_px > 0. false: triangulated points have no patch, only the points the
+  /// tracker makes from stereo in its keyframes have one [-]
   bool triangulated_point_patches = false;
   float track_refine_max_px = 3.0f;  ///< an alignment moving the keypoint further is not taken [px]
   /// In a noisy frame (StereoFrame::noisy: smoothed as dark) with at least
   /// unaligned_min_aligned matches aligned to their map points' patches (track_refine_window_px),
   /// the matches that could not be aligned enter the motion-only BA with their sigma times this.
-  /// Detected keypoints follow a small image motion only in part (XFeat's 84-94 % of a 0.5-1 %
-  /// scale change, benchmarks/log/realtime.md, 2026-11-29 h), so in a dark stretch where the image
+  /// Detected keypoints follow a small image motion only in part (XFeat's follow most, not all,
+  /// of a 0.5-1 % scale change; benchmarks/log/realtime.md), so in a dark stretch where the image
   /// scales by about 1 % a frame the unaligned matches pull the pose short; the aligned ones
   /// follow the map. The count gate keeps the weights where few matches align (a turn on the
   /// spot: the alignment models no rotation; frames tracked on projected keypoints, which are
-  /// aligned already). Off: XFeat + lines with 3 (the other gates as below), seeds 0-2 of the
-  /// 600-frame sequences: dusty dark loop 0.166 -> 0.145 m and hard junction 0.173 -> 0.157 m
-  /// (means), bright loop the same poses, but the spin 0.0181 -> 0.0219 m and the 150-frame dark
-  /// loop of realtime.py 0.0082 -> 0.0090 m (benchmarks/log/realtime.md, 2026-11-29 j). 1: every
-  /// match with point_sigma_px [-]
+  /// aligned already). Off by default: for XFeat + lines, 3 (the other gates as below) drifted
+  /// less on the 600-frame dusty dark loop and hard junction over three seeds and left the
+  /// bright loop's poses unchanged, but drifted more on the spin and on realtime.py's 150-frame
+  /// dark loop (benchmarks/log/realtime.md). 1: every match with point_sigma_px [-]
   double unaligned_sigma_factor = 1.0;
   int unaligned_min_aligned = 30;  ///< see unaligned_sigma_factor [-]
   /// ... and while the camera turned by at most this between the last two frames (the motion
@@ -221,11 +221,10 @@ struct TrackerOptions {
   /// keyframes always have detected keypoints. The point front end then runs on a fraction of
   /// the frames. Off by default: ORB + lines makes a keyframe every 2-3 frames in the light
   /// (mostly for new close points, which a projected frame cannot see), so little is left to
-  /// project (before the frame after a keyframe was detected, 3 ran it at 43.8 / 48.6 frames/s on
-  /// the 150-frame loop but the 600-frame bright loop drifted more, 0.0133 -> 0.0153 m over 3
-  /// seeds). configs/xfeat.yaml sets 2 with projection_cell_px 16: XFeat + lines 1.26x / 1.39x
-  /// the frames/s (light 1.0 / 0.15), the 600-frame sequences' ATE 0.91 - 1.07 of its own
-  /// without (benchmarks/log/realtime.md, 2026-11-29 e and f). 0: every frame's
+  /// project, and in the trial benchmarks/log/realtime.md records, 3 gained frames/s but drifted
+  /// more on the 600-frame bright loop. XFeat's preset (python/slslam/presets/xfeat.yaml) sets 2
+  /// with projection_cell_px 16: more frames/s for XFeat + lines in the light and in the dark, at
+  /// about the same ATE on the 600-frame sequences (benchmarks/log/realtime.md). 0: every frame's
   /// keypoints are detected
   int projected_max_frames = 0;
   int projection_min_inliers = 150;  ///< see projected_max_frames [-]
@@ -244,26 +243,28 @@ struct TrackerOptions {
   /// Lost: the motion before the loss, along which the local map is tried (TrackAlongLossMotion),
   /// is the mean per-frame motion over this many frames before it, not the last frame's alone:
   /// twenty black frames extrapolate one frame's jitter twentyfold. On the camera-only blackouts
-  /// of the simulated junction (light 0.5 seeds 0-8, light 0.15 with dust seeds 0-15) 5 brought
-  /// all 25 back right with either local BA solver, where with 1 the bright seed 0 re-entered
-  /// 0.9 m off with the own one (benchmarks/log/realtime.md, 2026-11-29). 1: the last
-  /// frame's [frames]
+  /// of the simulated junction (many seeds, in the light and in the dusty dark) 5 brought every
+  /// run back at the right pose with either local BA solver, where with 1 a bright run with the
+  /// own solver re-entered the repeated roadway far off the truth (benchmarks/log/realtime.md).
+  /// 1: the last frame's [frames]
   int lost_motion_frames = 5;
   /// Lost, the local map tracked from a pose along the motion before the loss is taken only where
   /// at least this share of its point matches are inliers [-]. Lines do not count here: a line
   /// constrains a pose little along itself, and on the camera-only blackout of the simulated
-  /// junction at light 0.5 the wrong re-entries kept 12-13 % of their point matches and made up
-  /// the rest with line inliers, the right ones kept 38-48 % (benchmarks/log/realtime.md,
-  /// 2026-11-28). 0: any share above none (a pose held by lines alone is never taken)
+  /// junction at light 0.5 the wrong re-entries kept well under a quarter of their point matches
+  /// and made up the rest with line inliers, the right ones well over a quarter
+  /// (benchmarks/log/realtime.md). 0: any share above none (a pose held by lines alone is never
+  /// taken)
   double lost_reentry_min_point_ratio = 0.25;
   /// Lost: the re-entry along the loss motion whose pose holds fewer than twice min_inliers is
   /// taken when it holds min_inliers and the previous frame's (also short of the bar, with
   /// min_inliers) lies, moved one step along that motion, within this distance and 5 degrees of
   /// it: two frames agreeing where one alone would not do. Attempts started from the frozen pose
   /// take no part (two frames of it agree by construction). On the dark camera-only blackout of
-  /// the simulated junction the attempts along the motion reached the right pose (1-9 cm off)
-  /// with 21-29 weighted inliers, frame after frame, until the frozen pose 1 m behind got past
-  /// the bar on its lines (benchmarks/log/realtime.md, 2026-11-28 d). 0: off [m]
+  /// the simulated junction the attempts along the motion reached the right pose (within
+  /// centimetres) frame after frame, but with fewer than twice min_inliers weighted inliers, until
+  /// the frozen pose, a metre behind, got past the bar on its lines (benchmarks/log/realtime.md).
+  /// 0: off [m]
   double lost_reentry_confirm_m = 0.15;
   /// Lost: lit frames (at least min(min_init_points, 15) stereo points, StartMap's first check;
   /// a black frame has none) that must fail relocalisation and the re-entry along the loss
@@ -280,11 +281,11 @@ struct TrackerOptions {
   LoopClosingOptions loop_closing;  ///< loop closing and map merging (need the vocabulary)
   bool localise_only = false;       ///< track in the loaded maps without changing them: no
                                     ///< keyframes, no mapping, no new maps
-  /// Invalid-cell filter for moving objects (SPEC A2): a cell whose matched keypoints disagree
-  /// with the pose of the frame (motion-only BA over the other cells, i.e. the consensus motion)
-  /// is dropped with its 8 neighbours: its keypoints take no part in the next frames' pose and
-  /// make no map points, but are still matched so that the cell can recover. The mask applies
-  /// only after a frame tracked with at least `weak_keyframe_inliers` weighted inliers.
+  /// Invalid-cell filter for moving objects (the SL-SLAM paper's): a cell whose matched keypoints
+  /// disagree with the pose of the frame (motion-only BA over the other cells, i.e. the consensus
+  /// motion) is dropped with its 8 neighbours: its keypoints take no part in the next frames'
+  /// pose and make no map points, but are still matched so that the cell can recover. The mask
+  /// applies only after a frame tracked with at least `weak_keyframe_inliers` weighted inliers.
   bool dynamic_cells = true;
   DynamicCellOptions dynamic;
   /// The IMU tightly coupled once samples are given (Tracker::AddImu) and it initialised: its

@@ -489,8 +489,8 @@ void Tracker::RefineTracks(const StereoFrame& frame, const LocalMapSnapshot& loc
   if (options_.track_refine_window_px <= 0 || image == nullptr || image->empty()) return;
   const float max_sq = options_.track_refine_max_px * options_.track_refine_max_px;
   // The matches in parallel stripes on OpenCV's threads: each writes its own refined_uv entry
-  // (AlignPatch's buffers are per thread). A third of a tracked frame's time in the core on one
-  // thread (ORB points, py-spy; benchmarks/log/realtime.md, 2026-11-29 i).
+  // (AlignPatch's buffers are per thread). On one thread the alignment is a large share of a
+  // tracked frame's time in the core (ORB points; benchmarks/log/realtime.md).
   const int n = static_cast<int>(tracking->keypoints.size());
   cv::parallel_for_(
       cv::Range(0, n),

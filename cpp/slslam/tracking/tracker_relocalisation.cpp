@@ -122,12 +122,11 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // Attempts are ranked by their inlier points with a stereo depth, then by all their point
   // inliers, then by the weighted inliers. Lines and far points cannot tell poses apart along
   // the roadway (its edges run along it, and a far point moves little with the camera), the
-  // close points with a depth can. On the camera-only blackouts of the simulated junction
-  // (benchmarks/log/realtime.md, 2026-11-28), dark: the frozen pose, 1 m behind the truth, kept
-  // 28-32 line inliers and 12-22 point inliers, 1-7 of them with a depth; the poses along the
-  // motion 4-15 cm off 13-24 points, 7-11 with a depth, and fewer lines. A wrong pose may also
-  // gather a few points among the wide window's many matches, so an attempt must keep a share of
-  // its point matches.
+  // close points with a depth can. On the dark camera-only blackouts of the simulated junction
+  // the frozen pose, a metre behind the truth, kept more line inliers and about as many point
+  // inliers as the poses along the motion, centimetres off, but fewer of them with a depth
+  // (benchmarks/log/realtime.md). A wrong pose may also gather a few points among the wide
+  // window's many matches, so an attempt must keep a share of its point matches.
   struct Rank {
     int stereo_points = 0;
     int points = 0;
@@ -176,7 +175,7 @@ Tracker::LocalTracking Tracker::TrackAlongLossMotion(const StereoFrame& frame,
   // the motion is confirmed by the previous frame's, moved one step along it, and becomes the
   // next frame's candidate. One started from the frozen pose neither confirms nor is confirmed:
   // it stays where it started, so two frames of it always agree to within one step (a robot
-  // that stopped in the dark comes back on the full bar, as before).
+  // that stopped in the dark comes back only on the full bar).
   const auto confirm = [&](LocalTracking&& chosen, int hypothesis) {
     const Rigid3d& pose = chosen.pose.cam_from_world;
     const bool candidate = hypothesis != 0 &&

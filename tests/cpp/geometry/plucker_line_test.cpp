@@ -46,7 +46,7 @@ TEST(PluckerLine, FromPointsSatisfiesDefinition) {
 
 TEST(PluckerLine, TwoViewPlanesRecoverTheLine) {
   // Two cameras 0.5 m apart observe the segment a-b; the planes through each camera centre and
-  // the projected segment intersect in the 3-D line (SPEC A5 initialisation).
+  // the projected segment intersect in the 3-D line (the SL-SLAM paper's line initialisation).
   const PinholeCamera camera = TestCamera();
   const Eigen::Vector3d a(-0.8, 0.4, 6.0);
   const Eigen::Vector3d b(0.9, -0.3, 7.5);
