@@ -87,7 +87,8 @@ void BindFeatures(py::module_& m) {
       py::arg("query"), py::arg("train"), py::arg("options") = MatchOptions{},
       "Mutual nearest-neighbour + ratio matching; returns (query index, train index) pairs N x 2.");
 
-  py::class_<GridLimitOptions>(m, "GridLimitOptions", "Per-cell keypoint limit (SPEC A2).")
+  py::class_<GridLimitOptions>(m, "GridLimitOptions",
+                               "Per-cell keypoint limit (the SL-SLAM paper's grid limitation).")
       .def(py::init<>())
       .def_readwrite("cell_size_px", &GridLimitOptions::cell_size_px, "cell side P [px]")
       .def_readwrite("max_per_cell", &GridLimitOptions::max_per_cell, "keypoints kept per cell")
@@ -106,7 +107,8 @@ void BindFeatures(py::module_& m) {
       py::arg("options") = GridLimitOptions{},
       "Indices (ascending) of the keypoints kept: the best max_per_cell by score in every cell.");
 
-  py::class_<DynamicCellOptions>(m, "DynamicCellOptions", "Invalid-cell filter (SPEC A2).")
+  py::class_<DynamicCellOptions>(m, "DynamicCellOptions",
+                                 "Invalid-cell filter (the SL-SLAM paper's).")
       .def(py::init<>())
       .def_readwrite("cell_size_px", &DynamicCellOptions::cell_size_px, "cell side [px]")
       .def_readwrite("sigma_px", &DynamicCellOptions::sigma_px, "Gaussian width of G(d) [px]")

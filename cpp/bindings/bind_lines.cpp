@@ -46,14 +46,16 @@ cv::Mat WrapLbd(const py::array& a, const char* what) {
 }  // namespace
 
 void BindLines(py::module_& m) {
-  py::class_<LinePreprocessOptions>(m, "LinePreprocessOptions", "Line preprocessing (SPEC A3).")
+  py::class_<LinePreprocessOptions>(m, "LinePreprocessOptions",
+                                    "Line preprocessing (the SL-SLAM paper's).")
       .def(py::init<>())
       .def_readwrite("length_ratio", &LinePreprocessOptions::length_ratio, "zeta")
       .def_readwrite("theta_min_rad", &LinePreprocessOptions::theta_min_rad, "angle unit [rad]")
       .def_readwrite("xi_d_px", &LinePreprocessOptions::xi_d_px, "merge/delete distance [px]")
       .def_readwrite("max_gap_px", &LinePreprocessOptions::max_gap_px, "gap limit [px]")
       .def("check", &LinePreprocessOptions::Check);
-  py::class_<AssociationOptions>(m, "AssociationOptions", "Point-line association (SPEC A4).")
+  py::class_<AssociationOptions>(m, "AssociationOptions",
+                                 "Point-line association (the SL-SLAM paper's).")
       .def(py::init<>())
       .def_readwrite("cell_size_px", &AssociationOptions::cell_size_px)
       .def_readwrite("layers", &AssociationOptions::layers)

@@ -176,7 +176,7 @@ class MatchOptions:
         ...
 class GridLimitOptions:
     """
-    Per-cell keypoint limit (SPEC A2).
+    Per-cell keypoint limit (the SL-SLAM paper's grid limitation).
     """
     def __init__(self) -> None:
         ...
@@ -208,7 +208,7 @@ class GridLimitOptions:
         ...
 class DynamicCellOptions:
     """
-    Invalid-cell filter (SPEC A2).
+    Invalid-cell filter (the SL-SLAM paper's).
     """
     def __init__(self) -> None:
         ...
@@ -579,7 +579,7 @@ class RayCaster:
         ...
 class LinePreprocessOptions:
     """
-    Line preprocessing (SPEC A3).
+    Line preprocessing (the SL-SLAM paper's).
     """
     def __init__(self) -> None:
         ...
@@ -619,7 +619,7 @@ class LinePreprocessOptions:
         ...
 class AssociationOptions:
     """
-    Point-line association (SPEC A4).
+    Point-line association (the SL-SLAM paper's).
     """
     def __init__(self) -> None:
         ...

@@ -36,8 +36,8 @@ struct ImuFactor {
     const Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
     const Eigen::Map<const V3> pi(pi_), pj(pj_);
     Eigen::Matrix<T, 15, 1> r;
-    ImuIntervalResidual(imu, imu.gravity_world(), Eigen::Quaternion<T>(qi), V3(pi), vbi_,
-                        Eigen::Quaternion<T>(qj), V3(pj), vbj_, &r);
+    ImuIntervalResidual(imu, V3(imu.gravity_world().cast<T>()), Eigen::Quaternion<T>(qi), V3(pi),
+                        vbi_, Eigen::Quaternion<T>(qj), V3(pj), vbj_, &r);
     Eigen::Map<Eigen::Matrix<T, 15, 1>> residual(out);
     residual = sqrt_info.cast<T>() * r;
     return true;

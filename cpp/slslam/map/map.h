@@ -63,6 +63,7 @@ struct KeyFrameInertial {
   ImuBias bias;
   int previous = -1;                ///< the keyframe the samples start at (-1: first of its chain)
   int refined = 0;                  ///< local BAs that estimated this state [-]
+  bool camera_tracked = true;       ///< the camera tracked its frame (not INERTIAL)
   ImuBuffer samples_from_previous;  ///< IMU times (t_cam - time_offset), covering the interval
 };
 
@@ -77,6 +78,9 @@ struct MapInertial {
   /// No IMU factor over a longer interval between keyframes (ORB-SLAM3's bound: the first-order
   /// bias correction of a longer one is poor, and its preintegration says little) [s]
   double max_interval_s = 3.0;
+  /// Local BA estimates gravity's direction too, pulled towards g_world with this standard
+  /// deviation (the tracker's: its inertial state's uncertainty of gravity); 0: held [rad]
+  double gravity_sigma_rad = 0.0;
 };
 
 struct KeyFrame {
@@ -105,6 +109,16 @@ struct KeyFrame {
 
   Eigen::Vector3d Center() const { return cam_from_world.Center(); }  ///< in the world [m]
 };
+
+// Gives a keyframe a new pose (a correction of its world around it): its IMU velocity, a vector of
+// the world, turns with it.
+inline void MoveKeyFrame(KeyFrame* kf, const Rigid3d& cam_from_world) {
+  if (kf->inertial) {
+    kf->inertial->v_world_body = cam_from_world.rotation.transpose() * kf->cam_from_world.rotation *
+                                 kf->inertial->v_world_body;
+  }
+  kf->cam_from_world = cam_from_world;
+}
 
 // Id counters shared by the maps of one atlas, so that keyframe, point and line ids are unique
 // across maps and a merge moves entries from one map into another without renumbering them.

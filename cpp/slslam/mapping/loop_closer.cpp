@@ -434,10 +434,7 @@ void LoopCloser::TransformMap(Map* map, const Rigid3d& target_from_source) {
   const Rigid3d source_from_target = target_from_source.Inverse();
   for (auto& [id, kf] : map->keyframes()) {
     (void)id;
-    kf->cam_from_world = kf->cam_from_world * source_from_target;
-    if (kf->inertial) {
-      kf->inertial->v_world_body = target_from_source.rotation * kf->inertial->v_world_body;
-    }
+    MoveKeyFrame(kf.get(), kf->cam_from_world * source_from_target);
   }
   for (auto& [id, p] : map->points()) {
     (void)id;
@@ -537,12 +534,7 @@ void LoopCloser::Correct(Map* map, int keyframe_id, const Verified& verified) {
   }
   // Poses, then every landmark follows its reference keyframe (its oldest live observer).
   for (size_t i = 0; i < ids.size(); ++i) {
-    auto kf = map->keyframe(ids[i]);
-    if (kf->inertial) {  // (the velocity turns with the world around the keyframe)
-      kf->inertial->v_world_body = poses[i].cam_from_world.rotation.transpose() *
-                                   kf->cam_from_world.rotation * kf->inertial->v_world_body;
-    }
-    kf->cam_from_world = poses[i].cam_from_world;
+    MoveKeyFrame(map->keyframe(ids[i]).get(), poses[i].cam_from_world);
   }
   auto reference = [&](const std::map<int, int>& observations) -> int {
     for (const auto& [kf_id, idx] : observations) {

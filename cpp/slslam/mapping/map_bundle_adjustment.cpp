@@ -63,6 +63,7 @@ int MapBundleAdjustment::AddInertialFactors(const Map& map, const std::vector<in
   BaInertial& inertial = problem_.inertial;
   inertial.body_from_cam = imu.body_from_cam;
   inertial.g_world = imu.g_world;
+  inertial.gravity_sigma_rad = imu.gravity_sigma_rad;
   const std::unordered_set<int> free(window.begin(), window.end());
   std::unordered_map<int, int> state_index;  // keyframe id -> speed-bias index
   const auto state_of = [&](const KeyFrame& kf) {
@@ -105,6 +106,47 @@ int MapBundleAdjustment::AddInertialFactors(const Map& map, const std::vector<in
   return added;
 }
 
+void MapBundleAdjustment::ApplyInertial(Map* map) const {
+  if (!problem_.inertial.factors.empty() && map->inertial()) {
+    MapInertial imu = *map->inertial();
+    imu.g_world = problem_.inertial.g_world;
+    map->set_inertial(imu);
+  }
+  for (size_t i = 0; i < state_kf_.size(); ++i) {
+    const BaSpeedBias& state = problem_.inertial.states[i];
+    auto kf = map->keyframe(state_kf_[i]);
+    if (state.fixed || !kf || !kf->inertial) continue;
+    kf->inertial->v_world_body = state.v_world_body;
+    kf->inertial->bias = state.bias;
+    ++kf->inertial->refined;
+  }
+}
+
+void MapBundleAdjustment::DropOutliers(Map* map, const BundleAdjustmentReport& report) const {
+  for (size_t i = 0; i < point_obs_ref_.size(); ++i) {
+    if (!report.point_outlier[i]) continue;
+    const auto [pid, kf_id] = point_obs_ref_[i];
+    auto p = map->point(pid);
+    auto kf = map->keyframe(kf_id);
+    if (!p || !kf) continue;
+    auto it = p->observations.find(kf_id);
+    if (it == p->observations.end()) continue;
+    kf->point_ids[it->second] = -1;
+    p->observations.erase(it);
+  }
+  for (size_t i = 0; i < line_obs_ref_.size(); ++i) {
+    if (!report.line_outlier[i]) continue;
+    const auto [lid, kf_id] = line_obs_ref_[i];
+    auto l = map->line(lid);
+    auto kf = map->keyframe(kf_id);
+    if (!l || !kf) continue;
+    auto it = l->observations.find(kf_id);
+    if (it == l->observations.end()) continue;
+    kf->line_ids[it->second] = -1;
+    l->observations.erase(it);
+  }
+}
+
 int MapBundleAdjustment::AddPose(const KeyFrame& kf, bool fixed) {
   const int index = static_cast<int>(problem_.poses.size());
   problem_.poses.push_back({kf.cam_from_world, fixed});
@@ -135,14 +177,7 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
     }
     kf->cam_from_world = after;
   }
-  for (size_t i = 0; i < state_kf_.size(); ++i) {
-    const BaSpeedBias& state = problem_.inertial.states[i];
-    auto kf = map->keyframe(state_kf_[i]);
-    if (state.fixed || !kf || !kf->inertial) continue;
-    kf->inertial->v_world_body = state.v_world_body;
-    kf->inertial->bias = state.bias;
-    ++kf->inertial->refined;
-  }
+  ApplyInertial(map);
   for (size_t i = 0; i < point_id_.size(); ++i) {
     if (auto p = map->point(point_id_[i])) p->position = problem_.points[i];
   }
@@ -153,29 +188,7 @@ int MapBundleAdjustment::Apply(Map* map, const BundleAdjustmentReport& report,
       l->end = l->line.ClosestPointTo(l->end);
     }
   }
-  // Outlier observations leave the map.
-  for (size_t i = 0; i < point_obs_ref_.size(); ++i) {
-    if (!report.point_outlier[i]) continue;
-    const auto [pid, kf_id] = point_obs_ref_[i];
-    auto p = map->point(pid);
-    auto kf = map->keyframe(kf_id);
-    if (!p || !kf) continue;
-    auto it = p->observations.find(kf_id);
-    if (it == p->observations.end()) continue;
-    kf->point_ids[it->second] = -1;
-    p->observations.erase(it);
-  }
-  for (size_t i = 0; i < line_obs_ref_.size(); ++i) {
-    if (!report.line_outlier[i]) continue;
-    const auto [lid, kf_id] = line_obs_ref_[i];
-    auto l = map->line(lid);
-    auto kf = map->keyframe(kf_id);
-    if (!l || !kf) continue;
-    auto it = l->observations.find(kf_id);
-    if (it == l->observations.end()) continue;
-    kf->line_ids[it->second] = -1;
-    l->observations.erase(it);
-  }
+  DropOutliers(map, report);
   if (!carry_new) return 0;
 
   // Keyframes made while the solve ran follow their first ancestor in the problem.

@@ -61,6 +61,11 @@ class MapBundleAdjustment {
       SLSLAM_REQUIRES(map->mutex());
 
  private:
+  // Apply's parts: the velocities, biases and gravity; the outlier observations leave the map.
+  void ApplyInertial(Map* map) const SLSLAM_REQUIRES(map->mutex());
+  void DropOutliers(Map* map, const BundleAdjustmentReport& report) const
+      SLSLAM_REQUIRES(map->mutex());
+
   BaProblem problem_;
   std::vector<int> pose_kf_;   // pose index -> keyframe id
   std::vector<int> point_id_;  // point index -> map point id

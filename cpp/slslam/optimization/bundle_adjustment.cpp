@@ -53,9 +53,18 @@ struct Parameters {
   void Resize(size_t poses, size_t lines, size_t speed_biases) {
     num_poses = static_cast<int>(poses);
     num_lines = static_cast<int>(lines);
-    reduced.assign(kPoseSize * poses + kLineSize * lines + kSpeedBiasSize * speed_biases, 0.0);
+    num_speed_biases = static_cast<int>(speed_biases);
+    reduced.assign(
+        kPoseSize * poses + kLineSize * lines + kSpeedBiasSize * speed_biases + kGravitySize, 0.0);
   }
+  int num_speed_biases = 0;
+  /// The rotation of gravity's direction (CameraImuFactor's last block), after the speed-biases.
+  double* gravity() { return speed_bias(num_speed_biases); }
+  const double* gravity() const { return speed_bias(num_speed_biases); }
   double* speed_bias(int i) {
+    return reduced.data() + kPoseSize * num_poses + kLineSize * num_lines + kSpeedBiasSize * i;
+  }
+  const double* speed_bias(int i) const {
     return reduced.data() + kPoseSize * num_poses + kLineSize * num_lines + kSpeedBiasSize * i;
   }
   double* pose(int i) { return reduced.data() + kPoseSize * i; }
@@ -102,6 +111,25 @@ double LineChi2(const StereoRig& rig, const Parameters& p, const BaLineObservati
   if (!(middle.z() > 0.0)) return INFINITY;
   return e.head<2>().squaredNorm() / (o.sigma_px * o.sigma_px);
 }
+
+// The rotation of gravity's direction (kGravitySize) towards zero, whitened by 1 / sigma [rad].
+class GravityPriorCost final : public ceres::SizedCostFunction<kGravitySize, kGravitySize> {
+ public:
+  explicit GravityPriorCost(double inverse_sigma) : inverse_sigma_(inverse_sigma) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    for (int k = 0; k < kGravitySize; ++k) residuals[k] = inverse_sigma_ * parameters[0][k];
+    if (jacobians && jacobians[0]) {
+      for (int k = 0; k < kGravitySize * kGravitySize; ++k) {
+        jacobians[0][k] = k % (kGravitySize + 1) == 0 ? inverse_sigma_ : 0.0;
+      }
+    }
+    return true;
+  }
+
+ private:
+  double inverse_sigma_;
+};
 
 // Per line, the tangent directions its observations determine (outliers left out, the poses
 // held): the eigenvectors of its information sum_i J_i^T J_i (J_i: the line tangent Jacobian of
@@ -276,6 +304,7 @@ ceres::Solver::Options CeresPassOptions(const BaProblem& ba, const BundleAdjustm
     for (size_t i = 0; i < state_used.size(); ++i) {
       if (state_used[i]) ordering->AddElementToGroup(params.speed_bias(static_cast<int>(i)), 1);
     }
+    if (!ba.inertial.factors.empty()) ordering->AddElementToGroup(params.gravity(), 1);
     solver_options.linear_solver_ordering = ordering;
   }
   return solver_options;
@@ -387,7 +416,7 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
     solver_problem.AddResidualBlock(
         new CameraImuFactor(f.pre, ba.inertial.g_world, ba.inertial.body_from_cam), nullptr,
         params.pose(f.pose_i), params.speed_bias(f.state_i), params.pose(f.pose_j),
-        params.speed_bias(f.state_j));
+        params.speed_bias(f.state_j), params.gravity());
     pose_used[f.pose_i] = pose_used[f.pose_j] = true;
     for (int state : {f.state_i, f.state_j}) {
       if (state_added[state]) continue;
@@ -397,6 +426,14 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
       }
     }
     ++blocks;
+  }
+  if (!ba.inertial.factors.empty()) {
+    if (ba.inertial.gravity_sigma_rad > 0.0) {
+      solver_problem.AddResidualBlock(new GravityPriorCost(1.0 / ba.inertial.gravity_sigma_rad),
+                                      nullptr, params.gravity());
+    } else {
+      solver_problem.SetParameterBlockConstant(params.gravity());
+    }
   }
   if (blocks == 0) return {};
   for (size_t i = 0; i < ba.poses.size(); ++i) {
@@ -415,28 +452,8 @@ PassSummary SolvePassCeres(const StereoRig& rig, const BaProblem& ba,
   return PassSummaryOf(solved, abort, interrupt);
 }
 
-}  // namespace
-
-void BundleAdjustmentOptions::Check() const {
-  CheckInRange("ba.robust_iterations", robust_iterations, 0, 10000);
-  CheckInRange("ba.refine_iterations", refine_iterations, 0, 10000);
-  CheckAboveInRange("ba.chi2_mono", chi2_mono, 0.0, 1e6);
-  CheckAboveInRange("ba.chi2_stereo", chi2_stereo, 0.0, 1e6);
-  CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
-  CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
-  CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
-  CheckInRange("ba.line_prior_weight", line_prior_weight, 0.0, 1e6);
-  CheckInRange("ba.line_min_information_per_rad2", line_min_information_per_rad2, 0.0, 1e12);
-}
-
-BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
-                                             const BundleAdjustmentOptions& options,
-                                             const std::atomic<bool>* abort,
-                                             const std::atomic<bool>* interrupt) {
-  rig.Check();
-  options.Check();
-  Require(problem != nullptr, "bundle adjustment needs a problem");
-  BaProblem& ba = *problem;
+// Every observation and factor refers to entries the problem has.
+void CheckIndices(const BaProblem& ba) {
   for (const auto& o : ba.point_observations) {
     Require(o.pose >= 0 && o.pose < static_cast<int>(ba.poses.size()) && o.point >= 0 &&
                 o.point < static_cast<int>(ba.points.size()),
@@ -455,7 +472,10 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
                 f.state_i >= 0 && f.state_i < states && f.state_j >= 0 && f.state_j < states,
             "IMU factor refers to a missing pose or speed-bias state");
   }
+}
 
+// The solver's parameters at the problem's estimate.
+Parameters ParametersOf(const BaProblem& ba, const BundleAdjustmentOptions& options) {
   Parameters params;
   params.Resize(ba.poses.size(), ba.lines.size(), ba.inertial.states.size());
   for (size_t i = 0; i < ba.poses.size(); ++i) {
@@ -484,6 +504,57 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     local.n -= params.line_anchors[i].cross(local.v);
     LineToParameters(OrthonormalLine::FromPlucker(local), params.line(i));
   }
+  return params;
+}
+
+// The solver's parameters back into the problem.
+void WriteBack(const Parameters& params, BaProblem* problem) {
+  BaProblem& ba = *problem;
+  for (size_t i = 0; i < ba.poses.size(); ++i) {
+    ParametersToPose(params.pose(i), &ba.poses[i].cam_from_world);
+  }
+  ba.points = params.points;
+  for (size_t i = 0; i < ba.lines.size(); ++i) {
+    ba.lines[i] = LineInWorld(params, static_cast<int>(i));
+  }
+  if (!ba.inertial.factors.empty()) {
+    ba.inertial.g_world = GravityDirection(
+        ba.inertial.g_world, GravityTangentBasis(ba.inertial.g_world), params.gravity());
+  }
+  for (size_t i = 0; i < ba.inertial.states.size(); ++i) {
+    const double* vb = params.speed_bias(static_cast<int>(i));
+    BaSpeedBias& state = ba.inertial.states[i];
+    state.v_world_body = Eigen::Map<const Eigen::Vector3d>(vb);
+    state.bias.gyro = Eigen::Map<const Eigen::Vector3d>(vb + 3);
+    state.bias.acc = Eigen::Map<const Eigen::Vector3d>(vb + 6);
+  }
+}
+
+}  // namespace
+
+void BundleAdjustmentOptions::Check() const {
+  CheckInRange("ba.robust_iterations", robust_iterations, 0, 10000);
+  CheckInRange("ba.refine_iterations", refine_iterations, 0, 10000);
+  CheckAboveInRange("ba.chi2_mono", chi2_mono, 0.0, 1e6);
+  CheckAboveInRange("ba.chi2_stereo", chi2_stereo, 0.0, 1e6);
+  CheckAboveInRange("ba.chi2_line", chi2_line, 0.0, 1e6);
+  CheckInRange("ba.line_angle_weight", line_angle_weight, 0.0, 1e6);
+  CheckInRange("ba.line_weight", line_weight, 0.0, 1e6);
+  CheckInRange("ba.line_prior_weight", line_prior_weight, 0.0, 1e6);
+  CheckInRange("ba.line_min_information_per_rad2", line_min_information_per_rad2, 0.0, 1e12);
+}
+
+BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* problem,
+                                             const BundleAdjustmentOptions& options,
+                                             const std::atomic<bool>* abort,
+                                             const std::atomic<bool>* interrupt) {
+  rig.Check();
+  options.Check();
+  Require(problem != nullptr, "bundle adjustment needs a problem");
+  BaProblem& ba = *problem;
+  CheckIndices(ba);
+
+  Parameters params = ParametersOf(ba, options);
 
   BundleAdjustmentReport report;
   report.point_outlier.assign(ba.point_observations.size(), false);
@@ -534,20 +605,7 @@ BundleAdjustmentReport SolveBundleAdjustment(const StereoRig& rig, BaProblem* pr
     }
   }
 
-  for (size_t i = 0; i < ba.poses.size(); ++i) {
-    ParametersToPose(params.pose(i), &ba.poses[i].cam_from_world);
-  }
-  ba.points = params.points;
-  for (size_t i = 0; i < ba.lines.size(); ++i) {
-    ba.lines[i] = LineInWorld(params, static_cast<int>(i));
-  }
-  for (size_t i = 0; i < ba.inertial.states.size(); ++i) {
-    const double* vb = params.speed_bias(static_cast<int>(i));
-    BaSpeedBias& state = ba.inertial.states[i];
-    state.v_world_body = Eigen::Map<const Eigen::Vector3d>(vb);
-    state.bias.gyro = Eigen::Map<const Eigen::Vector3d>(vb + 3);
-    state.bias.acc = Eigen::Map<const Eigen::Vector3d>(vb + 6);
-  }
+  WriteBack(params, &ba);
   return report;
 }
 

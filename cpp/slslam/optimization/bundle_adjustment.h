@@ -55,6 +55,10 @@ struct BaInertialFactor {
 struct BaInertial {
   Rigid3d body_from_cam;                              ///< the left camera in the IMU frame
   Eigen::Vector3d g_world = Eigen::Vector3d::Zero();  ///< gravity in the world [m/s^2]
+  /// Gravity's direction estimated with the rest (its magnitude kept), pulled towards g_world
+  /// with this standard deviation per axis across it; 0: held [rad]. The solve writes the
+  /// estimate back into g_world.
+  double gravity_sigma_rad = 0.0;
   std::vector<BaSpeedBias> states;
   std::vector<BaInertialFactor> factors;
 };

@@ -25,16 +25,30 @@ Matrix15d ImuIntervalSqrtInformation(const ImuPreintegration& pre) {
 
 CameraImuFactor::CameraImuFactor(const ImuPreintegration& pre, const Eigen::Vector3d& g_world,
                                  const Rigid3d& body_from_cam)
-    : pre_(pre), g_world_(g_world), sqrt_information_(ImuIntervalSqrtInformation(pre)) {
+    : pre_(pre),
+      g_world_(g_world),
+      gravity_basis_(GravityTangentBasis(g_world)),
+      sqrt_information_(ImuIntervalSqrtInformation(pre)) {
   const Rigid3d cam_from_body = body_from_cam.Inverse();
   q_cam_body_ = Eigen::Quaterniond(cam_from_body.rotation).normalized();
   t_cam_body_ = cam_from_body.translation;
 }
 
+Eigen::Matrix<double, 3, 2> GravityTangentBasis(const Eigen::Vector3d& g0) {
+  const Eigen::Vector3d u = g0.normalized();
+  // (the world axis least aligned with gravity, made orthogonal to it)
+  Eigen::Index axis = 0;
+  u.cwiseAbs().minCoeff(&axis);
+  const Eigen::Vector3d a = (Eigen::Vector3d::Unit(axis) - u * u(axis)).normalized();
+  Eigen::Matrix<double, 3, 2> basis;
+  basis << a, u.cross(a);
+  return basis;
+}
+
 template <typename T>
 bool CameraImuFactor::Residual(const double* pose_i, const T* delta_i, const T* vb_i,
                                const double* pose_j, const T* delta_j, const T* vb_j,
-                               T* residual) const {
+                               const T* gravity, T* residual) const {
   using V3 = Eigen::Matrix<T, 3, 1>;
   // The body in the world of a camera pose after PoseManifold's Plus (R <- Exp(w) R,
   // t <- Exp(w) t + rho): R_wb = R_cw^T R_cb, p_wb = R_cw^T (t_cb - t_cw).
@@ -54,7 +68,8 @@ bool CameraImuFactor::Residual(const double* pose_i, const T* delta_i, const T* 
   body(pose_i, delta_i, &qi, &pi);
   body(pose_j, delta_j, &qj, &pj);
   Eigen::Matrix<T, 15, 1> r;
-  ImuIntervalResidual(pre_, g_world_, qi, pi, vb_i, qj, pj, vb_j, &r);
+  ImuIntervalResidual(pre_, GravityDirection(g_world_, gravity_basis_, gravity), qi, pi, vb_i, qj,
+                      pj, vb_j, &r);
   Eigen::Map<Eigen::Matrix<T, 15, 1>> whitened(residual);
   whitened = sqrt_information_.cast<T>() * r;
   return true;
@@ -70,8 +85,8 @@ struct AtTangent {
   const double* pose_j;
   template <typename T>
   bool operator()(const T* delta_i, const T* vb_i, const T* delta_j, const T* vb_j,
-                  T* residual) const {
-    return factor->Residual(pose_i, delta_i, vb_i, pose_j, delta_j, vb_j, residual);
+                  const T* gravity, T* residual) const {
+    return factor->Residual(pose_i, delta_i, vb_i, pose_j, delta_j, vb_j, gravity, residual);
   }
 };
 
@@ -82,16 +97,16 @@ bool CameraImuFactor::Evaluate(double const* const* parameters, double* residual
   const double zero[kPoseTangentSize] = {0, 0, 0, 0, 0, 0};
   if (jacobians == nullptr) {
     return Residual(parameters[0], zero, parameters[1], parameters[2], zero, parameters[3],
-                    residuals);
+                    parameters[4], residuals);
   }
   AtTangent local{this, parameters[0], parameters[2]};
   const ceres::AutoDiffCostFunction<AtTangent, 15, kPoseTangentSize, kSpeedBiasSize,
-                                    kPoseTangentSize, kSpeedBiasSize>
+                                    kPoseTangentSize, kSpeedBiasSize, kGravitySize>
       autodiff(&local, ceres::DO_NOT_TAKE_OWNERSHIP);
-  const double* local_parameters[4] = {zero, parameters[1], zero, parameters[3]};
+  const double* local_parameters[5] = {zero, parameters[1], zero, parameters[3], parameters[4]};
   double d_pose_i[15 * kPoseTangentSize], d_pose_j[15 * kPoseTangentSize];
-  double* local_jacobians[4] = {jacobians[0] ? d_pose_i : nullptr, jacobians[1],
-                                jacobians[2] ? d_pose_j : nullptr, jacobians[3]};
+  double* local_jacobians[5] = {jacobians[0] ? d_pose_i : nullptr, jacobians[1],
+                                jacobians[2] ? d_pose_j : nullptr, jacobians[3], jacobians[4]};
   if (!autodiff.Evaluate(local_parameters, residuals, local_jacobians)) return false;
   // Tangent Jacobians into the first six of the seven ambient columns (manifolds.h).
   const auto lift = [](const double* tangent, double* ambient) {

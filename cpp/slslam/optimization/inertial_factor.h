@@ -30,7 +30,7 @@ Matrix15d ImuIntervalSqrtInformation(const ImuPreintegration& pre);
 
 // The unwhitened residual above. vb_* = (v [m/s], bg [rad/s], ba [m/s^2]).
 template <typename T>
-void ImuIntervalResidual(const ImuPreintegration& imu, const Eigen::Vector3d& g_world,
+void ImuIntervalResidual(const ImuPreintegration& imu, const Eigen::Matrix<T, 3, 1>& g_world,
                          const Eigen::Quaternion<T>& qi, const Eigen::Matrix<T, 3, 1>& pi,
                          const T* vbi_, const Eigen::Quaternion<T>& qj,
                          const Eigen::Matrix<T, 3, 1>& pj, const T* vbj_,
@@ -50,7 +50,7 @@ void ImuIntervalResidual(const ImuPreintegration& imu, const Eigen::Vector3d& g_
   T qe[4] = {err.w(), err.x(), err.y(), err.z()}, re[3];
   ceres::QuaternionToAngleAxis(qe, re);
   const double dt = imu.dt_s();
-  const V3 g = g_world.cast<T>();
+  const V3& g = g_world;
   const Eigen::Matrix<T, 3, 3> Rit = qi.conjugate().toRotationMatrix();
   const V3 dv =
       imu.delta_v().cast<T>() + imu.dv_dbg().cast<T>() * dbg + imu.dv_dba().cast<T>() * dba;
@@ -66,12 +66,34 @@ void ImuIntervalResidual(const ImuPreintegration& imu, const Eigen::Vector3d& g_
 // Size of a speed-bias parameter block: (v_world_body [m/s], gyro bias [rad/s], acc bias [m/s^2]).
 constexpr int kSpeedBiasSize = 9;
 
+// Size of the gravity block: a rotation of gravity's direction about the two axes across it
+// (GravityDirection); its magnitude is known.
+constexpr int kGravitySize = 2;
+
+// Gravity after the rotation `delta` (kGravitySize) of the reference g0 about the two unit axes
+// across it: Exp(B delta) g0, B = GravityTangentBasis(g0) (3 x 2).
+Eigen::Matrix<double, 3, 2> GravityTangentBasis(const Eigen::Vector3d& g0);
+template <typename T>
+Eigen::Matrix<T, 3, 1> GravityDirection(const Eigen::Vector3d& g0,
+                                        const Eigen::Matrix<double, 3, 2>& basis, const T* delta) {
+  const Eigen::Matrix<T, 3, 1> w =
+      basis.cast<T>() * Eigen::Map<const Eigen::Matrix<T, 2, 1>>(delta);
+  const T aa[3] = {w(0), w(1), w(2)};
+  const T g[3] = {T(g0(0)), T(g0(1)), T(g0(2))};
+  T out[3];
+  ceres::AngleAxisRotatePoint(aa, g, out);
+  return {out[0], out[1], out[2]};
+}
+
 // The IMU interval between two keyframes of bundle adjustment. Parameters: pose_i (cam_from_world
-// on PoseManifold, 7), speed-bias_i (9), pose_j (7), speed-bias_j (9); residual 15, whitened by
-// ImuIntervalSqrtInformation. The pose Jacobians are tangent Jacobians in the first six ambient
-// columns (the layout of manifolds.h), by automatic differentiation through PoseManifold's Plus.
+// on PoseManifold, 7), speed-bias_i (9), pose_j (7), speed-bias_j (9), gravity (2: the rotation of
+// g_world, GravityDirection; held constant where gravity is not estimated); residual 15,
+// whitened by ImuIntervalSqrtInformation. The pose Jacobians are tangent Jacobians in the first
+// six ambient columns (the layout of manifolds.h), by automatic differentiation through
+// PoseManifold's Plus.
 class CameraImuFactor final
-    : public ceres::SizedCostFunction<15, kPoseSize, kSpeedBiasSize, kPoseSize, kSpeedBiasSize> {
+    : public ceres::SizedCostFunction<15, kPoseSize, kSpeedBiasSize, kPoseSize, kSpeedBiasSize,
+                                      kGravitySize> {
  public:
   CameraImuFactor(const ImuPreintegration& pre, const Eigen::Vector3d& g_world,
                   const Rigid3d& body_from_cam);
@@ -81,11 +103,12 @@ class CameraImuFactor final
   // The residual at the parameters and a tangent step (delta_i, delta_j: PoseManifold tangents).
   template <typename T>
   bool Residual(const double* pose_i, const T* delta_i, const T* vb_i, const double* pose_j,
-                const T* delta_j, const T* vb_j, T* residual) const;
+                const T* delta_j, const T* vb_j, const T* gravity, T* residual) const;
 
  private:
   ImuPreintegration pre_;
   Eigen::Vector3d g_world_;
+  Eigen::Matrix<double, 3, 2> gravity_basis_;
   Eigen::Quaterniond q_cam_body_;
   Eigen::Vector3d t_cam_body_;
   Matrix15d sqrt_information_;

@@ -198,8 +198,9 @@ bool InertialEstimator::Trustworthy() const {
 }
 
 bool InertialEstimator::Rebase(double t_s, const Rigid3d& cam_from_world,
-                               const Eigen::Vector3d& v_world_body, const ImuBias& bias) {
-  if (!initialised_ || !(t_s <= state_t_s_)) return false;
+                               const Eigen::Vector3d& v_world_body, const ImuBias& bias,
+                               const Eigen::Vector3d& g_world) {
+  if (!initialised_ || !(t_s <= state_t_s_) || !g_world.allFinite()) return false;
   const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
   NavState at_keyframe;
   at_keyframe.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
@@ -212,10 +213,11 @@ bool InertialEstimator::Rebase(double t_s, const Rigid3d& cam_from_world,
                            options_.max_sample_gap_s, &pre)) {
       return false;
     }
-    now = pre.Predict(at_keyframe, bias, state_.g_world);
+    now = pre.Predict(at_keyframe, bias, g_world);
   }
   state_.nav = now;
   state_.bias = bias;
+  state_.g_world = g_world;
   return true;
 }
 

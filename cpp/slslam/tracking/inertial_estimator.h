@@ -113,11 +113,11 @@ class InertialEstimator {
   bool Trustworthy() const;
 
   // Local BA estimated the state of a keyframe at camera time t_s (its pose, the body's velocity
-  // and the biases): the state is that one propagated to the state's time by the IMU (the
-  // covariance is kept). False (state unchanged) when not initialised, t_s is after the state's
-  // time or the samples do not cover the interval.
+  // and the biases, with gravity in the world): the state is that one propagated to the state's
+  // time by the IMU (the covariance is kept). False (state unchanged) when not initialised, t_s is
+  // after the state's time or the samples do not cover the interval.
   bool Rebase(double t_s, const Rigid3d& cam_from_world, const Eigen::Vector3d& v_world_body,
-              const ImuBias& bias);
+              const ImuBias& bias, const Eigen::Vector3d& g_world);
   // The world moved (loop correction, merge): the state follows, new_from_old mapping old world
   // coordinates to new ones.
   void ChangeWorld(const Rigid3d& new_from_old);

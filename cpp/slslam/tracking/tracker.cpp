@@ -263,7 +263,7 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   return true;
 }
 
-void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
+void Tracker::AttachImu(double t_s, bool camera_tracked, Map* map, KeyFrame* kf) {
   if (options_.imu.local_ba_keyframes <= 0) return;
   const bool stateful = inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
                         inertial_->state_time_s() == t_s;
@@ -277,6 +277,7 @@ void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
   imu.t_s = t_s;
   imu.v_world_body = inertial_->state().nav.v_world_body;
   imu.bias = inertial_->state().bias;
+  imu.camera_tracked = camera_tracked;
   auto previous = imu_chain_map_ == active_ ? map->keyframe(imu_chain_keyframe_) : nullptr;
   if (previous && previous->inertial) {
     imu.previous = previous->id;
@@ -294,6 +295,10 @@ void Tracker::AttachImu(double t_s, Map* map, KeyFrame* kf) {
   settings.noise = options_.imu.Noise();
   settings.time_offset_s = options_.imu.time_offset_s;
   settings.max_sample_gap_s = options_.imu.max_sample_gap_s;
+  const Eigen::Matrix3d gravity_covariance =
+      inertial_->state().covariance.bottomRightCorner<3, 3>();
+  settings.gravity_sigma_rad =
+      std::max(1e-4, std::sqrt(0.5 * gravity_covariance.trace()) / options_.imu.gravity_mps2);
   map->set_inertial(settings);
 }
 
@@ -304,19 +309,25 @@ void Tracker::FollowLocalBa() {
   }
   KeyFrameInertial imu;
   Rigid3d cam_from_world;
+  Eigen::Vector3d g_world;
   {
     const std::unique_lock<Mutex> lock = LockActiveMap();
     Map& map = atlas_.map(active_);
     map.mutex().AssertHeld();  // locked by LockActiveMap
     auto kf = map.keyframe(imu_chain_keyframe_);
-    if (!kf || !kf->inertial || kf->inertial->refined == imu_chain_refined_) return;
+    if (!kf || !kf->inertial || !kf->inertial->camera_tracked ||
+        kf->inertial->refined == imu_chain_refined_) {
+      return;
+    }
     imu_chain_refined_ = kf->inertial->refined;
     imu.t_s = kf->inertial->t_s;
     imu.v_world_body = kf->inertial->v_world_body;
     imu.bias = kf->inertial->bias;
     cam_from_world = kf->cam_from_world;
+    if (!map.inertial()) return;
+    g_world = map.inertial()->g_world;
   }
-  inertial_->Rebase(imu.t_s, cam_from_world, imu.v_world_body, imu.bias);
+  inertial_->Rebase(imu.t_s, cam_from_world, imu.v_world_body, imu.bias, g_world);
 }
 
 bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const {
@@ -442,7 +453,8 @@ bool Tracker::StartMap(std::shared_ptr<const StereoFrame> frame, const Rigid3d& 
 void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
                              Rigid3d cam_from_world, const std::vector<int>& point_matches,
                              const std::vector<int>& line_matches,
-                             const std::vector<bool>& valid_keypoints, bool pose_from_imu) {
+                             const std::vector<bool>& valid_keypoints, bool pose_from_imu,
+                             bool camera_tracked) {
   BowVector bow;
   FeatureVector bow_features;
   if (vocabulary_ && frame->NumKeypoints() > 0) {
@@ -465,7 +477,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
     kf->pose_from_imu = pose_from_imu;
-    AttachImu(frame->timestamp, &map, kf.get());
+    AttachImu(frame->timestamp, camera_tracked, &map, kf.get());
     if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)
@@ -943,9 +955,9 @@ void Tracker::KeyframeWithLines(std::shared_ptr<const StereoFrame>& frame, Track
   // lines_on_demand: a keyframe tracked on its points. Its lines are matched to the local map
   // from the pose its points gave, and the pose is optimised again with them. The keyframe
   // keeps its points' matches from the first tracking (the second, pulled by the lines,
-  // keeps fewer: taking its matches drifted more on the dark sequences, benchmarks/log/realtime.md,
-  // 2026-11-27 h); its keypoints are refined as the second tracking aligned them (below),
-  // and it is made either way. The local map is copied again in the world the estimate is
+  // keeps fewer: taking its matches drifted more on the dark sequences,
+  // benchmarks/log/realtime.md); its keypoints are refined as the second tracking aligned them
+  // (below), and it is made either way. The local map is copied again in the world the estimate is
   // in (the anchor's): when a correction or a merge landed since (threaded mode), the
   // keyframe goes in without matched lines rather than mix two worlds.
   frame = WithLeftLines(std::move(frame), &result.left_lines_ms);
@@ -995,7 +1007,7 @@ void Tracker::InertialKeyFrame(std::shared_ptr<const StereoFrame>& frame,
   std::vector<int> lines = line_match;
   lines.resize(keyframe->NumLines(), -1);
   InsertKeyFrame(keyframe, cam_from_world, std::vector<int>(keyframe->NumKeypoints(), -1), lines,
-                 {}, /*pose_from_imu=*/LineAided());
+                 {}, /*pose_from_imu=*/LineAided(), /*camera_tracked=*/false);
   ++stats_.inertial_keyframes;
   result->keyframe = true;
   result->mapping_ms = Ms(start);

@@ -498,7 +498,8 @@ class Tracker {
   // the map lines it observes are refitted to its stereo lines and extended to its segments.
   void InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame, Rigid3d cam_from_world,
                       const std::vector<int>& point_matches, const std::vector<int>& line_matches,
-                      const std::vector<bool>& valid_keypoints = {}, bool pose_from_imu = false);
+                      const std::vector<bool>& valid_keypoints = {}, bool pose_from_imu = false,
+                      bool camera_tracked = true);
   // What tracking needs of the local map around a reference keyframe, copied under the map
   // lock: the landmarks in front of the predicted camera, with their positions, descriptors and
   // predicted image positions, in id order. Matching and the motion-only BA run on it without
@@ -604,10 +605,12 @@ class Tracker {
   // A new keyframe (at camera time t_s) of the active map `map` joins the IMU chain with the
   // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_s, in the
   // map's world), and the map gets the IMU settings; else the chain ends. Caller holds the lock.
-  void AttachImu(double t_s, Map* map, KeyFrame* kf) SLSLAM_REQUIRES(map->mutex());
+  void AttachImu(double t_s, bool camera_tracked, Map* map, KeyFrame* kf)
+      SLSLAM_REQUIRES(map->mutex());
   // Local BA estimated the IMU chain's last keyframe again: the inertial state restarts from it
   // (its pose, velocity and biases, propagated to the state's time), as ORB-SLAM3's tracking
-  // predicts from the last keyframe once local mapping changed the map.
+  // predicts from the last keyframe once local mapping changed the map; not from a keyframe the
+  // camera did not track (INERTIAL), whose points say little.
   void FollowLocalBa();
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
   // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone

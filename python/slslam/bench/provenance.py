@@ -9,18 +9,22 @@ from pathlib import Path
 from typing import Any
 
 
+def _git(path: Path, *args: str) -> str:
+    return subprocess.run(
+        ["git", "-C", str(path), *args], capture_output=True, text=True, timeout=10, check=True
+    ).stdout.strip()
+
+
 def git_commit(path: Path) -> str:
-    """The commit of the checkout holding ``path`` (with -dirty), or the core's build commit."""
+    """The commit of the slslam checkout holding ``path`` (with -dirty), or the core's build
+    commit when ``path`` is not in one (an installed package, which may sit inside another
+    repository, such as a Python installation kept in git)."""
     try:
-        commit = subprocess.run(
-            ["git", "-C", str(path), "describe", "--always", "--dirty", "--abbrev=12"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
-        ).stdout.strip()
-        if commit:
-            return commit
+        top = Path(_git(path, "rev-parse", "--show-toplevel"))
+        if (top / "python" / "slslam").is_dir() and (top / "cpp" / "slslam").is_dir():
+            commit = _git(path, "describe", "--always", "--dirty", "--abbrev=12")
+            if commit:
+                return commit
     except (OSError, subprocess.SubprocessError):
         pass
     from slslam.bench.keys import core_build

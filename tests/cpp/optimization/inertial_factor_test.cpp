@@ -45,7 +45,8 @@ TEST(CameraImuFactor, VanishesOnTheTrueMotion) {
   const std::vector<double> pi = PoseParams(motion, t0), pj = PoseParams(motion, t1);
   const std::vector<double> vbi = SpeedBias(motion.Velocity(t0), bias);
   const std::vector<double> vbj = SpeedBias(motion.Velocity(t1), bias);
-  const double* parameters[4] = {pi.data(), vbi.data(), pj.data(), vbj.data()};
+  const double gravity[kGravitySize] = {0.0, 0.0};
+  const double* parameters[5] = {pi.data(), vbi.data(), pj.data(), vbj.data(), gravity};
   Eigen::Matrix<double, 15, 1> whitened;
   ASSERT_TRUE(factor.Evaluate(parameters, whitened.data(), nullptr));
   // Back to units (rad, m/s, m): within the integration's first-order error at 2 kHz (each
@@ -74,12 +75,14 @@ TEST(CameraImuFactor, JacobiansThroughThePoseManifoldMatchCentralDifferences) {
       PoseParams(motion, 0.85), SpeedBias(motion.Velocity(0.8), ImuBias{})};
   params[3][3] = 0.02;
   params[3][8] = -0.1;
+  params.push_back({0.01, -0.02});  // gravity's direction turned a little
   const PoseManifold pose_manifold;
   const std::vector<const ceres::Manifold*> manifolds = {&pose_manifold, nullptr, &pose_manifold,
-                                                         nullptr};
+                                                         nullptr, nullptr};
   std::vector<const double*> ptrs;
   for (auto& p : params) ptrs.push_back(p.data());
-  const std::vector<int> sizes = {kPoseSize, kSpeedBiasSize, kPoseSize, kSpeedBiasSize};
+  const std::vector<int> sizes = {kPoseSize, kSpeedBiasSize, kPoseSize, kSpeedBiasSize,
+                                  kGravitySize};
   std::vector<RowMatrix> ambient;
   std::vector<double*> jacobians;
   for (int size : sizes) ambient.emplace_back(15, size);
@@ -159,6 +162,43 @@ TEST(InertialBundleAdjustment, RecoversVelocitiesAndBiasesFromExactPoses) {
     EXPECT_LT((problem.inertial.states[k].bias.gyro - bias.gyro).norm(), 5e-4) << k;
     EXPECT_LT((problem.inertial.states[k].bias.acc - bias.acc).norm(), 0.02) << k;
   }
+}
+
+// The same with gravity's direction about 1 degree off at the start and estimated (a loose prior):
+// the solve turns it back within 0.05 degrees.
+TEST(InertialBundleAdjustment, EstimatesGravitysDirectionFromATiltedStart) {
+  const test::SyntheticMotion motion;
+  StereoRig rig;
+  rig.camera = {400, 400, 320, 240, 640, 480};
+  rig.baseline_m = 0.1;
+  BaProblem problem;
+  problem.inertial.body_from_cam = BodyFromCam();
+  problem.inertial.g_world =
+      ExpSO3(Eigen::Vector3d(1.0, 0.5, 0.0).normalized() * (M_PI / 180.0)) * motion.g_world;
+  problem.inertial.gravity_sigma_rad = 0.1;
+  const double dt = 0.25;
+  for (int k = 0; k < 9; ++k) {
+    const double t = 1.0 + k * dt;
+    problem.poses.push_back({(motion.WorldFromBody(t) * BodyFromCam()).Inverse(), true});
+    problem.inertial.states.push_back({motion.Velocity(t), ImuBias{}, false});
+    if (k == 0) continue;
+    BaInertialFactor f;
+    f.pose_i = f.state_i = k - 1;
+    f.pose_j = f.state_j = k;
+    f.pre = motion.Preintegrate(t - dt, t, 400.0, ImuBias{}, ImuBias{});
+    problem.inertial.factors.push_back(f);
+  }
+  const double before =
+      std::acos(problem.inertial.g_world.normalized().dot(motion.g_world.normalized()));
+  BundleAdjustmentOptions options;
+  options.robust_iterations = 20;
+  options.refine_iterations = 20;
+  ASSERT_TRUE(SolveBundleAdjustment(rig, &problem, options).solved);
+  const double after = std::acos(
+      std::min(1.0, problem.inertial.g_world.normalized().dot(motion.g_world.normalized())));
+  EXPECT_GT(before, 0.9 * M_PI / 180.0);  // (the axis is not quite across gravity)
+  EXPECT_LT(after, 0.05 * M_PI / 180.0);
+  EXPECT_NEAR(problem.inertial.g_world.norm(), motion.g_world.norm(), 1e-9);
 }
 
 }  // namespace
