@@ -87,6 +87,7 @@ py::dict MapDict(const SessionMap& session) {
   out["loops_rejected"] = loops.loops_rejected;
   out["loops_accepted"] = loops.loops_accepted;
   out["merges"] = loops.merges;
+  out["merges_in_yaw_and_position"] = loops.merges_in_yaw_and_position;
   out["global_ba_runs"] = loops.global_ba_runs;
   out["loop_closing_ms"] = loops.loop_ms;
   out["global_ba_ms"] = loops.global_ba_ms;

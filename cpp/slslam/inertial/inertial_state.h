@@ -92,7 +92,6 @@ class ImuBuffer {
   ImuBuffer Slice(double t0_s, double t1_s) const;
   // Appends the samples of `later` after this buffer's last one (those not after it are skipped).
   void Append(const ImuBuffer& later);
-  double first_s() const { return samples_.empty() ? 1e300 : samples_.front().t_s; }
   bool empty() const { return samples_.empty(); }
   double last_s() const { return samples_.empty() ? -1e300 : samples_.back().t_s; }
   size_t size() const { return samples_.size(); }

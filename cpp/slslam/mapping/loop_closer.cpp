@@ -399,8 +399,21 @@ int LoopCloser::Apply(Atlas* atlas, int source, int keyframe_id, const KeyFrame&
     std::scoped_lock lock(source_map.mutex(), target_map.mutex());  // in a fixed order
     source_map.mutex().AssertHeld();  // (the analysis does not follow std::scoped_lock)
     target_map.mutex().AssertHeld();
-    if (source_map.keyframe(keyframe_id)) {
-      TransformMap(&source_map, verified.target_from_source);
+    if (auto kf = source_map.keyframe(keyframe_id)) {
+      // With gravity in both maps, the merged one turns about it only; the keyframe's verified
+      // pose becomes the one that alignment gives it (the correction below moves it there).
+      Verified aligned = verified;
+      const bool yaw_only = options_.yaw_and_position_with_gravity &&
+                            source_map.gravity_direction() && target_map.gravity_direction();
+      if (yaw_only) {
+        aligned.target_from_source =
+            YawAndPositionAlignment(verified.target_from_source, *source_map.gravity_direction(),
+                                    *target_map.gravity_direction(), kf->Center());
+        std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+        ++stats_.merges_in_yaw_and_position;
+      }
+      TransformMap(&source_map, aligned.target_from_source);
+      if (yaw_only) aligned.match.cam_from_world = kf->cam_from_world;
       std::vector<std::pair<int, BowVector>> moved;
       for (const auto& [id, k] : source_map.keyframes()) moved.emplace_back(id, k->bow);
       target_map.Absorb(&source_map);
@@ -412,7 +425,7 @@ int LoopCloser::Apply(Atlas* atlas, int source, int keyframe_id, const KeyFrame&
       auto& edges = loop_edges_[target];
       for (const LoopEdge& e : loop_edges_[source]) edges.push_back(e);
       loop_edges_.erase(source);
-      Correct(&target_map, keyframe_id, verified);
+      Correct(&target_map, keyframe_id, aligned);
       // Inline, a global BA over the whole map follows at once and subsumes it.
       if (!options_.global_ba || background_global_ba_) {
         std::set<int> merged_side;
@@ -426,6 +439,18 @@ int LoopCloser::Apply(Atlas* atlas, int source, int keyframe_id, const KeyFrame&
     }
   }
   return corrected_map;
+}
+
+Rigid3d YawAndPositionAlignment(const Rigid3d& target_from_source, const Eigen::Vector3d& g_source,
+                                const Eigen::Vector3d& g_target,
+                                const Eigen::Vector3d& pivot_source) {
+  const Eigen::Vector3d mapped = (target_from_source.rotation * g_source).normalized();
+  const Eigen::Matrix3d tilt =
+      Eigen::Quaterniond::FromTwoVectors(mapped, g_target.normalized()).toRotationMatrix();
+  Rigid3d aligned;
+  aligned.rotation = tilt * target_from_source.rotation;
+  aligned.translation = target_from_source * pivot_source - aligned.rotation * pivot_source;
+  return aligned;
 }
 
 void LoopCloser::TransformMap(Map* map, const Rigid3d& target_from_source) {

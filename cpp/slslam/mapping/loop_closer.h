@@ -46,6 +46,15 @@
 
 namespace slslam {
 
+// The alignment closest to `target_from_source` that maps gravity's direction in the source world
+// (g_source) onto the target's (g_target): the rotation corrected by the least rotation that
+// brings R g_source onto g_target (a turn about gravity and a translation remain, the degrees of
+// freedom a visual-inertial map leaves open), the translation such that `pivot_source` (a
+// source-world point: the merging keyframe's centre) lands where target_from_source put it.
+Rigid3d YawAndPositionAlignment(const Rigid3d& target_from_source, const Eigen::Vector3d& g_source,
+                                const Eigen::Vector3d& g_target,
+                                const Eigen::Vector3d& pivot_source);
+
 struct LoopClosingOptions {
   bool enabled = true;                  ///< detect and close loops within a map
   bool merge_maps = true;               ///< detect links to other maps of the atlas and merge
@@ -77,7 +86,8 @@ struct LoopClosingOptions {
   PoseGraphOptions pose_graph;
   /// A map whose gravity the IMU gave (Map::gravity_direction) corrects a loop in yaw and
   /// position only (the pose graph's 4-DoF mode, as ORB-SLAM3's visual-inertial mode): roll and
-  /// pitch are observable there, and a loop's error in them is the camera's, not the IMU's.
+  /// pitch are observable there, and a loop's error in them is the camera's, not the IMU's. A
+  /// merge of two such maps turns the merged one about gravity only (YawAndPositionAlignment).
   bool yaw_and_position_with_gravity = true;
   BundleAdjustmentOptions global_ba_options;
 
@@ -86,15 +96,16 @@ struct LoopClosingOptions {
 
 struct LoopClosingStats {
   int keyframes_checked = 0;
-  int candidates_verified = 0;     ///< candidates that passed geometric verification
-  int loops_detected = 0;          ///< verified and plausible hypotheses (before consistency)
-  int loops_rejected = 0;          ///< verified but implausible (drift gate) or inconsistent
-  int loops_accepted = 0;          ///< loops closed within a map
-  int merges = 0;                  ///< maps merged into an older one
-  int global_ba_runs = 0;          ///< finished global BAs (not counting cancelled ones)
-  int global_ba_cancelled = 0;     ///< background global BAs a newer loop or merge cancelled
-  double loop_ms = 0.0;            ///< detection + verification + correction [ms]
-  double global_ba_ms = 0.0;       ///< build + solve + write back of the finished runs [ms]
+  int candidates_verified = 0;         ///< candidates that passed geometric verification
+  int loops_detected = 0;              ///< verified and plausible hypotheses (before consistency)
+  int loops_rejected = 0;              ///< verified but implausible (drift gate) or inconsistent
+  int loops_accepted = 0;              ///< loops closed within a map
+  int merges = 0;                      ///< maps merged into an older one
+  int merges_in_yaw_and_position = 0;  ///< of which aligned about gravity only (both had it)
+  int global_ba_runs = 0;              ///< finished global BAs (not counting cancelled ones)
+  int global_ba_cancelled = 0;         ///< background global BAs a newer loop or merge cancelled
+  double loop_ms = 0.0;                ///< detection + verification + correction [ms]
+  double global_ba_ms = 0.0;           ///< build + solve + write back of the finished runs [ms]
   double global_ba_lock_ms = 0.0;  ///< of which the map's lock was held (build, write back) [ms]
   int welding_ba_runs = 0;         ///< welding BAs after merges
   double welding_ba_ms = 0.0;      ///< their build + solve + write back [ms]

@@ -4,6 +4,7 @@
 #include <set>
 #include <unordered_set>
 
+#include "slslam/core/check.h"
 #include "slslam/core/rigid3.h"
 
 namespace slslam {
@@ -97,7 +98,9 @@ int MapBundleAdjustment::AddInertialFactors(const Map& map, const std::vector<in
       it = pose_index->emplace(previous->id, AddPose(*previous, /*fixed=*/true)).first;
     }
     factor.pose_i = it->second;
-    factor.pose_j = pose_index->at(id);
+    const auto window_pose = pose_index->find(id);
+    Require(window_pose != pose_index->end(), "AddInertialFactors: a window keyframe has no pose");
+    factor.pose_j = window_pose->second;
     factor.state_i = state_of(*previous);
     factor.state_j = state_of(*kf);
     inertial.factors.push_back(std::move(factor));
@@ -111,6 +114,7 @@ void MapBundleAdjustment::ApplyInertial(Map* map) const {
     MapInertial imu = *map->inertial();
     imu.g_world = problem_.inertial.g_world;
     map->set_inertial(imu);
+    map->set_gravity_direction(imu.g_world);  // (what loop correction and merges align to)
   }
   for (size_t i = 0; i < state_kf_.size(); ++i) {
     const BaSpeedBias& state = problem_.inertial.states[i];

@@ -211,8 +211,9 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
                            const Matrix6d& information, bool with_prior) {
   if (!inertial_) return;
   // (without a chain to extend, the next keyframe's interval starts after this frame)
-  if (imu_chain_keyframe_ < 0)
+  if (options_.imu.local_ba_keyframes > 0 && imu_chain_keyframe_ < 0) {
     keyframe_imu_.DropBefore(frame.timestamp - options_.imu.time_offset_s);
+  }
   if (inertial_map_ != active_) {  // another map's world: the state before does not fit
     inertial_->Reset();
     inertial_map_ = active_;
@@ -263,10 +264,10 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   return true;
 }
 
-void Tracker::AttachImu(double t_s, bool camera_tracked, Map* map, KeyFrame* kf) {
+void Tracker::AttachImu(double t_s, bool camera_tracked, bool same_world, Map* map, KeyFrame* kf) {
   if (options_.imu.local_ba_keyframes <= 0) return;
-  const bool stateful = inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
-                        inertial_->state_time_s() == t_s;
+  const bool stateful = same_world && inertial_ && inertial_->initialised() &&
+                        inertial_map_ == active_ && inertial_->state_time_s() == t_s;
   if (!stateful) {
     imu_chain_keyframe_ = -1;
     keyframe_imu_.DropBefore(t_s - options_.imu.time_offset_s);
@@ -297,8 +298,11 @@ void Tracker::AttachImu(double t_s, bool camera_tracked, Map* map, KeyFrame* kf)
   settings.max_sample_gap_s = options_.imu.max_sample_gap_s;
   const Eigen::Matrix3d gravity_covariance =
       inertial_->state().covariance.bottomRightCorner<3, 3>();
-  settings.gravity_sigma_rad =
-      std::max(1e-4, std::sqrt(0.5 * gravity_covariance.trace()) / options_.imu.gravity_mps2);
+  // (per axis across gravity: half the trace of its covariance, the radial part included; a
+  // floor of 0.1 mrad, about 0.006 degrees, keeps the prior finite)
+  constexpr double kMinGravitySigmaRad = 1e-4;
+  settings.gravity_sigma_rad = std::max(
+      kMinGravitySigmaRad, std::sqrt(0.5 * gravity_covariance.trace()) / options_.imu.gravity_mps2);
   map->set_inertial(settings);
 }
 
@@ -471,13 +475,14 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     map.mutex().AssertHeld();  // locked by LockActiveMap
     live = &map;
     // (the frame's pose is the last pose: both move with a correction written meanwhile)
-    if (FollowAnchor(map, {&cam_from_world, &last_cam_from_world_})) {
-      seen_epoch_ = map.correction_epoch();
-    }
+    const bool corrected = FollowAnchor(map, {&cam_from_world, &last_cam_from_world_});
+    if (corrected) seen_epoch_ = map.correction_epoch();
     auto kf = map.AddKeyFrame(cam_from_world, frame);
     kf_id = kf->id;
     kf->pose_from_imu = pose_from_imu;
-    AttachImu(frame->timestamp, camera_tracked, &map, kf.get());
+    // (after a correction landed meanwhile the inertial state is in the world before it: the
+    // chain ends rather than take its velocity)
+    AttachImu(frame->timestamp, camera_tracked && !corrected, !corrected, &map, kf.get());
     if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)

@@ -605,7 +605,9 @@ class Tracker {
   // A new keyframe (at camera time t_s) of the active map `map` joins the IMU chain with the
   // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_s, in the
   // map's world), and the map gets the IMU settings; else the chain ends. Caller holds the lock.
-  void AttachImu(double t_s, bool camera_tracked, Map* map, KeyFrame* kf)
+  // `same_world`: the inertial state is in the map's world (no correction landed since the frame
+  // was tracked).
+  void AttachImu(double t_s, bool camera_tracked, bool same_world, Map* map, KeyFrame* kf)
       SLSLAM_REQUIRES(map->mutex());
   // Local BA estimated the IMU chain's last keyframe again: the inertial state restarts from it
   // (its pose, velocity and biases, propagated to the state's time), as ORB-SLAM3's tracking

@@ -235,6 +235,7 @@ class MapStats:
     loops_rejected: int = 0  #: implausible (drift gate) or inconsistent
     loops_accepted: int = 0  #: loops closed within a map
     merges: int = 0  #: maps merged into an older one
+    merges_in_yaw_and_position: int = 0  #: ... of them turned about gravity only (both had it)
     global_ba_runs: int = 0  #: finished global bundle adjustments
     loop_closing_ms: float = 0.0  #: detection, verification, correction
     global_ba_ms: float = 0.0  #: build, solve and write back of the finished global BAs

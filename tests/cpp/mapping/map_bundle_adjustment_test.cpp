@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
+#include "../inertial/synthetic_motion.h"
+
 namespace slslam {
 namespace {
 
@@ -168,6 +170,83 @@ INSTANTIATE_TEST_SUITE_P(CeresAndOwn, MapBundleAdjustmentSolver, ::testing::Bool
                          [](const ::testing::TestParamInfo<bool>& info) {
                            return info.param ? std::string("Own") : std::string("Ceres");
                          });
+
+// A map's IMU chain in a window: the factor from the window's oldest keyframe's predecessor
+// (joining as a fixed pose with a fixed state), none over an interval longer than the map's bound;
+// the solve's velocities and biases written back to the window's keyframes only, each counted as
+// refined, and the map's gravity (both copies) moved to the estimate.
+TEST(MapBundleAdjustment, TheImuChainOfAWindowJoinsWithItsPredecessorFixed) {
+  const test::SyntheticMotion motion;
+  Map map;
+  MutexLock lock(map.mutex());
+  MapInertial imu;
+  imu.g_world = motion.g_world;
+  imu.gravity_sigma_rad = 0.01;
+  map.set_inertial(imu);
+  // Keyframes at 1.0, 1.5, 2.0, 2.5 s and one 4 s later (no factor to it).
+  const std::vector<double> times = {1.0, 1.5, 2.0, 2.5, 6.5};
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (size_t k = 0; k < times.size(); ++k) {
+    const double t = times[k];
+    auto kf = map.AddKeyFrame(motion.WorldFromBody(t).Inverse(), EmptyFrame());
+    KeyFrameInertial state;
+    state.t_s = t;
+    state.v_world_body = motion.Velocity(t) + Eigen::Vector3d(0.2, -0.1, 0.1);  // (off)
+    if (k > 0) {
+      state.previous = kfs.back()->id;
+      for (double s = times[k - 1]; s < t - 1e-9; s += 0.005) {
+        state.samples_from_previous.Add(s, motion.Gyro(s + 0.0025),
+                                        motion.Accelerometer(s + 0.0025));
+      }
+    }
+    kf->inertial = state;
+    kfs.push_back(kf);
+  }
+  const Eigen::Vector3d v1_before = kfs[1]->inertial->v_world_body;
+  MapBundleAdjustment ba;
+  std::unordered_map<int, int> pose_index;
+  const std::vector<int> window = {kfs[2]->id, kfs[3]->id, kfs[4]->id};
+  for (int id : window) pose_index[id] = ba.AddPose(*map.keyframe(id), /*fixed=*/true);
+  EXPECT_EQ(ba.AddInertialFactors(map, window, &pose_index), 2);     // 1 -> 2, 2 -> 3; not 3 -> 4
+  ASSERT_EQ(ba.problem().poses.size(), 4u);                          // the predecessor joined,
+  EXPECT_TRUE(ba.problem().poses[pose_index.at(kfs[1]->id)].fixed);  // held
+  ASSERT_EQ(ba.problem().inertial.states.size(), 3u);
+  EXPECT_TRUE(ba.problem().inertial.states[0].fixed);  // (its state, added first)
+  StereoRig rig;
+  rig.camera = {400, 400, 320, 240, 640, 480};
+  rig.baseline_m = 0.1;
+  BundleAdjustmentOptions options;
+  options.robust_iterations = 20;
+  options.refine_iterations = 20;
+  const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &ba.problem(), options);
+  ASSERT_TRUE(report.solved);
+  ba.Apply(&map, report);
+  EXPECT_EQ(kfs[1]->inertial->v_world_body, v1_before);  // fixed: not written
+  EXPECT_EQ(kfs[1]->inertial->refined, 0);
+  for (int k : {2, 3}) {
+    EXPECT_EQ(kfs[k]->inertial->refined, 1) << k;
+    EXPECT_LT((kfs[k]->inertial->v_world_body - motion.Velocity(times[k])).norm(),
+              (v1_before - motion.Velocity(times[1])).norm())
+        << k;
+  }
+  EXPECT_EQ(kfs[4]->inertial->refined, 0);  // in no factor
+  ASSERT_TRUE(map.gravity_direction().has_value());
+  EXPECT_LT((*map.gravity_direction() - map.inertial()->g_world.normalized()).norm(), 1e-12);
+}
+
+// A correction moves a keyframe's world: its velocity turns with it.
+TEST(MapBundleAdjustment, MoveKeyFrameTurnsTheVelocityWithThePose) {
+  KeyFrame kf;
+  kf.cam_from_world = Rigid3d(Yaw(10), Eigen::Vector3d(1, 0, 0));
+  kf.inertial = KeyFrameInertial{};
+  kf.inertial->v_world_body = Eigen::Vector3d(1.0, 0.0, 0.0);
+  // The world turned by 90 degrees (about y, this file's Yaw) around the keyframe: cam_from_new =
+  // cam_from_old * old_from_new.
+  const Rigid3d moved = kf.cam_from_world * Rigid3d(Yaw(90), Eigen::Vector3d::Zero()).Inverse();
+  MoveKeyFrame(&kf, moved);
+  EXPECT_LT((kf.inertial->v_world_body - Eigen::Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+  EXPECT_EQ(kf.cam_from_world.rotation, moved.rotation);
+}
 
 }  // namespace
 }  // namespace slslam

@@ -5,11 +5,13 @@
 
 #include <vector>
 
+#include <ceres/autodiff_cost_function.h>
 #include <gtest/gtest.h>
 
 #include "../inertial/synthetic_motion.h"
 #include "slslam/geometry/rotation.h"
 #include "slslam/optimization/bundle_adjustment.h"
+#include "slslam/optimization/sqrt_information.h"
 
 namespace slslam {
 namespace {
@@ -199,6 +201,131 @@ TEST(InertialBundleAdjustment, EstimatesGravitysDirectionFromATiltedStart) {
   EXPECT_GT(before, 0.9 * M_PI / 180.0);  // (the axis is not quite across gravity)
   EXPECT_LT(after, 0.05 * M_PI / 180.0);
   EXPECT_NEAR(problem.inertial.g_world.norm(), motion.g_world.norm(), 1e-9);
+}
+
+// The LiDAR smoother's IMU factor as it was before it shared ImuIntervalResidual (kept verbatim as
+// the reference): the shared residual must give the same numbers bit for bit, values and
+// automatic derivatives, so the smoother's trajectories stay byte-identical.
+struct ReferenceLioImuFactor {
+  ReferenceLioImuFactor(const ImuPreintegration& imu, const Matrix15d& sqrt_info)
+      : imu(imu), sqrt_info(sqrt_info) {}
+
+  template <typename T>
+  bool operator()(const T* qi_, const T* pi_, const T* vbi_, const T* qj_, const T* pj_,
+                  const T* vbj_, T* out) const {
+    using V3 = Eigen::Matrix<T, 3, 1>;
+    const Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
+    const Eigen::Map<const V3> pi(pi_), pj(pj_), vi(vbi_), bgi(vbi_ + 3), bai(vbi_ + 6);
+    const Eigen::Map<const V3> vj(vbj_), bgj(vbj_ + 3), baj(vbj_ + 6);
+    const V3 dbg = bgi - imu.bias_hat().gyro.cast<T>();
+    const V3 dba = bai - imu.bias_hat().acc.cast<T>();
+    const V3 dtheta = imu.dR_dbg().cast<T>() * dbg;
+    Eigen::Quaternion<T> q_corr;
+    T aa[3] = {dtheta(0), dtheta(1), dtheta(2)}, qc[4];
+    ceres::AngleAxisToQuaternion(aa, qc);
+    q_corr = Eigen::Quaternion<T>(qc[0], qc[1], qc[2], qc[3]);
+    const Eigen::Quaternion<T> dq = Eigen::Quaterniond(imu.delta_R()).cast<T>() * q_corr;
+    const Eigen::Quaternion<T> err = dq.conjugate() * qi.conjugate() * qj;
+    T qe[4] = {err.w(), err.x(), err.y(), err.z()}, re[3];
+    ceres::QuaternionToAngleAxis(qe, re);
+    const double dt = imu.dt_s();
+    const V3 g = imu.gravity_world().cast<T>();
+    const Eigen::Matrix<T, 3, 3> Rit = qi.conjugate().toRotationMatrix();
+    const V3 dv =
+        imu.delta_v().cast<T>() + imu.dv_dbg().cast<T>() * dbg + imu.dv_dba().cast<T>() * dba;
+    const V3 dp =
+        imu.delta_p().cast<T>() + imu.dp_dbg().cast<T>() * dbg + imu.dp_dba().cast<T>() * dba;
+    Eigen::Matrix<T, 15, 1> r;
+    r.template segment<3>(0) = V3(re[0], re[1], re[2]);
+    r.template segment<3>(3) = Rit * (vj - vi - g * T(dt)) - dv;
+    r.template segment<3>(6) = Rit * (pj - pi - vi * T(dt) - T(0.5 * dt * dt) * g) - dp;
+    r.template segment<3>(9) = bgj - bgi;
+    r.template segment<3>(12) = baj - bai;
+    Eigen::Map<Eigen::Matrix<T, 15, 1>> residual(out);
+    residual = sqrt_info.cast<T>() * r;
+    return true;
+  }
+
+  ImuPreintegration imu;
+  Matrix15d sqrt_info;
+};
+
+// The same through the shared residual (as lidar/lio_smoother.cpp calls it).
+struct SharedLioImuFactor {
+  SharedLioImuFactor(const ImuPreintegration& imu, const Matrix15d& sqrt_info)
+      : imu(imu), sqrt_info(sqrt_info) {}
+
+  template <typename T>
+  bool operator()(const T* qi_, const T* pi_, const T* vbi_, const T* qj_, const T* pj_,
+                  const T* vbj_, T* out) const {
+    using V3 = Eigen::Matrix<T, 3, 1>;
+    const Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
+    const Eigen::Map<const V3> pi(pi_), pj(pj_);
+    Eigen::Matrix<T, 15, 1> r;
+    ImuIntervalResidual(imu, V3(imu.gravity_world().cast<T>()), Eigen::Quaternion<T>(qi), V3(pi),
+                        vbi_, Eigen::Quaternion<T>(qj), V3(pj), vbj_, &r);
+    Eigen::Map<Eigen::Matrix<T, 15, 1>> residual(out);
+    residual = sqrt_info.cast<T>() * r;
+    return true;
+  }
+
+  ImuPreintegration imu;
+  Matrix15d sqrt_info;
+};
+
+TEST(ImuIntervalResidual, IsTheLidarSmoothersFormerFactorBitForBit) {
+  const test::SyntheticMotion motion;
+  ImuBias bias_hat;
+  bias_hat.gyro = Eigen::Vector3d(0.003, -0.001, 0.002);
+  bias_hat.acc = Eigen::Vector3d(0.02, 0.01, -0.03);
+  const ImuPreintegration pre = motion.Preintegrate(0.2, 0.3, 400.0, ImuBias{}, bias_hat);
+  // The former smoother's square root of the information, from its own noise (the same values).
+  Matrix15d cov = Matrix15d::Zero();
+  cov.topLeftCorner<9, 9>() = pre.covariance();
+  const ImuNoiseOptions noise;
+  cov.block<3, 3>(9, 9).diagonal().setConstant(noise.gyro_random_walk * noise.gyro_random_walk *
+                                               pre.dt_s());
+  cov.block<3, 3>(12, 12).diagonal().setConstant(noise.acc_random_walk * noise.acc_random_walk *
+                                                 pre.dt_s());
+  cov.diagonal() = cov.diagonal().cwiseMax(1e-12);
+  const Matrix15d former = SqrtInformation<15>(Matrix15d(cov.inverse()));
+  EXPECT_EQ(ImuIntervalSqrtInformation(pre), former);
+  const Eigen::Quaterniond qi = Eigen::Quaterniond(motion.Attitude(0.2)).normalized();
+  const Eigen::Quaterniond qj =
+      Eigen::Quaterniond(motion.Attitude(0.3) * ExpSO3(Eigen::Vector3d(0.01, 0, -0.02)))
+          .normalized();
+  Eigen::Vector3d pi = motion.Position(0.2),
+                  pj = motion.Position(0.3) + Eigen::Vector3d(0.01, 0, 0);
+  std::vector<double> vbi = SpeedBias(motion.Velocity(0.2), bias_hat);
+  std::vector<double> vbj = SpeedBias(motion.Velocity(0.3), ImuBias{});
+  vbi[4] += 0.001;
+  vbi[7] -= 0.02;
+  const double* parameters[6] = {qi.coeffs().data(), pi.data(), vbi.data(),
+                                 qj.coeffs().data(), pj.data(), vbj.data()};
+  const ceres::AutoDiffCostFunction<ReferenceLioImuFactor, 15, 4, 3, 9, 4, 3, 9> reference(
+      new ReferenceLioImuFactor(pre, former));
+  const ceres::AutoDiffCostFunction<SharedLioImuFactor, 15, 4, 3, 9, 4, 3, 9> shared(
+      new SharedLioImuFactor(pre, former));
+  const int sizes[6] = {4, 3, 9, 4, 3, 9};
+  std::vector<std::vector<double>> j_ref(6), j_new(6);
+  double* ref_ptrs[6];
+  double* new_ptrs[6];
+  for (int b = 0; b < 6; ++b) {
+    j_ref[b].assign(15 * sizes[b], 0.0);
+    j_new[b].assign(15 * sizes[b], 1.0);
+    ref_ptrs[b] = j_ref[b].data();
+    new_ptrs[b] = j_new[b].data();
+  }
+  // With Jacobians (Jets) and without (doubles: Ceres' cost evaluations), each against its own.
+  Eigen::Matrix<double, 15, 1> r_ref, r_new, r_ref_plain, r_new_plain;
+  ASSERT_TRUE(reference.Evaluate(parameters, r_ref.data(), ref_ptrs));
+  ASSERT_TRUE(shared.Evaluate(parameters, r_new.data(), new_ptrs));
+  ASSERT_TRUE(reference.Evaluate(parameters, r_ref_plain.data(), nullptr));
+  ASSERT_TRUE(shared.Evaluate(parameters, r_new_plain.data(), nullptr));
+  EXPECT_GT(r_ref.norm(), 1.0);
+  EXPECT_EQ(r_new, r_ref);
+  EXPECT_EQ(r_new_plain, r_ref_plain);
+  for (int b = 0; b < 6; ++b) EXPECT_EQ(j_new[b], j_ref[b]) << "block " << b;
 }
 
 }  // namespace

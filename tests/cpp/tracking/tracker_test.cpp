@@ -418,7 +418,7 @@ void TenSecondsWithoutAnyFeature(int local_ba_keyframes) {
   EXPECT_GT(g_map.dot(Eigen::Vector3d::UnitY()), std::cos(1.0 * M_PI / 180.0));
   if (local_ba_keyframes == 0) {
     EXPECT_EQ(tracker.mapping_stats().ba_inertial_factors, 0);
-  } else {  // (every keyframe after the initialisation but each chain's first)
+  } else {  // (each local BA after the initialisation has at least one)
     EXPECT_GT(tracker.mapping_stats().ba_inertial_factors,
               tracker.mapping_stats().keyframes_processed);
   }
