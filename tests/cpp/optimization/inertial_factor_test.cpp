@@ -9,14 +9,14 @@
 #include <gtest/gtest.h>
 
 #include "../inertial/synthetic_motion.h"
+#include "../test_support.h"
+#include "check_cost.h"
 #include "slslam/geometry/rotation.h"
 #include "slslam/optimization/bundle_adjustment.h"
 #include "slslam/optimization/sqrt_information.h"
 
 namespace slslam {
 namespace {
-
-using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 // The camera 10 cm ahead of the IMU, turned (Kalibr-like extrinsics).
 Rigid3d BodyFromCam() {
@@ -79,87 +79,62 @@ TEST(CameraImuFactor, JacobiansThroughThePoseManifoldMatchCentralDifferences) {
   params[3][8] = -0.1;
   params.push_back({0.01, -0.02});  // gravity's direction turned a little
   const PoseManifold pose_manifold;
-  const std::vector<const ceres::Manifold*> manifolds = {&pose_manifold, nullptr, &pose_manifold,
-                                                         nullptr, nullptr};
-  std::vector<const double*> ptrs;
-  for (auto& p : params) ptrs.push_back(p.data());
-  const std::vector<int> sizes = {kPoseSize, kSpeedBiasSize, kPoseSize, kSpeedBiasSize,
-                                  kGravitySize};
-  std::vector<RowMatrix> ambient;
-  std::vector<double*> jacobians;
-  for (int size : sizes) ambient.emplace_back(15, size);
-  for (auto& j : ambient) jacobians.push_back(j.data());
-  Eigen::VectorXd residual(15);
-  ASSERT_TRUE(factor.Evaluate(ptrs.data(), residual.data(), jacobians.data()));
-  EXPECT_GT(residual.norm(), 1.0);
-  for (size_t b = 0; b < params.size(); ++b) {
-    const ceres::Manifold* m = manifolds[b];
-    const int tangent = m ? m->TangentSize() : sizes[b];
-    RowMatrix lift = RowMatrix::Identity(sizes[b], tangent);
-    if (m) m->PlusJacobian(params[b].data(), lift.data());
-    const Eigen::MatrixXd analytic = ambient[b] * lift;
-    Eigen::MatrixXd numeric(15, tangent);
-    const double h = 1e-6;
-    for (int k = 0; k < tangent; ++k) {
-      Eigen::VectorXd r[2] = {Eigen::VectorXd(15), Eigen::VectorXd(15)};
-      for (int side = 0; side < 2; ++side) {
-        std::vector<double> delta(tangent, 0.0), moved(sizes[b]);
-        delta[k] = side == 0 ? h : -h;
-        if (m) {
-          m->Plus(params[b].data(), delta.data(), moved.data());
-        } else {
-          for (int i = 0; i < sizes[b]; ++i) moved[i] = params[b][i] + delta[i];
-        }
-        std::vector<const double*> p2 = ptrs;
-        p2[b] = moved.data();
-        ASSERT_TRUE(factor.Evaluate(p2.data(), r[side].data(), nullptr));
-      }
-      numeric.col(k) = (r[0] - r[1]) / (2 * h);
-    }
-    const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
-    EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale)
-        << "block " << b << "\nanalytic\n"
-        << analytic << "\nnumeric\n"
-        << numeric;
+  {
+    std::vector<const double*> ptrs;
+    for (auto& p : params) ptrs.push_back(p.data());
+    Eigen::Matrix<double, 15, 1> residual;
+    ASSERT_TRUE(factor.Evaluate(ptrs.data(), residual.data(), nullptr));
+    EXPECT_GT(residual.norm(), 1.0);
   }
+  test::CheckCost(factor, params, {&pose_manifold, nullptr, &pose_manifold, nullptr, nullptr});
 }
 
-// Keyframes every 0.25 s along the synthetic motion with exact poses (held), the IMU read with a
-// bias: bundle adjustment with the IMU factors alone recovers every velocity and the biases from
-// zero-velocity, zero-bias starts.
+constexpr int kChainKeyframes = 9;
+double ChainTime(int k) { return 1.0 + 0.25 * k; }
+
+// Nine keyframes every 0.25 s from t = 1 s along the motion with exact poses (held), their
+// velocities the truth's (or zero with `velocities_from_zero`), biases zero, and
+// the IMU between consecutive ones read with `bias` and integrated at a zero bias (the factor's
+// first-order bias correction carries the rest), under gravity `g_world`.
+BaProblem ImuChain(const test::SyntheticMotion& motion, const ImuBias& bias,
+                   bool velocities_from_zero, const Eigen::Vector3d& g_world) {
+  BaProblem problem;
+  problem.inertial.body_from_cam = BodyFromCam();
+  problem.inertial.g_world = g_world;
+  for (int k = 0; k < kChainKeyframes; ++k) {
+    const double t = ChainTime(k);
+    problem.poses.push_back({(motion.WorldFromBody(t) * BodyFromCam()).Inverse(), true});
+    const Eigen::Vector3d v = velocities_from_zero ? Eigen::Vector3d::Zero() : motion.Velocity(t);
+    problem.inertial.states.push_back({v, ImuBias{}, false});
+    if (k == 0) continue;
+    BaInertialFactor f;
+    f.pose_i = f.state_i = k - 1;
+    f.pose_j = f.state_j = k;
+    f.pre = motion.Preintegrate(ChainTime(k - 1), t, 400.0, bias, ImuBias{});
+    problem.inertial.factors.push_back(f);
+  }
+  return problem;
+}
+
+BundleAdjustmentReport SolveChain(BaProblem* problem) {
+  BundleAdjustmentOptions options;
+  options.robust_iterations = 20;
+  options.refine_iterations = 20;
+  return SolveBundleAdjustment(test::EurocLikeRig(), problem, options);
+}
+
+// The IMU read with a bias: bundle adjustment with the IMU factors alone recovers every velocity
+// and the biases from zero-velocity, zero-bias starts.
 TEST(InertialBundleAdjustment, RecoversVelocitiesAndBiasesFromExactPoses) {
   const test::SyntheticMotion motion;
   ImuBias bias;
   bias.gyro = Eigen::Vector3d(0.004, -0.003, 0.002);
   bias.acc = Eigen::Vector3d(0.08, -0.05, 0.06);
-  StereoRig rig;
-  rig.camera = {400, 400, 320, 240, 640, 480};
-  rig.baseline_m = 0.1;
-  BaProblem problem;
-  problem.inertial.body_from_cam = BodyFromCam();
-  problem.inertial.g_world = motion.g_world;
-  const int n = 9;
-  const double dt = 0.25;
-  for (int k = 0; k < n; ++k) {
-    const double t = 1.0 + k * dt;
-    problem.poses.push_back({(motion.WorldFromBody(t) * BodyFromCam()).Inverse(), true});
-    problem.inertial.states.push_back({Eigen::Vector3d::Zero(), ImuBias{}, false});
-    if (k == 0) continue;
-    BaInertialFactor f;
-    f.pose_i = f.state_i = k - 1;
-    f.pose_j = f.state_j = k;
-    // (integrated at a zero bias: the factor's first-order bias correction carries the rest)
-    f.pre = motion.Preintegrate(t - dt, t, 400.0, bias, ImuBias{});
-    problem.inertial.factors.push_back(f);
-  }
-  BundleAdjustmentOptions options;
-  options.robust_iterations = 20;
-  options.refine_iterations = 20;
-  const BundleAdjustmentReport report = SolveBundleAdjustment(rig, &problem, options);
-  ASSERT_TRUE(report.solved);
-  for (int k = 0; k < n; ++k) {
-    const double t = 1.0 + k * dt;
-    EXPECT_LT((problem.inertial.states[k].v_world_body - motion.Velocity(t)).norm(), 0.01)
+  BaProblem problem = ImuChain(motion, bias, /*velocities_from_zero=*/true, motion.g_world);
+  ASSERT_TRUE(SolveChain(&problem).solved);
+  for (int k = 0; k < kChainKeyframes; ++k) {
+    EXPECT_LT((problem.inertial.states[k].v_world_body - motion.Velocity(ChainTime(k))).norm(),
+              0.01)
         << "keyframe " << k;
     EXPECT_LT((problem.inertial.states[k].bias.gyro - bias.gyro).norm(), 5e-4) << k;
     EXPECT_LT((problem.inertial.states[k].bias.acc - bias.acc).norm(), 0.02) << k;
@@ -170,32 +145,13 @@ TEST(InertialBundleAdjustment, RecoversVelocitiesAndBiasesFromExactPoses) {
 // the solve turns it back within 0.05 degrees.
 TEST(InertialBundleAdjustment, EstimatesGravitysDirectionFromATiltedStart) {
   const test::SyntheticMotion motion;
-  StereoRig rig;
-  rig.camera = {400, 400, 320, 240, 640, 480};
-  rig.baseline_m = 0.1;
-  BaProblem problem;
-  problem.inertial.body_from_cam = BodyFromCam();
-  problem.inertial.g_world =
-      ExpSO3(Eigen::Vector3d(1.0, 0.5, 0.0).normalized() * (M_PI / 180.0)) * motion.g_world;
+  BaProblem problem = ImuChain(
+      motion, ImuBias{}, /*velocities_from_zero=*/false,
+      ExpSO3(Eigen::Vector3d(1.0, 0.5, 0.0).normalized() * (M_PI / 180.0)) * motion.g_world);
   problem.inertial.gravity_sigma_rad = 0.1;
-  const double dt = 0.25;
-  for (int k = 0; k < 9; ++k) {
-    const double t = 1.0 + k * dt;
-    problem.poses.push_back({(motion.WorldFromBody(t) * BodyFromCam()).Inverse(), true});
-    problem.inertial.states.push_back({motion.Velocity(t), ImuBias{}, false});
-    if (k == 0) continue;
-    BaInertialFactor f;
-    f.pose_i = f.state_i = k - 1;
-    f.pose_j = f.state_j = k;
-    f.pre = motion.Preintegrate(t - dt, t, 400.0, ImuBias{}, ImuBias{});
-    problem.inertial.factors.push_back(f);
-  }
   const double before =
       std::acos(problem.inertial.g_world.normalized().dot(motion.g_world.normalized()));
-  BundleAdjustmentOptions options;
-  options.robust_iterations = 20;
-  options.refine_iterations = 20;
-  ASSERT_TRUE(SolveBundleAdjustment(rig, &problem, options).solved);
+  ASSERT_TRUE(SolveChain(&problem).solved);
   const double after = std::acos(
       std::min(1.0, problem.inertial.g_world.normalized().dot(motion.g_world.normalized())));
   EXPECT_GT(before, 0.9 * M_PI / 180.0);  // (the axis is not quite across gravity)
