@@ -360,6 +360,9 @@ void BindTracking(py::module_& m) {
       .def_readwrite("lost_search_scale", &TrackerOptions::lost_search_scale)
       .def_readwrite("weak_keyframe_inliers", &TrackerOptions::weak_keyframe_inliers)
       .def_readwrite("weak_keyframe_frames", &TrackerOptions::weak_keyframe_frames)
+      .def_readwrite("frame_rate_hz", &TrackerOptions::frame_rate_hz)
+      .def_readwrite("reference_rate_hz", &TrackerOptions::reference_rate_hz)
+      .def_readwrite("reference_focal_px", &TrackerOptions::reference_focal_px)
       .def_readwrite("vocabulary_path", &TrackerOptions::vocabulary_path)
       .def_readwrite("relocalisation", &TrackerOptions::relocalisation)
       .def_readwrite("loop_closing", &TrackerOptions::loop_closing)
@@ -403,6 +406,9 @@ void BindTracking(py::module_& m) {
       .def_readonly("projected_keypoints", &FrameOutput::projected_keypoints,
                     "tracked on this many projected keypoints (0: on detected ones)");
 
+  m.def("adapt_to_rig", &AdaptToRig, py::arg("options"),
+        "The options the tracker runs with: counts in frames turned to frame_rate_hz against "
+        "reference_rate_hz, pixel windows to the rig's fx against reference_focal_px.");
   m.def(
       "match_stereo_points",
       [](const py::array& left_image, const py::array& right_image, const PixelArray& left_uv,

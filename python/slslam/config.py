@@ -171,6 +171,9 @@ TRACKING_TO_CORE: dict[str, tuple[str, ...]] = {
         "new_map_after_lost_frames",
         "weak_keyframe_inliers",
         "weak_keyframe_frames",
+        "frame_rate_hz",
+        "reference_rate_hz",
+        "reference_focal_px",
     )
 } | {
     "max_depth_baselines": ("stereo.max_depth_baselines",),
@@ -648,6 +651,19 @@ class TrackingConfig:
     # weighted inliers below this: a keyframe every weak_keyframe_frames (thin tracking)
     weak_keyframe_inliers: int = _tracking("weak_keyframe_inliers", "[0, 1000000000]")
     weak_keyframe_frames: int = _tracking("weak_keyframe_frames", "[1, 1000000000]")  # [frames]
+    # the camera's frame rate [Hz]; 0: the sequence's (EuRoC sensor.yaml or timestamps, KITTI
+    # times.txt, a bag's stamps, the simulator's), or unknown (Python API without it)
+    frame_rate_hz: float = _tracking("frame_rate_hz", "[0, 100000]")
+    # the rate the options counted in frames (keyframe gaps, recently_lost_frames,
+    # lost_motion_frames, new_map_after_lost_frames, projected_max_frames) and per frame
+    # (lost_velocity_decay, unaligned_max_turn_deg_per_frame) are given at [Hz]: at another
+    # camera rate each becomes count * frame_rate_hz / reference_rate_hz (the same time); 0: the
+    # counts as given at every rate
+    reference_rate_hz: float = _tracking("reference_rate_hz", "[0, 100000]")
+    # the focal length search_radius_px, line_search_px, projection_search_px and
+    # projection_cell_px are given at [px]: scaled by the camera's fx / this (the same angle);
+    # 0: as given
+    reference_focal_px: float = _tracking("reference_focal_px", "[0, 10000000]")
     relocalisation: bool = True  # bag-of-words relocalisation when lost (needs a vocabulary)
     # BoW vocabulary file; null: the one shipped for ORB (learned descriptors need their own,
     # made with `slslam vocab train`)

@@ -264,6 +264,11 @@ def test_default_configuration_tracks_the_shared_drive_at_the_right_scale(tmp_pa
     m = summary.metrics
     assert m["frames"] == 108 and m["tracked_frames"] == 108, m["states"]
     assert m["maps"] == 1
+    # the options counted in frames at KITTI's 10 Hz: the same times as at the 20 Hz they are
+    # given at (tracking.reference_rate_hz)
+    assert m["rig_adapted"]["frame_rate_hz"] == pytest.approx(9.7, rel=0.01)  # its time stamps
+    assert m["rig_adapted"]["keyframe_max_frames"] == 10
+    assert m["rig_adapted"]["recently_lost_frames"] == 5
     estimate = read_trajectory(tmp_path / "run" / "trajectory.tum", "tum")
     ours = np.linalg.norm(np.diff(estimate.positions_xyz, axis=0), axis=1).sum()
     ref = read_trajectory(reference, "tum")
@@ -275,6 +280,34 @@ def test_default_configuration_tracks_the_shared_drive_at_the_right_scale(tmp_pa
         rows = (tmp_path / "run" / name).read_text().splitlines()
         assert [row.split()[0] for row in rows] == [tum_time(int(t)) for t in stamps]
     assert rows[0].startswith("1317042145.967790592 ")
+
+
+def test_xfeat_keeps_the_scale_of_the_shared_drive(tmp_path):
+    """XFeat + lines (its preset, tuned at 20 Hz on the simulator's 458 px rig) on KITTI's
+    10 Hz, 721 px rig: with the preset's keyframe gap counted in frames it kept 44 % of the path;
+    the counts follow the camera's rate and the pixel windows its focal length
+    (tracking.reference_rate_hz, reference_focal_px), so it keeps the scale."""
+    from evo.core import sync
+    from evo.core.metrics import PoseRelation
+    from evo.main_ape import ape
+
+    from slslam.config import config_from_dict
+    from slslam.datasets import read_trajectory
+    from slslam.tracking import run_sequence
+
+    drive = shared_path("kitti_raw_2011_09_26_drive_0001")
+    config = config_from_dict({"features": {"point_frontend": "xfeat"}})
+    m = run_sequence(drive, tmp_path / "run", config, progress=False).metrics
+    assert m["tracked_frames"] == m["frames"] == 108 and m["maps"] == 1, m["states"]
+    assert m["rig_adapted"]["keyframe_min_frames"] == 3  # the preset's 6 at 20 Hz
+    estimate = read_trajectory(tmp_path / "run" / "trajectory.tum", "tum")
+    reference = read_trajectory(drive / "reference_orbslam3_stereo.tum", "tum")
+    theirs = np.linalg.norm(np.diff(reference.positions_xyz, axis=0), axis=1).sum()
+    ours = np.linalg.norm(np.diff(estimate.positions_xyz, axis=0), axis=1).sum()
+    assert abs(ours - theirs) <= 0.03 * theirs, (ours, theirs)
+    ref, est = sync.associate_trajectories(reference, estimate, max_diff=0.01)
+    rmse = ape(ref, est, PoseRelation.translation_part, align=True).stats["rmse"]
+    assert rmse < 0.01 * theirs, rmse
 
 
 def test_tum_time_is_exact():
@@ -297,3 +330,6 @@ def test_the_default_configuration_serves_the_simulated_rig_too(tmp_path):
     m = run_sequence(seq, tmp_path / "run", default_config(), progress=False).metrics
     assert m["tracked_frames"] == m["frames"] == 60 and m["maps"] == 1
     assert m["ape"]["rmse"] < 0.05
+    # the simulator's 20 Hz is the reference rate: the counts as configured
+    assert m["rig_adapted"]["frame_rate_hz"] == pytest.approx(20.0)
+    assert m["rig_adapted"]["keyframe_max_frames"] == default_config().tracking.keyframe_max_frames

@@ -71,6 +71,8 @@ const char* TrackingStateName(TrackingState state) {
 
 Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   options_.Check();
+  options_ = AdaptToRig(options_);
+  options_.Check();
   if (!options_.vocabulary_path.empty()) {
     vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::Load(options_.vocabulary_path));
   }

@@ -275,8 +275,28 @@ struct TrackerOptions {
   int weak_keyframe_inliers = 60;  ///< weighted inliers below this: a keyframe every
                                    ///< `weak_keyframe_frames`, to keep a thin map alive [-]
   int weak_keyframe_frames = 3;    ///< [frames]
-  std::string vocabulary_path;     ///< bag-of-words vocabulary for relocalisation; empty:
-                                   ///< no relocalisation
+  /// The camera's frame rate [Hz]: the options counted in frames follow it (AdaptToRig, with
+  /// reference_rate_hz). slslam's readers take it from the sequence (EuRoC's sensor.yaml or its
+  /// timestamps, KITTI's times.txt, a bag's stamps, the simulator's rate). 0: unknown, the counts
+  /// are used as given
+  double frame_rate_hz = 0.0;
+  /// The frame rate the options counted in frames (keyframe gaps, RECENTLY_LOST, lost motion, a
+  /// new map after loss, projected frames) and per frame (lost_velocity_decay,
+  /// unaligned_max_turn_deg_per_frame) are given at [Hz]: the simulated rig's, on which they were
+  /// tuned. At frame_rate_hz each count becomes round(count * frame_rate_hz / reference_rate_hz),
+  /// so it spans the same time at any camera rate: XFeat's keyframe gap of 6 frames is 0.3 s at
+  /// 20 Hz, and 6 frames of KITTI's 10 Hz (0.6 s, 6 m at its speed) cost it most of the path
+  /// (benchmarks/log/kitti_low_light.md). 0: the counts as given at every rate
+  double reference_rate_hz = 20.0;
+  /// The focal length the image-motion windows in pixels (search_radius_px, line_search_px,
+  /// projection_search_px, projection_cell_px) are given at [px]: the simulated rig's, on which
+  /// they were tuned. At the rig's fx each is scaled by fx / reference_focal_px, the same angle at
+  /// any resolution: on KITTI (fx 721 px, 10 Hz) with the frame rate above, ORB + lines and XFeat
+  /// + lines both came closer to ORB-SLAM3's path than with the rate alone
+  /// (benchmarks/log/kitti_low_light.md). 0: the windows as given
+  double reference_focal_px = 458.0;
+  std::string vocabulary_path;  ///< bag-of-words vocabulary for relocalisation; empty:
+                                ///< no relocalisation
   RelocalisationOptions relocalisation;
   LoopClosingOptions loop_closing;  ///< loop closing and map merging (need the vocabulary)
   bool localise_only = false;       ///< track in the loaded maps without changing them: no
@@ -296,6 +316,13 @@ struct TrackerOptions {
 
   void Check() const;
 };
+
+// `options` with the options counted in frames and the image-motion windows in pixels turned to
+// the rig (frame_rate_hz against reference_rate_hz, the camera's fx against reference_focal_px;
+// a ratio within 1 % of 1 counts as 1, so a rate read from jittered timestamps changes
+// nothing). The result's references are the rig's own, so adapting it again changes nothing.
+// The Tracker adapts its options on construction; a count that was positive stays at least 1.
+TrackerOptions AdaptToRig(const TrackerOptions& options);
 
 // A frame's pose expressed in the final map: relative to its reference keyframe, so loop
 // correction, merging and bundle adjustment that move the keyframe move the frame too.

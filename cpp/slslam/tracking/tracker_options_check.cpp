@@ -102,6 +102,9 @@ void TrackerOptions::Check() const {
   CheckInRange("tracking.weak_keyframe_inliers", weak_keyframe_inliers, 0, kMaxCount);
   CheckInRange("tracking.weak_keyframe_frames", weak_keyframe_frames, 1, kMaxCount);
   CheckInRange("tracking.lines_on_demand_inliers", lines_on_demand_inliers, 0, kMaxCount);
+  CheckInRange("tracking.frame_rate_hz", frame_rate_hz, 0.0, 1e5);
+  CheckInRange("tracking.reference_rate_hz", reference_rate_hz, 0.0, 1e5);
+  CheckInRange("tracking.reference_focal_px", reference_focal_px, 0.0, 1e7);
 }
 
 }  // namespace slslam

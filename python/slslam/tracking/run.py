@@ -208,6 +208,18 @@ def _frame_stamps_ns(sequence, n: int) -> list[int] | None:
     return [int(t) for t in stamps[:n]]
 
 
+def _with_frame_rate(config: Config, stamps_ns: list[int] | None) -> Config:
+    """``config`` with ``tracking.frame_rate_hz`` taken from the frames' timestamps (one over
+    their median interval) where it is 0 (the default) and the sequence lists them."""
+    if config.tracking.frame_rate_hz > 0 or stamps_ns is None or len(stamps_ns) < 2:
+        return config
+    interval_ns = float(np.median(np.diff(np.asarray(stamps_ns, dtype=np.int64))))
+    if interval_ns <= 0:
+        return config
+    tracking = dataclasses.replace(config.tracking, frame_rate_hz=1e9 / interval_ns)
+    return dataclasses.replace(config, tracking=tracking)
+
+
 def _stamp(stamps_ns: list[int] | None, index: int, timestamp_s: float) -> str:
     if stamps_ns is not None and 0 <= index < len(stamps_ns):
         return tum_time(stamps_ns[index])
@@ -477,6 +489,8 @@ def run_sequence(
     )
     n = len(sequence) if max_frames is None else min(max_frames, len(sequence))
     stamps_ns = _frame_stamps_ns(sequence, n)
+    # the options counted in frames follow the camera's rate (tracking.reference_rate_hz)
+    config = _with_frame_rate(config, stamps_ns)
     results: list[TrackResult] = []
     error: BaseException | None = None
     with Tracker(
@@ -584,6 +598,7 @@ def run_sequence(
             s: sum(r.state == s for r in results) for s in sorted({r.state for r in results})
         },
         **_loss_metrics(results),
+        "rig_adapted": tracker.rig_adapted_options(),
         "median_ms": {
             s: statistics.median(getattr(r.timings_ms, s) for r in results) if results else None
             for s in STAGES

@@ -386,6 +386,26 @@ def _vocabulary_for(config: Config, frontend: Any) -> Path | None:
         return None
 
 
+#: The tracking options AdaptToRig turns to the camera's frame rate and focal length.
+RIG_ADAPTED_OPTIONS = (
+    "frame_rate_hz",
+    "keyframe_max_frames",
+    "keyframe_min_frames",
+    "keyframe_min_frames_noisy",
+    "weak_keyframe_frames",
+    "projected_max_frames",
+    "recently_lost_frames",
+    "lost_motion_frames",
+    "new_map_after_lost_frames",
+    "lost_velocity_decay",
+    "unaligned_max_turn_deg_per_frame",
+    "search_radius_px",
+    "line_search_px",
+    "projection_search_px",
+    "projection_cell_px",
+)
+
+
 class Tracker:
     """Stereo point-line visual SLAM.
 
@@ -442,6 +462,9 @@ class Tracker:
             raise InputError("--localise-only", "localisation-only mode needs a map (--load-map)")
         options.localise_only = localise_only
         self._core = _core.TrackerCore(options, _line_options(self.config))
+        # The options the core runs with (the counts in frames at the camera's rate, the pixel
+        # windows at its focal length: tracking.reference_rate_hz, reference_focal_px).
+        self._rig_options = _core.adapt_to_rig(options)
         # tracking.projected_max_frames: frames go to the core without keypoints when it will
         # likely place the map's points itself (_detect_ahead); the descriptor kind of the empty
         # set is the front end's own, found on the first detection.
@@ -828,7 +851,8 @@ class Tracker:
         ``frames_ahead`` above the configured value the worker may know fewer and choose
         otherwise)."""
         tracking = self.config.tracking
-        if tracking.projected_max_frames <= 0 or self._no_keypoints is None:
+        max_frames = self._rig_options.projected_max_frames  # at the camera's rate
+        if max_frames <= 0 or self._no_keypoints is None:
             return True
         lag = tracking.pipeline_frames_ahead + 1
         known = [r for r in self._results[-64:] if r.index <= index - lag]  # (a copy)
@@ -851,7 +875,7 @@ class Tracker:
             return choose(True)
         detected = [r.index for r in known if not r.counts.projected]
         detected += [k for k, (detect, _) in since if detect]
-        if not detected or index - max(detected) > tracking.projected_max_frames:
+        if not detected or index - max(detected) > max_frames:
             return choose(True)
         keyframes = [r.index for r in known if r.counts.keyframe]
         if len(keyframes) < 2:
@@ -883,6 +907,13 @@ class Tracker:
         )
 
     # -- results -------------------------------------------------------------------------------
+    def rig_adapted_options(self) -> dict[str, float]:
+        """The tracking options that follow the rig, as the core runs with them (the counts in
+        frames at ``tracking.frame_rate_hz``, the pixel windows at the camera's fx; equal to the
+        config's where the rig is the reference one or the references are 0)."""
+        o = self._rig_options
+        return {name: getattr(o, name) for name in RIG_ADAPTED_OPTIONS}
+
     @property
     def results(self) -> list[TrackResult]:
         """Every frame's result so far, in input order."""

@@ -344,6 +344,9 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(weak_keyframe_inliers, "tracking.weak_keyframe_inliers", 0, 1e9, "[]"),
        FIELD(weak_keyframe_frames, "tracking.weak_keyframe_frames", 1, 1e9, "[]"),
        FIELD(lines_on_demand_inliers, "tracking.lines_on_demand_inliers", 0, 1e9, "[]"),
+       FIELD(frame_rate_hz, "tracking.frame_rate_hz", 0, 1e5, "[]"),
+       FIELD(reference_rate_hz, "tracking.reference_rate_hz", 0, 1e5, "[]"),
+       FIELD(reference_focal_px, "tracking.reference_focal_px", 0, 1e7, "[]"),
        // nested structs, reached through the tracker's constructor
        FIELD(rig.baseline_m, "stereo baseline", 0, 1000, "(]"),
        FIELD(rig.camera.fx, "camera fx", 0, 1e7, "(]"),
