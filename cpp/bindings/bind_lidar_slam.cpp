@@ -1,6 +1,6 @@
 // slslam._core LiDAR(-inertial) SLAM: odometry (deskew, scan-to-map, IMU smoothing), Scan
-// Context loop candidates and the keyframe pose graph (the shared solver,
-// optimization/pose_graph.h). Only built with SLSLAM_WITH_PCL (the module lives in slslam_lidar).
+// Context loop candidates and the keyframe pose graph (lidar/keyframe_pose_graph.h). Only built
+// with SLSLAM_WITH_PCL (the module lives in slslam_lidar).
 #include <string>
 #include <vector>
 
@@ -9,10 +9,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "slslam/core/check.h"
+#include "slslam/lidar/keyframe_pose_graph.h"
 #include "slslam/lidar/lidar_odometry.h"
 #include "slslam/lidar/scan_context.h"
-#include "slslam/optimization/pose_graph.h"
 
 namespace py = pybind11;
 
@@ -31,60 +30,6 @@ std::vector<Eigen::Vector3d> ToVectors(const Points3& points) {
 Points3 ToArray(const std::vector<Eigen::Vector3d>& points) {
   Points3 out(points.size(), 3);
   for (size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
-  return out;
-}
-
-// The LiDAR back end's pose-graph settings (slslam.lidar.slam); the graph itself is the shared
-// solver's.
-struct LidarPoseGraphOptions {
-  int max_iterations = 50;         ///< Levenberg-Marquardt iterations [-]
-  double loop_cauchy_scale = 1.0;  ///< Cauchy scale of loop edges (whitened units) [-]
-
-  void Check() const {
-    SLSLAM_CHECK(max_iterations >= 1 && max_iterations <= 1000,
-                 "LidarPoseGraphOptions.max_iterations must be in [1, 1000], got ", max_iterations);
-    SLSLAM_CHECK(loop_cauchy_scale > 0, "LidarPoseGraphOptions.loop_cauchy_scale must be > 0");
-  }
-};
-
-// A 4x4 world_from_keyframe as the keyframe_from_world pose the shared solver works on.
-BaPose KeyframeFromWorld(const Eigen::Matrix4d& world_from_keyframe, size_t index) {
-  const Eigen::Matrix3d R = world_from_keyframe.topLeftCorner<3, 3>();
-  SLSLAM_CHECK(world_from_keyframe.allFinite() &&
-                   (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-6,
-               "pose graph: keyframe ", index, " is not a rigid transform");
-  return {Rigid3d::FromMatrix4(world_from_keyframe).Inverse(), index == 0};
-}
-
-// Keyframe poses (world_from_keyframe) optimised under edges a -> b: T_a_b = a_from_b with an
-// information of its split error (translation t_est - t_ab in frame a, then Log(R_ab^T R_est)),
-// loops under a Cauchy loss. The first keyframe is held.
-std::vector<Eigen::Matrix4d> OptimizeLidarPoseGraph(
-    const std::vector<Eigen::Matrix4d>& T_world_keyframe, const std::vector<int>& a,
-    const std::vector<int>& b, const std::vector<Eigen::Matrix4d>& T_a_b,
-    const std::vector<Eigen::Matrix<double, 6, 6>>& information, const std::vector<bool>& loop,
-    const LidarPoseGraphOptions& options) {
-  options.Check();
-  SLSLAM_CHECK(a.size() == b.size() && a.size() == T_a_b.size() && a.size() == information.size() &&
-                   a.size() == loop.size(),
-               "pose graph: edge lists differ in length");
-  std::vector<BaPose> poses;
-  for (size_t i = 0; i < T_world_keyframe.size(); ++i) {
-    poses.push_back(KeyframeFromWorld(T_world_keyframe[i], i));
-  }
-  std::vector<PoseGraphEdge> edges(a.size());
-  for (size_t k = 0; k < a.size(); ++k) {
-    edges[k].a = a[k];
-    edges[k].b = b[k];
-    edges[k].a_from_b = Rigid3d::FromMatrix4(T_a_b[k]);
-    edges[k].information = LeftTangentInformation(edges[k].a_from_b, information[k]);
-    edges[k].cauchy_scale = loop[k] ? options.loop_cauchy_scale : 0.0;
-  }
-  PoseGraphOptions graph_options;
-  graph_options.max_iterations = options.max_iterations;
-  OptimizePoseGraph(&poses, edges, graph_options);
-  std::vector<Eigen::Matrix4d> out;
-  for (const BaPose& pose : poses) out.push_back(pose.cam_from_world.Inverse().ToMatrix4());
   return out;
 }
 
