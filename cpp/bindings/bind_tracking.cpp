@@ -155,9 +155,8 @@ std::shared_ptr<PreparedFrame> PrepareFromArrays(
                          noisy, denoised);
 }
 
-}  // namespace
-
-void BindTracking(py::module_& m) {
+// The rectified stereo rig.
+void BindRig(py::module_& m) {
   py::class_<StereoRig>(m, "StereoRig", "Rectified stereo pair: left intrinsics and baseline.")
       .def(py::init<>())
       .def(py::init([](const PinholeCamera& camera, double baseline_m) {
@@ -169,7 +168,10 @@ void BindTracking(py::module_& m) {
       .def_readwrite("camera", &StereoRig::camera)
       .def_readwrite("baseline_m", &StereoRig::baseline_m)
       .def("check", &StereoRig::Check);
+}
 
+// Options of pose optimisation, bundle adjustment, triangulation, local mapping, stereo.
+void BindSolverOptions(py::module_& m) {
   py::class_<PoseOptimizerOptions>(m, "PoseOptimizerOptions", "Motion-only bundle adjustment.")
       .def(py::init<>())
       .def_readwrite("rounds", &PoseOptimizerOptions::rounds)
@@ -224,7 +226,10 @@ void BindTracking(py::module_& m) {
       .def_readwrite("row_search_max_cost", &StereoMatchOptions::row_search_max_cost)
       .def_readwrite("row_search_min_texture", &StereoMatchOptions::row_search_min_texture)
       .def("check", &StereoMatchOptions::Check);
+}
 
+// Options of relocalisation, the IMU, the pose graph and loop closing.
+void BindRecoveryOptions(py::module_& m) {
   py::class_<RelocalisationOptions>(m, "RelocalisationOptions",
                                     "Relocalisation by bag of words, PnP RANSAC and the local map.")
       .def(py::init<>())
@@ -306,7 +311,10 @@ void BindTracking(py::module_& m) {
       .def_readwrite("welding_keyframes", &LoopClosingOptions::welding_keyframes)
       .def_readwrite("pose_graph", &LoopClosingOptions::pose_graph)
       .def("check", &LoopClosingOptions::Check);
+}
 
+// TrackerOptions, which holds the option structs above.
+void BindTrackerOptions(py::module_& m) {
   py::class_<TrackerOptions>(m, "TrackerOptions", "Tracking, mapping and front-end thresholds.")
       .def(py::init<>())
       .def_readwrite("rig", &TrackerOptions::rig)
@@ -372,7 +380,10 @@ void BindTracking(py::module_& m) {
       .def_readwrite("use_imu", &TrackerOptions::use_imu)
       .def_readwrite("imu", &TrackerOptions::imu)
       .def("check", &TrackerOptions::Check);
+}
 
+// One frame's result and the free functions of the tracking front end.
+void BindFrameOutputAndHelpers(py::module_& m) {
   py::class_<FrameOutput>(m, "FrameOutput",
                           "One frame's result from TrackerCore.track (slslam.Tracker wraps it "
                           "into a TrackResult).")
@@ -442,7 +453,10 @@ void BindTracking(py::module_& m) {
       "(noisier than denoise_above_noise; 0: never): descriptors along the row band, then the row "
       "search with options.row_search, then subpixel refinement. (u_right, depth) per left "
       "keypoint, -1 where unmatched.");
+}
 
+// The per-frame session (pipeline/tracker_session.h) and what it prepares ahead.
+void BindSession(py::module_& m) {
   py::class_<PreparedFrame, std::shared_ptr<PreparedFrame>>(
       m, "PreparedFrame", "A frame whose stereo matching ran ahead (TrackerCore.prepare).")
       .def_property_readonly("stereo_matching_ms",
@@ -543,6 +557,17 @@ void BindTracking(py::module_& m) {
           "_translation arrays) in the "
           "final map: after loop correction, merges and bundle adjustment.")
       .def("flush", &TrackerSession::Flush, py::call_guard<py::gil_scoped_release>());
+}
+
+}  // namespace
+
+void BindTracking(py::module_& m) {
+  BindRig(m);
+  BindSolverOptions(m);
+  BindRecoveryOptions(m);
+  BindTrackerOptions(m);
+  BindFrameOutputAndHelpers(m);
+  BindSession(m);
 }
 
 }  // namespace slslam::bindings
