@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Sets up (Debian packages, slslam with test extras, GoogleTest binaries) and runs every test:
-# the C++ suite through ctest, then the Python suite through pytest. Fails when either fails.
+# the C++ suite through ctest, the lint and type checks, then the Python suite through pytest.
+# Fails when any part fails. The ThreadSanitizer build and clang's thread-safety analysis are
+# separate scripts (scripts/tsan.sh, scripts/thread_safety.sh) that .ci/run calls after this.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -12,18 +14,6 @@ source "$root/scripts/python_env.sh"
 
 echo "[slslam] C++ tests"
 ctest --test-dir "$build_dir" --output-on-failure -j2
-
-# The threaded tracker under ThreadSanitizer (its own build in build/tsan, about 6 minutes on two
-# cores the first time); SLSLAM_SKIP_TSAN=1 skips it.
-if [[ "${SLSLAM_SKIP_TSAN:-0}" != "1" ]]; then
-  bash scripts/tsan.sh
-fi
-
-# Clang's thread-safety analysis of the core's locking (syntax only, about a minute);
-# SLSLAM_SKIP_THREAD_SAFETY=1 skips it.
-if [[ "${SLSLAM_SKIP_THREAD_SAFETY:-0}" != "1" ]]; then
-  bash scripts/thread_safety.sh
-fi
 
 # ruff, clang-format and mypy (scripts/lint.sh)
 bash scripts/lint.sh

@@ -8,7 +8,7 @@
 #   bash scripts/thread_safety.sh FILE.cpp   # some sources
 #
 # Installs Debian's clang when missing (the product builds with GCC; clang is used for this check
-# only). Called by scripts/test.sh; SLSLAM_SKIP_THREAD_SAFETY=1 skips it there.
+# only). Called by .ci/run after scripts/test.sh.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"

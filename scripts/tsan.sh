@@ -8,7 +8,7 @@
 #   bash scripts/tsan.sh 'TrackerTest.*' # another gtest filter
 #
 # Needs the packages scripts/setup.sh installs, plus libtsan2 (GCC's TSan runtime; installed
-# here when missing). Called by scripts/test.sh.
+# here when missing). Called by .ci/run after scripts/test.sh.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
