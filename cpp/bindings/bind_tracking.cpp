@@ -68,8 +68,8 @@ py::dict MapDict(const SessionMap& session) {
   py::dict imu_out;
   imu_out["has_imu"] = imu.has_imu;
   imu_out["initialised"] = imu.initialised;
-  imu_out["first_pose_s"] = imu.first_pose_s;
-  imu_out["first_init_s"] = imu.first_init_s;
+  imu_out["first_pose_t_ns"] = imu.first_pose_t_ns;  // (None: never)
+  imu_out["first_init_t_ns"] = imu.first_init_t_ns;
   imu_out["initialisations"] = imu.initialisations;
   imu_out["refinements"] = imu.refinements;
   imu_out["last_failure"] = imu.last_failure;
@@ -108,23 +108,23 @@ py::dict MapDict(const SessionMap& session) {
   return out;
 }
 
-// The trajectory as arrays (index, timestamp, map_index, cam_from_world rotation, translation).
+// The trajectory as arrays (index, t_ns, map_index, cam_from_world rotation, translation).
 py::dict TrajectoryDict(const std::vector<FramePose>& poses) {
   const auto n = static_cast<py::ssize_t>(poses.size());
   py::array_t<int> index(n), map_index(n);
-  py::array_t<double> timestamp(n);
+  py::array_t<int64_t> t_ns(n);
   py::array_t<double> R_cw({n, py::ssize_t{3}, py::ssize_t{3}});
   py::array_t<double> t_cw({n, py::ssize_t{3}});
   auto idx = index.mutable_unchecked<1>();
   auto mi = map_index.mutable_unchecked<1>();
-  auto ts = timestamp.mutable_unchecked<1>();
+  auto ts = t_ns.mutable_unchecked<1>();
   auto R = R_cw.mutable_unchecked<3>();
   auto t = t_cw.mutable_unchecked<2>();
   for (py::ssize_t i = 0; i < n; ++i) {
     const FramePose& f = poses[i];
     idx(i) = f.index;
     mi(i) = f.map_index;
-    ts(i) = f.timestamp;
+    ts(i) = f.t_ns;
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) R(i, r, c) = f.cam_from_world.rotation(r, c);
       t(i, r) = f.cam_from_world.translation(r);
@@ -132,7 +132,7 @@ py::dict TrajectoryDict(const std::vector<FramePose>& poses) {
   }
   py::dict out;
   out["index"] = index;
-  out["timestamp"] = timestamp;
+  out["t_ns"] = t_ns;
   out["map_index"] = map_index;
   out["cam_from_world_rotation"] = R_cw;
   out["cam_from_world_translation"] = t_cw;
@@ -141,7 +141,7 @@ py::dict TrajectoryDict(const std::vector<FramePose>& poses) {
 
 // TrackerSession::Prepare from numpy arrays: converted under the GIL, built without it.
 std::shared_ptr<PreparedFrame> PrepareFromArrays(
-    const TrackerSession& session, int index, double timestamp, const py::array& left_image,
+    const TrackerSession& session, int index, int64_t t_ns, const py::array& left_image,
     const py::array& right_image, const PixelArray& left_uv, const py::array& left_descriptors,
     const PixelArray& right_uv, const py::array& right_descriptors,
     const std::shared_ptr<LeftLines>& left_lines, bool keypoints_pending, bool noisy,
@@ -151,8 +151,8 @@ std::shared_ptr<PreparedFrame> PrepareFromArrays(
   const Keypoints kl = MakeKeypoints(left_uv, left_descriptors, "left");
   const Keypoints kr = MakeKeypoints(right_uv, right_descriptors, "right");
   py::gil_scoped_release release;
-  return session.Prepare(index, timestamp, left, right, kl, kr, left_lines, keypoints_pending,
-                         noisy, denoised);
+  return session.Prepare(index, t_ns, left, right, kl, kr, left_lines, keypoints_pending, noisy,
+                         denoised);
 }
 
 // The rectified stereo rig.
@@ -436,7 +436,7 @@ void BindFrameOutputAndHelpers(py::module_& m) {
           // the pair as StereoFrontend::Build matches it (tracking.denoise_above_noise)
           const cv::Mat left = SmoothIfNoisy(left_image_mat, denoise_above_noise);
           const cv::Mat right = SmoothIfNoisy(right_image_mat, denoise_above_noise);
-          frame = MakeStereoFrame(0, 0.0, kl, kr, nullptr, nullptr, rig, options);
+          frame = MakeStereoFrame(0, 0, kl, kr, nullptr, nullptr, rig, options);
           SearchAndRefineStereoPoints(left, right, rig, options, &frame);
         }
         // Copies: a Map would hand Python a view of `frame`, which dies on return.
@@ -474,32 +474,33 @@ void BindSession(py::module_& m) {
            py::arg("options"), py::arg("lines") = LineExtractorOptions{})
       .def(
           "track",
-          [](TrackerSession& session, int index, double timestamp, const py::array& left_image,
+          [](TrackerSession& session, int index, int64_t t_ns, const py::array& left_image,
              const py::array& right_image, const PixelArray& left_uv,
              const py::array& left_descriptors, const PixelArray& right_uv,
              const py::array& right_descriptors, const std::shared_ptr<LeftLines>& left_lines,
              bool noisy, bool denoised) {
             const std::shared_ptr<PreparedFrame> p =
-                PrepareFromArrays(session, index, timestamp, left_image, right_image, left_uv,
+                PrepareFromArrays(session, index, t_ns, left_image, right_image, left_uv,
                                   left_descriptors, right_uv, right_descriptors, left_lines,
                                   /*keypoints_pending=*/false, noisy, denoised);
             py::gil_scoped_release release;
             return session.TrackPrepared(*p);
           },
-          py::arg("index"), py::arg("timestamp"), py::arg("left_image"), py::arg("right_image"),
+          py::arg("index"), py::arg("t_ns"), py::arg("left_image"), py::arg("right_image"),
           py::arg("left_uv"), py::arg("left_descriptors"), py::arg("right_uv"),
           py::arg("right_descriptors"), py::arg("left_lines") = nullptr, py::arg("noisy") = false,
           py::arg("denoised") = false,
-          "Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left "
+          "Tracks one rectified stereo frame captured at t_ns [ns]; returns its FrameOutput. "
+          "left_lines: the left "
           "image's lines from extract_left_lines on this left image (None: extracted here). "
           "noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). "
           "denoised: both images come from smooth_if_noisy at the options' "
           "denoise_above_noise (slslam.Tracker's own), so they are not checked again.")
-      .def("prepare", &PrepareFromArrays, py::arg("index"), py::arg("timestamp"),
-           py::arg("left_image"), py::arg("right_image"), py::arg("left_uv"),
-           py::arg("left_descriptors"), py::arg("right_uv"), py::arg("right_descriptors"),
-           py::arg("left_lines") = nullptr, py::arg("keypoints_pending") = false,
-           py::arg("noisy") = false, py::arg("denoised") = false,
+      .def("prepare", &PrepareFromArrays, py::arg("index"), py::arg("t_ns"), py::arg("left_image"),
+           py::arg("right_image"), py::arg("left_uv"), py::arg("left_descriptors"),
+           py::arg("right_uv"), py::arg("right_descriptors"), py::arg("left_lines") = nullptr,
+           py::arg("keypoints_pending") = false, py::arg("noisy") = false,
+           py::arg("denoised") = false,
            "track's first part without the session's lock: the frame's stereo matching (and "
            "its lines unless left_lines or lines on demand), for a thread ahead of the core. "
            "track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints "
@@ -520,10 +521,10 @@ void BindSession(py::module_& m) {
           "The left image's lines as track extracts them (smoothed when noisy), without the "
           "session's lock: for a thread beside the point front end. Needs use_lines and "
           "right_lines_on_keyframes. denoised: as track's.")
-      .def("add_imu", &TrackerSession::AddImu, py::arg("t_s"), py::arg("gyro"), py::arg("acc"),
+      .def("add_imu", &TrackerSession::AddImu, py::arg("t_ns"), py::arg("gyro"), py::arg("acc"),
            py::call_guard<py::gil_scoped_release>(),
-           "IMU samples (body frame, on the IMU's clock) for the visual-inertial tracking, before "
-           "the frames they precede.")
+           "IMU samples (times [ns] int64, body frame, on the IMU's clock) for the "
+           "visual-inertial tracking, before the frames they precede.")
       .def(
           "map",
           [](TrackerSession& session, bool settle) {
@@ -553,7 +554,7 @@ void BindSession(py::module_& m) {
             }
             return TrajectoryDict(poses);
           },
-          "Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and "
+          "Every estimated frame pose (index, t_ns, map_index, cam_from_world_rotation and "
           "_translation arrays) in the "
           "final map: after loop correction, merges and bundle adjustment.")
       .def("flush", &TrackerSession::Flush, py::call_guard<py::gil_scoped_release>());

@@ -1722,9 +1722,9 @@ class TrackerCore:
     """
     def __init__(self, options: TrackerOptions, lines: LineExtractorOptions = ...) -> None:
         ...
-    def add_imu(self, t_s: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], gyro: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], acc: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> None:
+    def add_imu(self, t_ns: typing.Annotated[numpy.typing.ArrayLike, numpy.int64, "[m, 1]"], gyro: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"], acc: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 3]"]) -> None:
         """
-        IMU samples (body frame, on the IMU's clock) for the visual-inertial tracking, before the frames they precede.
+        IMU samples (times [ns] int64, body frame, on the IMU's clock) for the visual-inertial tracking, before the frames they precede.
         """
     def extract_left_lines(self, left_image: numpy.ndarray, denoised: bool = False) -> LeftLines:
         """
@@ -1740,7 +1740,7 @@ class TrackerCore:
         """
         Points and lines; settle: first waits for local mapping (and applies an overlapped local BA), else the map as it stands.
         """
-    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False, noisy: bool = False, denoised: bool = False) -> PreparedFrame:
+    def prepare(self, index: typing.SupportsInt | typing.SupportsIndex, t_ns: typing.SupportsInt | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, keypoints_pending: bool = False, noisy: bool = False, denoised: bool = False) -> PreparedFrame:
         """
         track's first part without the session's lock: the frame's stereo matching (and its lines unless left_lines or lines on demand), for a thread ahead of the core. track(...) equals track_prepared(prepare(...)). keypoints_pending (no keypoints given; tracking.projected_max_frames): the tracker places the map's points in the frame, or returns needs_keypoints. noisy, denoised: as track's.
         """
@@ -1748,9 +1748,9 @@ class TrackerCore:
         """
         Writes every live map (versioned binary, checksummed); waits for mapping.
         """
-    def track(self, index: typing.SupportsInt | typing.SupportsIndex, timestamp: typing.SupportsFloat | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, noisy: bool = False, denoised: bool = False) -> FrameOutput:
+    def track(self, index: typing.SupportsInt | typing.SupportsIndex, t_ns: typing.SupportsInt | typing.SupportsIndex, left_image: numpy.ndarray, right_image: numpy.ndarray, left_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], left_descriptors: numpy.ndarray, right_uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], right_descriptors: numpy.ndarray, left_lines: LeftLines = None, noisy: bool = False, denoised: bool = False) -> FrameOutput:
         """
-        Tracks one rectified stereo frame; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here). noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). denoised: both images come from smooth_if_noisy at the options' denoise_above_noise (slslam.Tracker's own), so they are not checked again.
+        Tracks one rectified stereo frame captured at t_ns [ns]; returns its FrameOutput. left_lines: the left image's lines from extract_left_lines on this left image (None: extracted here). noisy: the images were smoothed as noisy before (tracking.unaligned_sigma_factor). denoised: both images come from smooth_if_noisy at the options' denoise_above_noise (slslam.Tracker's own), so they are not checked again.
         """
     def track_prepared(self, frame: PreparedFrame) -> FrameOutput:
         """
@@ -1758,7 +1758,7 @@ class TrackerCore:
         """
     def trajectory(self) -> dict:
         """
-        Every estimated frame pose (index, timestamp, map_index, cam_from_world_rotation and _translation arrays) in the final map: after loop correction, merges and bundle adjustment.
+        Every estimated frame pose (index, t_ns, map_index, cam_from_world_rotation and _translation arrays) in the final map: after loop correction, merges and bundle adjustment.
         """
 class VocabularyOptions:
     """

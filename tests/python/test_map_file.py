@@ -88,7 +88,7 @@ def test_format_one_files_still_load_as_opencv_line_descriptors(tmp_path: Path) 
     [
         ("cloud.ply", b"ply\nformat ascii 1.0\n", "not an slslam map file"),
         ("empty.slmap", b"", "not an slslam map file"),
-        ("newer.slmap", map_file(version=3), "newer than this slslam reads"),
+        ("newer.slmap", map_file(version=4), "newer than this slslam reads"),
         ("unknown_lines.slmap", map_file(line_descriptor="sift"), "line descriptor 'sift'"),
         ("truncated.slmap", map_file()[:-5], "truncated"),
         ("flipped.slmap", map_file()[:-3] + b"\xff" + map_file()[-2:], "checksum mismatch"),

@@ -82,8 +82,8 @@ def test_stereo_matching_runs_ahead_of_the_core_and_a_frame_is_tracked_once(sequ
         _, expected, _ = tracker.trajectory()
     with Tracker(sequence.camera, orb_lines()) as tracker:
         f0, f1 = sequence[0], sequence[1]
-        first = tracker._prepare(0, f0.left, f0.right, f0.t_ns * 1e-9, None)
-        second = tracker._prepare(1, f1.left, f1.right, f1.t_ns * 1e-9, f0.t_ns * 1e-9)
+        first = tracker._prepare(0, f0.left, f0.right, f0.t_ns, None)
+        second = tracker._prepare(1, f1.left, f1.right, f1.t_ns, f0.t_ns)
         assert first.stereo.stereo_matching_ms > 0.0
         tracker._track_prepared(first)
         tracker._track_prepared(second)
@@ -91,7 +91,7 @@ def test_stereo_matching_runs_ahead_of_the_core_and_a_frame_is_tracked_once(sequ
             tracker._core.track_prepared(first.stereo)
         _, poses, _ = tracker.trajectory()
         f2 = sequence[2]
-        third = tracker._prepare(2, f2.left, f2.right, f2.t_ns * 1e-9, f1.t_ns * 1e-9)
+        third = tracker._prepare(2, f2.left, f2.right, f2.t_ns, f1.t_ns)
     assert np.array_equal(poses, expected)
     with Tracker(sequence.camera, orb_lines()) as other:  # a frame is its own core's
         with pytest.raises(ValueError, match="TrackerCore that prepared it"):

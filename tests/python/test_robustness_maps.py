@@ -164,8 +164,8 @@ def parse(data: bytes) -> Layout:
                 r.skip_list(4)
             kf["index"] = r.o
             r.o += 4
-            kf["timestamp"] = r.o
-            kf["timestamp_s"] = r.one("d")
+            kf["t_ns"] = r.o
+            kf["t_ns_value"] = r.one("q")
             kf["uv"], kf["n_keypoints"] = r.skip_list(8)
             r.skip_list(4)  # scores
             r.skip_list(4)  # octaves
@@ -239,7 +239,8 @@ class Sealer:
         payload = bytes(data[PREAMBLE:])
         start = max(0, min(same_until - PREAMBLE, len(payload), len(self.states) - 1))
         checksum = fnv1a64(payload[start:], self.states[start])
-        return bytes(data[:8]) + struct.pack("<IQQ", 2, len(payload), checksum) + payload
+        version = struct.unpack_from("<I", data, 8)[0]  # (the data's own: 3, or 2 for f64 times)
+        return bytes(data[:8]) + struct.pack("<IQQ", version, len(payload), checksum) + payload
 
     def patch(self, at: int, raw: bytes) -> bytes:
         """The original with ``raw`` written at ``at``, resealed."""
@@ -288,6 +289,10 @@ def f64(x: float) -> bytes:
     return struct.pack("<d", x)
 
 
+def i64(x: int) -> bytes:
+    return struct.pack("<q", x)
+
+
 def i32(x: int) -> bytes:
     return struct.pack("<i", x)
 
@@ -322,7 +327,8 @@ def generate(original: bytes, layout: Layout, rng: np.random.Generator) -> list[
     add("valid", "vocabulary-legacy-name", with_header(vocabulary=name), both(OK))
     add("valid", "other-writer-version", with_header(slslam_version="9.9.9-dev+x"), both(OK))
     kf = layout.keyframes[-1]
-    add("valid", "timestamp-9.1e9", s.patch(kf["timestamp"], f64(9.1e9)), both(OK))
+    add("valid", "t_ns-9.1e18", s.patch(kf["t_ns"], i64(9_100_000_000_000_000_000)), both(OK))
+    add("valid", "t_ns-negative", s.patch(kf["t_ns"], i64(-1)), both(OK))
     p = layout.points[len(layout.points) // 2]
     add("valid", "point-at-9.9e6", s.patch(p["position"], f64(-9.9e6)), both(OK))
 
@@ -331,7 +337,7 @@ def generate(original: bytes, layout: Layout, rng: np.random.Generator) -> list[
         add("preamble", "magic", magic + original[8:], both("not an slslam map file"))
     for version, what in (
         (0, "format version 0"),
-        (3, "newer"),
+        (4, "newer"),
         (256, "newer"),
         (2**32 - 1, "newer"),
     ):
@@ -367,7 +373,7 @@ def generate(original: bytes, layout: Layout, rng: np.random.Generator) -> list[
             what = "not an slslam map file"
         elif at < 12:
             version = struct.unpack_from("<I", data, 8)[0]
-            what = "format version 0" if version == 0 else "newer" if version > 2 else "."
+            what = "format version 0" if version == 0 else "newer" if version > 3 else "."
         elif at < 20:
             what = r"announces"
         else:
@@ -602,13 +608,21 @@ def generate(original: bytes, layout: Layout, rng: np.random.Generator) -> list[
 
     # -- keyframe records, resealed ------------------------------------------------------------
     kfs = layout.keyframes
+    # Format version 2: the same file with f64 frame times [s]; it loads, and a time that is not
+    # finite or beyond int64 nanoseconds is refused.
+    v2 = bytearray(original)
+    v2[8:12] = u32(2)
+    for kf in kfs:
+        v2[kf["t_ns"] : kf["t_ns"] + 8] = f64(kf["t_ns_value"] / 1e9)
+    s2 = Sealer(s.seal(v2))
+    add("compat", "version-2-seconds", s2.original, both(OK))
     for value in (1e300, -1e300, math.inf, -math.inf, math.nan, 2e10, -2e10, 9.3e9):
         for kf in rng.choice(len(kfs), 2, replace=False):
             kf = kfs[int(kf)]
             add(
                 "keyframe-timestamp",
                 f"kf{kf['id']}-{value}",
-                s.patch(kf["timestamp"], f64(value)),
+                s2.patch(kf["t_ns"], f64(value)),
                 records(rf"keyframe {kf['id']}: frame timestamp .* is not finite or beyond"),
             )
     for value in (1e300, math.inf, -math.inf, math.nan, 2e10, -1.0000001e7):

@@ -419,15 +419,46 @@ def test_bad_imu_samples_are_clear_errors(sim_loop):
     camera = EurocSequence(sim_loop).camera
     with Tracker(camera, config("orb", lines=False)) as tracker:
         z = np.zeros((3, 3))
+        t_ns = np.arange(3, dtype=np.int64) * 5_000_000
         with pytest.raises(InputError, match=r"IMU samples.*shape \(3, 3\)"):
-            tracker.add_imu(np.arange(3.0), np.zeros((3, 2)), z)
+            tracker.add_imu(t_ns, np.zeros((3, 2)), z)
+        with pytest.raises(InputError, match=r"IMU samples.*integer nanoseconds.*float64"):
+            tracker.add_imu(np.arange(3.0), z, z)  # float seconds: refused, not truncated
         with pytest.raises(InputError, match=r"IMU samples.*not finite"):
-            tracker.add_imu(np.array([0.0, 1.0, np.nan]), z, z)
+            tracker.add_imu(t_ns, np.array([[0.0, 0.0, np.nan], [0, 0, 0], [0, 0, 0]]), z)
         with pytest.raises(InputError, match=r"IMU samples.*increase"):
-            tracker.add_imu(np.array([0.0, 2.0, 1.0]), z, z)
-        tracker.add_imu(np.arange(3.0), z, z)
+            tracker.add_imu(np.array([0, 2, 1], dtype=np.int64), z, z)
+        tracker.add_imu(t_ns, z, z)
         with pytest.raises(InputError, match=r"IMU samples.*increase"):
-            tracker.add_imu(np.array([2.0]), np.zeros((1, 3)), np.zeros((1, 3)))
+            tracker.add_imu(np.array([10_000_000]), np.zeros((1, 3)), np.zeros((1, 3)))
+
+
+def test_frame_times_in_seconds_and_nanoseconds_agree(sim_loop):
+    """track(timestamp=s) and track(t_ns=) land on the same nanosecond (slslam.timestamps, as
+    the core's NsFromSeconds); exactly one is needed; a Unix time keeps its nanoseconds."""
+    from slslam.timestamps import ns_from_seconds
+
+    assert ns_from_seconds(1403715273.25) == 1_403_715_273_250_000_000
+    assert abs(ns_from_seconds(1403715273.262142) - 1_403_715_273_262_142_000) <= 119
+    assert ns_from_seconds(-0.0025) == -2_500_000
+    sequence = EurocSequence(sim_loop)
+    f = sequence[0]
+    with Tracker(sequence.camera, config("orb", lines=False)) as tracker:
+        with pytest.raises(InputError, match=r"timestamp \[s\] or t_ns \[ns\], once"):
+            tracker.track(f.left, f.right)
+        with pytest.raises(InputError, match="once"):
+            tracker.track(f.left, f.right, 1.0, t_ns=1)
+        with pytest.raises(InputError, match="t_ns must be an integer"):
+            tracker.track(f.left, f.right, t_ns=1.5)  # type: ignore[arg-type]
+        first = tracker.track(f.left, f.right, 1403715273.25)
+        assert first.t_ns == 1_403_715_273_250_000_000 and first.timestamp == 1403715273.25
+        second = tracker.track(f.left, f.right, t_ns=first.t_ns + 50_000_001)
+        assert second.t_ns == 1_403_715_273_300_000_001
+        with pytest.raises(InputError, match="does not increase"):
+            tracker.track(f.left, f.right, t_ns=second.t_ns)
+        final = tracker.final_trajectory()
+        assert final.t_ns.dtype == np.int64
+        assert final.t_ns.tolist() == [first.t_ns, second.t_ns]
 
 
 def _row_search_disparities(

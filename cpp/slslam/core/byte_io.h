@@ -45,6 +45,7 @@ class ByteWriter {
     for (int i = 0; i < 8; ++i) buffer_.push_back(static_cast<uint8_t>(v >> (8 * i)));
   }
   void I32(int32_t v) { U32(static_cast<uint32_t>(v)); }
+  void I64(int64_t v) { U64(static_cast<uint64_t>(v)); }
   void F32(float v) {
     uint32_t bits;
     std::memcpy(&bits, &v, 4);
@@ -122,6 +123,7 @@ class ByteReader {
     return v;
   }
   int32_t I32(const char* what) { return static_cast<int32_t>(U32(what)); }
+  int64_t I64(const char* what) { return static_cast<int64_t>(U64(what)); }
   float F32(const char* what) {
     const uint32_t bits = U32(what);
     float v;

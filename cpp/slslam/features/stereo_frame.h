@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -17,7 +18,7 @@ namespace slslam {
 
 struct StereoFrame {
   int index = 0;                ///< input frame number (0-based)
-  double timestamp = 0.0;       ///< [s]
+  int64_t t_ns = 0;             ///< capture time [ns] (core/time.h)
   Keypoints keypoints;          ///< left image
   std::vector<double> u_right;  ///< per keypoint: matched right column [px], or -1
   std::vector<double> depth;    ///< per keypoint: depth from the stereo match [m], or -1

@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 
 #include "slslam/core/check.h"
+#include "slslam/core/time.h"
 #include "slslam/geometry/rotation.h"
 
 namespace slslam {
@@ -139,50 +140,49 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
   return true;
 }
 
-void ImuBuffer::Add(double t_s, const Eigen::Vector3d& gyro_radps,
+void ImuBuffer::Add(int64_t t_ns, const Eigen::Vector3d& gyro_radps,
                     const Eigen::Vector3d& acc_mps2) {
-  Require(std::isfinite(t_s) && gyro_radps.allFinite() && acc_mps2.allFinite(),
-          "IMU sample is not finite");
-  SLSLAM_CHECK(samples_.empty() || t_s > samples_.back().t_s,
-               "IMU samples must come in increasing time: ", t_s, " s after ", samples_.back().t_s,
-               " s");
-  samples_.push_back({t_s, gyro_radps, acc_mps2});
+  Require(gyro_radps.allFinite() && acc_mps2.allFinite(), "IMU sample is not finite");
+  SLSLAM_CHECK(samples_.empty() || t_ns > samples_.back().t_ns,
+               "IMU samples must come in increasing time: ", t_ns, " ns after ",
+               samples_.back().t_ns, " ns");
+  samples_.push_back({t_ns, gyro_radps, acc_mps2});
 }
 
-bool ImuBuffer::Preintegrate(double t0_s, double t1_s, double max_sample_gap_s,
+bool ImuBuffer::Preintegrate(int64_t t0_ns, int64_t t1_ns, double max_sample_gap_s,
                              ImuPreintegration* out) const {
-  if (samples_.empty() || !(t1_s > t0_s) || samples_.front().t_s > t0_s ||
-      samples_.back().t_s < t1_s - max_sample_gap_s) {
+  if (samples_.empty() || !(t1_ns > t0_ns) || samples_.front().t_ns > t0_ns ||
+      SecondsBetween(samples_.back().t_ns, t1_ns) > max_sample_gap_s) {
     return false;
   }
   // The last sample at or before t0 (binary search: the buffer holds seconds of samples).
   size_t lo = 0, hi = samples_.size();
   while (hi - lo > 1) {
     const size_t mid = (lo + hi) / 2;
-    (samples_[mid].t_s <= t0_s ? lo : hi) = mid;
+    (samples_[mid].t_ns <= t0_ns ? lo : hi) = mid;
   }
-  double t = t0_s;
-  for (size_t k = lo; k < samples_.size() && t < t1_s; ++k) {
-    const double next = k + 1 < samples_.size() ? samples_[k + 1].t_s : t1_s;
-    if (next - samples_[k].t_s > max_sample_gap_s) return false;
-    const double end = std::min(next, t1_s);
-    if (end > t) out->Integrate(samples_[k].gyro, samples_[k].acc, end - t);
+  int64_t t = t0_ns;
+  for (size_t k = lo; k < samples_.size() && t < t1_ns; ++k) {
+    const int64_t next = k + 1 < samples_.size() ? samples_[k + 1].t_ns : t1_ns;
+    if (SecondsBetween(samples_[k].t_ns, next) > max_sample_gap_s) return false;
+    const int64_t end = std::min(next, t1_ns);
+    if (end > t) out->Integrate(samples_[k].gyro, samples_[k].acc, SecondsBetween(t, end));
     t = end;
   }
-  return t >= t1_s;
+  return t >= t1_ns;
 }
 
-void ImuBuffer::DropBefore(double t_s) {
-  // Keep the last sample at or before t_s: it is held over t_s.
-  while (samples_.size() >= 2 && samples_[1].t_s <= t_s) samples_.pop_front();
+void ImuBuffer::DropBefore(int64_t t_ns) {
+  // Keep the last sample at or before t_ns: it is held over t_ns.
+  while (samples_.size() >= 2 && samples_[1].t_ns <= t_ns) samples_.pop_front();
 }
 
-ImuBuffer ImuBuffer::Slice(double t0_s, double t1_s) const {
+ImuBuffer ImuBuffer::Slice(int64_t t0_ns, int64_t t1_ns) const {
   ImuBuffer out;
   for (size_t k = 0; k < samples_.size(); ++k) {
     const Sample& s = samples_[k];
-    if (s.t_s >= t1_s) break;
-    const bool held_over_t0 = k + 1 < samples_.size() && samples_[k + 1].t_s <= t0_s;
+    if (s.t_ns >= t1_ns) break;
+    const bool held_over_t0 = k + 1 < samples_.size() && samples_[k + 1].t_ns <= t0_ns;
     if (!held_over_t0) out.samples_.push_back(s);
   }
   return out;
@@ -190,7 +190,7 @@ ImuBuffer ImuBuffer::Slice(double t0_s, double t1_s) const {
 
 void ImuBuffer::Append(const ImuBuffer& later) {
   for (const Sample& s : later.samples_) {
-    if (samples_.empty() || s.t_s > samples_.back().t_s) samples_.push_back(s);
+    if (samples_.empty() || s.t_ns > samples_.back().t_ns) samples_.push_back(s);
   }
 }
 

@@ -16,6 +16,7 @@
 // (optimization/manifolds.h: cam_from_world = Exp(rho, omega) * cam_from_world_hat).
 #pragma once
 
+#include <cstdint>
 #include <deque>
 
 #include <Eigen/Core>
@@ -75,30 +76,30 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
 // information in the left tangent (for the pose optimiser).
 Matrix6d CameraPosePriorInformation(const InertialState& state, const Rigid3d& body_from_cam);
 
-// IMU samples in time order, each held until the next one's time.
+// IMU samples in time order, each held until the next one's time. Times are int64 ns on the
+// IMU's clock (core/time.h).
 class ImuBuffer {
  public:
   // Throws std::invalid_argument on a time not after the last one or a non-finite value.
-  void Add(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
-  // Integrates the samples over [t0_s, t1_s] (the first sample at or before t0_s; partial
+  void Add(int64_t t_ns, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
+  // Integrates the samples over [t0_ns, t1_ns] (the first sample at or before t0_ns; partial
   // intervals at both ends) into `out`, whose bias_hat and noise are kept. False when the
   // samples do not cover the interval or two are further apart than max_sample_gap_s.
-  bool Preintegrate(double t0_s, double t1_s, double max_sample_gap_s,
+  bool Preintegrate(int64_t t0_ns, int64_t t1_ns, double max_sample_gap_s,
                     ImuPreintegration* out) const;
-  // Forgets samples no longer needed for intervals starting at or after t_s.
-  void DropBefore(double t_s);
-  // The samples Preintegrate needs for [t0_s, t1_s]: from the last one at or before t0_s to the
-  // last one before t1_s.
-  ImuBuffer Slice(double t0_s, double t1_s) const;
+  // Forgets samples no longer needed for intervals starting at or after t_ns.
+  void DropBefore(int64_t t_ns);
+  // The samples Preintegrate needs for [t0_ns, t1_ns]: from the last one at or before t0_ns to
+  // the last one before t1_ns.
+  ImuBuffer Slice(int64_t t0_ns, int64_t t1_ns) const;
   // Appends the samples of `later` after this buffer's last one (those not after it are skipped).
   void Append(const ImuBuffer& later);
   bool empty() const { return samples_.empty(); }
-  double last_s() const { return samples_.empty() ? -1e300 : samples_.back().t_s; }
   size_t size() const { return samples_.size(); }
 
  private:
   struct Sample {
-    double t_s;
+    int64_t t_ns;
     Eigen::Vector3d gyro, acc;
   };
   std::deque<Sample> samples_;

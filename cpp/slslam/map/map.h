@@ -16,6 +16,7 @@
 
 #include "slslam/core/rigid3.h"
 #include "slslam/core/thread_annotations.h"
+#include "slslam/core/time.h"
 #include "slslam/features/stereo_frame.h"
 #include "slslam/geometry/plucker_line.h"
 #include "slslam/inertial/imu_preintegration.h"
@@ -58,7 +59,7 @@ struct MapLine {
 // The IMU at a keyframe: the body's (IMU frame's) velocity and the biases, and the samples from
 // the keyframe before it in the IMU chain (local BA's inertial factor between the two).
 struct KeyFrameInertial {
-  double t_s = 0.0;                                        ///< camera time of the keyframe [s]
+  int64_t t_ns = 0;                                        ///< camera time of the keyframe [ns]
   Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();  ///< [m/s]
   ImuBias bias;
   int previous = -1;                ///< the keyframe the samples start at (-1: first of its chain)

@@ -183,7 +183,7 @@ Front ReadFront(ByteReader* in, uint32_t version, const Where& where) {
 }
 
 // Decodes one section; entries must come in ascending id, as a map stores them.
-MapContent ReadSection(ByteReader* in, const TableEntry& e, const Where& where) {
+MapContent ReadSection(ByteReader* in, uint32_t version, const TableEntry& e, const Where& where) {
   MapContent c;
   auto ascending = [&where](const auto& entries, int id, const char* what) {
     if (!entries.empty() && id <= entries.rbegin()->first) {
@@ -191,7 +191,7 @@ MapContent ReadSection(ByteReader* in, const TableEntry& e, const Where& where) 
     }
   };
   for (uint32_t i = 0; i < e.keyframes; ++i) {
-    auto kf = map_io_detail::ReadKeyFrame(in);
+    auto kf = map_io_detail::ReadKeyFrame(in, version, where);
     ascending(c.keyframes, kf->id, "keyframe");
     c.keyframes.emplace_hint(c.keyframes.end(), kf->id, std::move(kf));
   }
@@ -342,7 +342,7 @@ LoadedMaps LoadMaps(const std::string& path, std::shared_ptr<MapIds> ids) {
     const TableEntry& e = front.table[m];
     ByteReader section(in.Take(e.bytes, "map section"), e.bytes, path);
     const Where in_map = where.InMap(static_cast<int>(m));
-    contents.push_back(ReadSection(&section, e, in_map));
+    contents.push_back(ReadSection(&section, version, e, in_map));
     map_io_detail::CheckMapContent(contents.back(), front.header, front.ids, in_map);
   }
   CheckUniqueIds(contents, where);

@@ -2,7 +2,8 @@
 // keyframe (with the stereo frame it was made from), culled-keyframe record, map point and map
 // line, with their ids, so a map kept from one shift can be tracked in on the next (issue 14).
 //
-// File layout (format version 2; version 1 lacks line_descriptor, its lines carry OpenCV's LBD).
+// File layout (format version 3; version 2 has f64 frame timestamps [s] where 3 has i64 t_ns,
+// version 1 also lacks line_descriptor, its lines carry OpenCV's LBD).
 // Integers are little-endian two's complement, floats IEEE-754
 // little-endian; "str" is a u32 byte count and the bytes; "[T]" is a u32 count and that many T;
 // ids and counts are i32/u32 and every id fits an int.
@@ -25,7 +26,7 @@
 //                 u8 bad; [i32 keyframe, i32 shared points] covisibility; [i32] point_ids;
 //                 [i32] line_ids; [u32 word, f64 weight] bow; [u32 node, [i32 keypoint]]
 //                 bow_features; then its frame:
-//                   i32 index; f64 timestamp [s]; [f32 u, v] keypoints.uv [px];
+//                   i32 index; i64 t_ns [ns]; [f32 u, v] keypoints.uv [px];
 //                   [f32] keypoints.score; [i32] keypoints.octave; mat keypoints.descriptors;
 //                   [f64] u_right [px]; [f64] depth [m]; [f32 u0, v0, u1, v1] lines [px];
 //                   mat line_descriptors; [f64 start xyz, end xyz] line_endpoints (left camera
@@ -60,7 +61,7 @@
 
 namespace slslam {
 
-constexpr uint32_t kMapFileFormatVersion = 2;
+constexpr uint32_t kMapFileFormatVersion = 3;
 
 // What the maps were made with: a tracker refuses a map made with another front end or rig.
 struct MapFileHeader {

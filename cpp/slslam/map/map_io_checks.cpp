@@ -60,10 +60,6 @@ void CheckFrame(const StereoFrame& f, const MapFileHeader& header, const Where& 
   const int n = f.NumKeypoints();
   const Keypoints& k = f.keypoints;
   if (f.index < 0) where.Fail("keyframe ", kf, ": frame index ", f.index, " is negative");
-  if (!(std::abs(f.timestamp) <= kMaxTimestampS)) {
-    where.Fail("keyframe ", kf, ": frame timestamp ", f.timestamp, " s is not finite or beyond ",
-               kMaxTimestampS, " s (int64 nanoseconds)");
-  }
   if (!k.uv.allFinite() ||
       (k.uv.size() > 0 && k.uv.cwiseAbs().maxCoeff() > kMaxImageCoordinatePx)) {
     where.Fail("keyframe ", kf, ": a keypoint position is not finite or beyond ",

@@ -1,9 +1,11 @@
 // Encoding and decoding of the map file's records (layout in map_io.h). Decoding checks only
 // what it needs to stay within the buffer and allocate sensibly; the meaning of the values is
 // checked by CheckMapContent (map_io_checks.cpp) on the decoded entries.
+#include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "slslam/core/time.h"
 #include "slslam/map/map_io_records.h"
 
 namespace slslam::map_io_detail {
@@ -152,7 +154,7 @@ Keypoints ReadKeypoints(ByteReader* in) {
 
 void WriteFrame(const StereoFrame& f, ByteWriter* out) {
   out->I32(f.index);
-  out->F64(f.timestamp);
+  out->I64(f.t_ns);
   WriteKeypoints(f.keypoints, out);
   WriteDoubles(f.u_right, out);
   WriteDoubles(f.depth, out);
@@ -173,10 +175,20 @@ void WriteFrame(const StereoFrame& f, ByteWriter* out) {
   for (const bool has : f.line_has_depth) out->U8(has ? 1 : 0);
 }
 
-std::shared_ptr<StereoFrame> ReadFrame(ByteReader* in) {
+std::shared_ptr<StereoFrame> ReadFrame(ByteReader* in, uint32_t version, const Where& where,
+                                       int keyframe) {
   auto f = std::make_shared<StereoFrame>();
   f->index = in->I32("frame index");
-  f->timestamp = in->F64("frame timestamp");
+  if (version >= 3) {
+    f->t_ns = in->I64("frame time");
+  } else {  // float seconds, rounded to the nanosecond
+    const double t_s = in->F64("frame timestamp");
+    if (!(std::abs(t_s) <= kMaxTimestampS)) {
+      where.Fail("keyframe ", keyframe, ": frame timestamp ", t_s, " s is not finite or beyond ",
+                 kMaxTimestampS, " s (int64 nanoseconds)");
+    }
+    f->t_ns = NsFromSeconds(t_s);
+  }
   f->keypoints = ReadKeypoints(in);
   f->u_right = ReadDoubles(in, "right columns");
   f->depth = ReadDoubles(in, "depths");
@@ -225,7 +237,7 @@ void WriteKeyFrame(const KeyFrame& kf, ByteWriter* out) {
   WriteFrame(*kf.frame, out);
 }
 
-std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in) {
+std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in, uint32_t version, const Where& where) {
   auto kf = std::make_shared<KeyFrame>();
   kf->id = in->I32("keyframe id");
   kf->cam_from_world.rotation = ReadMatrix3(in, "keyframe rotation");
@@ -250,7 +262,7 @@ std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in) {
     kf->bow_features.emplace_hint(kf->bow_features.end(), node,
                                   ReadInts(in, "direct-index keypoints"));
   }
-  kf->frame = ReadFrame(in);
+  kf->frame = ReadFrame(in, version, where, kf->id);
   return kf;
 }
 

@@ -50,7 +50,8 @@ class Where {
 constexpr size_t kMaxVersionBytes = 256;  // header string limits [bytes]
 constexpr size_t kMaxVocabularyBytes = 4096;
 // Plausibility bounds of a map's records (a damaged or crafted file goes beyond them):
-// keyframe times within int64 nanoseconds [s], positions within 10,000 km of the origin [m].
+// keyframe times of format version 2 files within int64 nanoseconds [s], positions within 10,000 km
+// of the origin [m].
 constexpr double kMaxTimestampS = 9.2e9;
 constexpr double kMaxCoordinateM = 1e7;
 // Keypoint positions within this many pixels of the image origin [px].
@@ -76,7 +77,8 @@ void WriteRetired(int id, const RetiredKeyFrame& retired, ByteWriter* out);
 void WritePoint(const MapPoint& point, ByteWriter* out);
 void WriteLine(const MapLine& line, ByteWriter* out);
 
-std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in);
+// `version`: the file's format version (its frame times: f64 seconds before 3, i64 ns since).
+std::shared_ptr<KeyFrame> ReadKeyFrame(ByteReader* in, uint32_t version, const Where& where);
 std::pair<int, RetiredKeyFrame> ReadRetired(ByteReader* in);
 std::shared_ptr<MapPoint> ReadPoint(ByteReader* in);
 std::shared_ptr<MapLine> ReadLine(ByteReader* in);

@@ -7,6 +7,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "slslam/core/time.h"
 #include "slslam/mapping/map_bundle_adjustment.h"
 
 namespace slslam {
@@ -131,7 +132,7 @@ bool LongImuInterval(const Map& map, const KeyFrame& kf) SLSLAM_REQUIRES(map.mut
   for (const auto& [id, other] : map.keyframes()) {
     (void)id;
     if (other->inertial && other->inertial->previous == kf.id) {
-      return other->inertial->t_s - previous->inertial->t_s > max_interval_s;
+      return SecondsBetween(previous->inertial->t_ns, other->inertial->t_ns) > max_interval_s;
     }
   }
   return false;
@@ -184,7 +185,8 @@ bool LocalMapper::Prepare(Window* window) {
       for (int n = 1; n < options_.inertial_keyframes && kf->inertial; ++n) {
         auto previous = map->keyframe(kf->inertial->previous);
         if (!previous || !previous->inertial ||
-            !(kf->inertial->t_s - previous->inertial->t_s <= map->inertial()->max_interval_s)) {
+            !(SecondsBetween(previous->inertial->t_ns, kf->inertial->t_ns) <=
+              map->inertial()->max_interval_s)) {
           break;
         }
         kf = previous;

@@ -6,6 +6,7 @@
 
 #include "slslam/core/check.h"
 #include "slslam/core/rigid3.h"
+#include "slslam/core/time.h"
 
 namespace slslam {
 
@@ -85,12 +86,12 @@ int MapBundleAdjustment::AddInertialFactors(const Map& map, const std::vector<in
     if (!previous || !previous->inertial) continue;
     const KeyFrameInertial& from = *previous->inertial;
     const KeyFrameInertial& to = *kf->inertial;
-    if (!(to.t_s - from.t_s <= imu.max_interval_s)) continue;
+    if (!(SecondsBetween(from.t_ns, to.t_ns) <= imu.max_interval_s)) continue;
     BaInertialFactor factor;
     factor.pre = ImuPreintegration(from.bias, imu.noise);
-    if (!to.samples_from_previous.Preintegrate(from.t_s - imu.time_offset_s,
-                                               to.t_s - imu.time_offset_s, imu.max_sample_gap_s,
-                                               &factor.pre)) {
+    const int64_t offset_ns = NsFromSeconds(imu.time_offset_s);
+    if (!to.samples_from_previous.Preintegrate(from.t_ns - offset_ns, to.t_ns - offset_ns,
+                                               imu.max_sample_gap_s, &factor.pre)) {
       continue;
     }
     auto it = pose_index->find(previous->id);

@@ -23,17 +23,17 @@ TrackerSession::TrackerSession(const TrackerOptions& options, const LineExtracto
                  options.use_lines && options.right_lines_on_keyframes && options.lines_on_demand,
                  options.denoise_above_noise}) {}
 
-FrameOutput TrackerSession::Track(int index, double timestamp, const cv::Mat& left,
+FrameOutput TrackerSession::Track(int index, int64_t t_ns, const cv::Mat& left,
                                   const cv::Mat& right, const Keypoints& left_keypoints,
                                   const Keypoints& right_keypoints,
                                   const std::shared_ptr<LeftLines>& left_lines, bool noisy,
                                   bool denoised) {
-  return TrackPrepared(*Prepare(index, timestamp, left, right, left_keypoints, right_keypoints,
+  return TrackPrepared(*Prepare(index, t_ns, left, right, left_keypoints, right_keypoints,
                                 left_lines, /*keypoints_pending=*/false, noisy, denoised));
 }
 
-std::shared_ptr<PreparedFrame> TrackerSession::Prepare(int index, double timestamp,
-                                                       const cv::Mat& left, const cv::Mat& right,
+std::shared_ptr<PreparedFrame> TrackerSession::Prepare(int index, int64_t t_ns, const cv::Mat& left,
+                                                       const cv::Mat& right,
                                                        const Keypoints& left_keypoints,
                                                        const Keypoints& right_keypoints,
                                                        const std::shared_ptr<LeftLines>& left_lines,
@@ -48,7 +48,7 @@ std::shared_ptr<PreparedFrame> TrackerSession::Prepare(int index, double timesta
   // lines_on_demand: lines extracted ahead are the completer's to hand over if the tracker asks
   // (the same lines it would extract: only the time differs).
   const LineFeatures* ahead = left_lines ? &left_lines->features : nullptr;
-  p->frame = frontend_.Build(index, timestamp, p->left, p->right, left_keypoints, right_keypoints,
+  p->frame = frontend_.Build(index, t_ns, p->left, p->right, left_keypoints, right_keypoints,
                              &p->timing, frontend_.options().left_lines_on_demand ? nullptr : ahead,
                              &p->left_used, &p->right_used, denoised);
   if (keypoints_pending) {
@@ -97,14 +97,15 @@ std::shared_ptr<LeftLines> TrackerSession::ExtractLeftLines(const cv::Mat& left,
   return out;
 }
 
-void TrackerSession::AddImu(const Eigen::VectorXd& t_s,
+void TrackerSession::AddImu(const Eigen::Matrix<int64_t, Eigen::Dynamic, 1>& t_ns,
                             const Eigen::Matrix<double, Eigen::Dynamic, 3>& gyro,
                             const Eigen::Matrix<double, Eigen::Dynamic, 3>& acc) {
-  SLSLAM_CHECK(gyro.rows() == t_s.size() && acc.rows() == t_s.size(), "IMU samples: ", t_s.size(),
-               " timestamps, ", gyro.rows(), " gyro rows, ", acc.rows(), " accelerometer rows");
+  SLSLAM_CHECK(gyro.rows() == t_ns.size() && acc.rows() == t_ns.size(),
+               "IMU samples: ", t_ns.size(), " times, ", gyro.rows(), " gyro rows, ", acc.rows(),
+               " accelerometer rows");
   MutexLock lock(mutex_);
-  for (Eigen::Index i = 0; i < t_s.size(); ++i) {
-    tracker_.AddImu(t_s[i], gyro.row(i).transpose(), acc.row(i).transpose());
+  for (Eigen::Index i = 0; i < t_ns.size(); ++i) {
+    tracker_.AddImu(t_ns[i], gyro.row(i).transpose(), acc.row(i).transpose());
   }
 }
 

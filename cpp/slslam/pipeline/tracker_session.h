@@ -6,6 +6,7 @@
 // TrackerCore, which only converts arrays and releases the GIL.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -61,14 +62,14 @@ class TrackerSession {
   TrackerSession(const TrackerOptions& options, const LineExtractorOptions& lines);
 
   // Prepare + TrackPrepared.
-  FrameOutput Track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
+  FrameOutput Track(int index, int64_t t_ns, const cv::Mat& left, const cv::Mat& right,
                     const Keypoints& left_keypoints, const Keypoints& right_keypoints,
                     const std::shared_ptr<LeftLines>& left_lines, bool noisy, bool denoised);
 
   // Track's first part, the frame's stereo matching (StereoFrontend::Build), without the
   // session's lock: it reads no state of the tracker, so a pipeline's worker runs it for frame
   // k + 1 while the tracker works on frame k. The images are copied (the frame outlives them).
-  std::shared_ptr<PreparedFrame> Prepare(int index, double timestamp, const cv::Mat& left,
+  std::shared_ptr<PreparedFrame> Prepare(int index, int64_t t_ns, const cv::Mat& left,
                                          const cv::Mat& right, const Keypoints& left_keypoints,
                                          const Keypoints& right_keypoints,
                                          const std::shared_ptr<LeftLines>& left_lines,
@@ -82,9 +83,10 @@ class TrackerSession {
   // session's lock (beside the point front end, or beside Track of the previous frame).
   std::shared_ptr<LeftLines> ExtractLeftLines(const cv::Mat& left, bool denoised) const;
 
-  // IMU samples (timestamps [s], gyro [rad/s], specific force [m/s^2], one row each), before
-  // the frames they precede.
-  void AddImu(const Eigen::VectorXd& t_s, const Eigen::Matrix<double, Eigen::Dynamic, 3>& gyro,
+  // IMU samples (times [ns] on the IMU's clock, gyro [rad/s], specific force [m/s^2], one row
+  // each), before the frames they precede.
+  void AddImu(const Eigen::Matrix<int64_t, Eigen::Dynamic, 1>& t_ns,
+              const Eigen::Matrix<double, Eigen::Dynamic, 3>& gyro,
               const Eigen::Matrix<double, Eigen::Dynamic, 3>& acc) SLSLAM_EXCLUDES(mutex_);
 
   // The map and the counters; `settle` waits for local mapping (and loop closing) first.

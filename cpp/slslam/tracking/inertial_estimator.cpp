@@ -69,61 +69,64 @@ InertialEstimator::InertialEstimator(const InertialOptions& options)
   options_.Check();
 }
 
-void InertialEstimator::AddImu(double t_imu_s, const Eigen::Vector3d& gyro_radps,
+void InertialEstimator::AddImu(int64_t t_imu_ns, const Eigen::Vector3d& gyro_radps,
                                const Eigen::Vector3d& acc_mps2) {
-  imu_.Add(t_imu_s, gyro_radps, acc_mps2);
+  imu_.Add(t_imu_ns, gyro_radps, acc_mps2);
 }
 
-bool InertialEstimator::PropagateState(double t_s, InertialState* out) const {
+bool InertialEstimator::PropagateState(int64_t t_ns, InertialState* out) const {
   if (!initialised_) return false;
-  if (!(t_s > state_t_s_)) {
+  if (!(t_ns > state_t_ns_)) {
     *out = state_;
-    return t_s == state_t_s_;
+    return t_ns == state_t_ns_;
   }
   ImuPreintegration pre(state_.bias, noise_);
-  if (!imu_.Preintegrate(state_t_s_ - options_.time_offset_s, t_s - options_.time_offset_s,
-                         options_.max_sample_gap_s, &pre)) {
+  const int64_t offset_ns = options_.time_offset_ns();
+  if (!imu_.Preintegrate(state_t_ns_ - offset_ns, t_ns - offset_ns, options_.max_sample_gap_s,
+                         &pre)) {
     return false;
   }
   *out = slslam::Propagate(state_, pre);
   return true;
 }
 
-bool InertialEstimator::Predict(double t_s, InertialState* out) const {
-  return PropagateState(t_s, out);
+bool InertialEstimator::Predict(int64_t t_ns, InertialState* out) const {
+  return PropagateState(t_ns, out);
 }
 
-bool InertialEstimator::PosePriorAt(double t_s, PosePrior* prior) const {
+bool InertialEstimator::PosePriorAt(int64_t t_ns, PosePrior* prior) const {
   InertialState predicted;
-  if (!PropagateState(t_s, &predicted)) return false;
+  if (!PropagateState(t_ns, &predicted)) return false;
   prior->mean = CamFromWorld(predicted.nav, options_.body_from_cam);
   prior->information = CameraPosePriorInformation(predicted, options_.body_from_cam);
   return prior->information.allFinite();
 }
 
-void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
+void InertialEstimator::AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_world,
                                       const Matrix6d& information, bool with_prior,
                                       const Eigen::Vector3d& unobserved_world) {
   // A pose that leaves a direction unobserved (parallel lines alone) is no pose for the
   // initialisation's window, and no visual fix for the lost rule: the distance driven goes on.
   const bool full = unobserved_world.isZero(0.0);
-  if (!full && (!initialised_ || !(t_s > state_t_s_))) return;
-  if (report_.first_pose_s < 0.0) report_.first_pose_s = t_s;
+  if (!full && (!initialised_ || !(t_ns > state_t_ns_))) return;
+  if (!report_.first_pose_t_ns) report_.first_pose_t_ns = t_ns;
   const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
   if (full) {
-    if (!window_.empty() && !(t_s > window_.back().t_s)) return;  // (a frame given twice)
-    window_.push_back({t_s, world_from_body});
-    while (window_.size() > 2 && t_s - window_[1].t_s >= options_.window_s) window_.pop_front();
-    imu_.DropBefore(window_.front().t_s - options_.time_offset_s);
+    if (!window_.empty() && !(t_ns > window_.back().t_ns)) return;  // (a frame given twice)
+    window_.push_back({t_ns, world_from_body});
+    while (window_.size() > 2 && SecondsBetween(window_[1].t_ns, t_ns) >= options_.window_s) {
+      window_.pop_front();
+    }
+    imu_.DropBefore(window_.front().t_ns - options_.time_offset_ns());
   }
   if (!initialised_) {
     TryInitialise(/*refine=*/false);
     return;
   }
   InertialState predicted;
-  if (!PropagateState(t_s, &predicted)) {  // samples missing: start again from this pose
+  if (!PropagateState(t_ns, &predicted)) {  // samples missing: start again from this pose
     Reset();
-    window_.push_back({t_s, world_from_body});
+    window_.push_back({t_ns, world_from_body});
     return;
   }
   const Rigid3d predicted_cam = CamFromWorld(predicted.nav, options_.body_from_cam);
@@ -170,23 +173,25 @@ void InertialEstimator::AddVisualPose(double t_s, const Rigid3d& cam_from_world,
     predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
   }
   if (full) {
-    last_visual_s_ = t_s;
+    last_visual_t_ns_ = t_ns;
     last_visual_p_ = predicted.nav.p_world_body;
     driven_m_ = 0.0;
   } else {
     driven_m_ += (predicted.nav.p_world_body - state_.nav.p_world_body).norm();
   }
   state_ = predicted;
-  state_t_s_ = t_s;
-  if (!refined_ && t_s - init_s_ >= options_.refine_after_s) TryInitialise(/*refine=*/true);
+  state_t_ns_ = t_ns;
+  if (!refined_ && SecondsBetween(init_t_ns_, t_ns) >= options_.refine_after_s) {
+    TryInitialise(/*refine=*/true);
+  }
 }
 
-bool InertialEstimator::Propagate(double t_s) {
+bool InertialEstimator::Propagate(int64_t t_ns) {
   InertialState next;
-  if (!PropagateState(t_s, &next)) return false;
+  if (!PropagateState(t_ns, &next)) return false;
   driven_m_ += (next.nav.p_world_body - state_.nav.p_world_body).norm();
   state_ = next;
-  state_t_s_ = std::max(state_t_s_, t_s);
+  state_t_ns_ = std::max(state_t_ns_, t_ns);
   return true;
 }
 
@@ -197,20 +202,21 @@ bool InertialEstimator::Trustworthy() const {
   return state_.PositionSigma() <= bound && seconds_without_vision() <= options_.max_gap_s;
 }
 
-bool InertialEstimator::Rebase(double t_s, const Rigid3d& cam_from_world,
+bool InertialEstimator::Rebase(int64_t t_ns, const Rigid3d& cam_from_world,
                                const Eigen::Vector3d& v_world_body, const ImuBias& bias,
                                const Eigen::Vector3d& g_world) {
-  if (!initialised_ || !(t_s <= state_t_s_) || !g_world.allFinite()) return false;
+  if (!initialised_ || !(t_ns <= state_t_ns_) || !g_world.allFinite()) return false;
   const Rigid3d world_from_body = cam_from_world.Inverse() * options_.body_from_cam.Inverse();
   NavState at_keyframe;
   at_keyframe.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
   at_keyframe.p_world_body = world_from_body.translation;
   at_keyframe.v_world_body = v_world_body;
   NavState now = at_keyframe;
-  if (t_s < state_t_s_) {
+  if (t_ns < state_t_ns_) {
     ImuPreintegration pre(bias, noise_);
-    if (!imu_.Preintegrate(t_s - options_.time_offset_s, state_t_s_ - options_.time_offset_s,
-                           options_.max_sample_gap_s, &pre)) {
+    const int64_t offset_ns = options_.time_offset_ns();
+    if (!imu_.Preintegrate(t_ns - offset_ns, state_t_ns_ - offset_ns, options_.max_sample_gap_s,
+                           &pre)) {
       return false;
     }
     now = pre.Predict(at_keyframe, bias, g_world);
@@ -243,21 +249,23 @@ void InertialEstimator::Reset() {
   initialised_ = false;
   refined_ = false;
   window_.clear();
-  last_attempt_s_ = -1e300;
+  last_attempt_t_ns_.reset();
 }
 
 void InertialEstimator::TryInitialise(bool refine) {
   if (window_.size() < 3) return;
-  const double t_last = window_.back().t_s;
-  if (t_last - window_.front().t_s < options_.min_window_s) return;
-  if (!refine && t_last - last_attempt_s_ < kInitRetryS) return;
-  last_attempt_s_ = t_last;
+  const int64_t t_last = window_.back().t_ns;
+  if (SecondsBetween(window_.front().t_ns, t_last) < options_.min_window_s) return;
+  if (!refine && last_attempt_t_ns_ && SecondsBetween(*last_attempt_t_ns_, t_last) < kInitRetryS) {
+    return;
+  }
+  last_attempt_t_ns_ = t_last;
   std::vector<Rigid3d> poses;
-  std::vector<double> times;
+  std::vector<int64_t> times;
   for (const TimedPose& pose : window_) {
-    if (times.empty() || pose.t_s - times.back() >= kInitPoseSpacingS) {
+    if (times.empty() || SecondsBetween(times.back(), pose.t_ns) >= kInitPoseSpacingS) {
       poses.push_back(pose.world_from_body);
-      times.push_back(pose.t_s);
+      times.push_back(pose.t_ns);
     }
   }
   if (times.back() != t_last) {  // the newest pose replaces the last one kept (closer than that)
@@ -275,8 +283,9 @@ void InertialEstimator::TryInitialise(bool refine) {
   pre.reserve(poses.size() - 1);
   for (size_t k = 0; k + 1 < poses.size(); ++k) {
     pre.emplace_back(start, noise_);
-    if (!imu_.Preintegrate(times[k] - options_.time_offset_s, times[k + 1] - options_.time_offset_s,
-                           options_.max_sample_gap_s, &pre.back())) {
+    if (!imu_.Preintegrate(times[k] - options_.time_offset_ns(),
+                           times[k + 1] - options_.time_offset_ns(), options_.max_sample_gap_s,
+                           &pre.back())) {
       report_.last_failure = "IMU samples missing between tracked frames";
       return;
     }
@@ -301,14 +310,14 @@ void InertialEstimator::TryInitialise(bool refine) {
   state_.bias = r.bias;
   state_.g_world = r.g_world;
   state_.covariance = InitialCovariance(r.g_world, options_.acc_bias_prior_mps2);
-  state_t_s_ = times.back();
-  last_visual_s_ = state_t_s_;
+  state_t_ns_ = times.back();
+  last_visual_t_ns_ = state_t_ns_;
   last_visual_p_ = state_.nav.p_world_body;
   driven_m_ = 0.0;
   initialised_ = true;
-  init_s_ = state_t_s_;
+  init_t_ns_ = state_t_ns_;
   ++report_.initialisations;
-  if (report_.first_init_s < 0.0) report_.first_init_s = state_t_s_;
+  if (!report_.first_init_t_ns) report_.first_init_t_ns = state_t_ns_;
 }
 
 void InertialOptions::Check() const {

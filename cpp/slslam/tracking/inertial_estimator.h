@@ -9,15 +9,19 @@
 //
 // Frames: world = the active map's world (not gravity-aligned: gravity is estimated in it);
 // body = the IMU frame; cam = the rectified left camera, body_from_cam the extrinsics. Times are
-// the camera's; an IMU sample's time is shifted by time_offset_s onto it.
+// int64 ns (core/time.h) on the camera's clock; an IMU sample's time is shifted by time_offset_s
+// onto it.
 #pragma once
 
+#include <cstdint>
 #include <deque>
+#include <optional>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "slslam/core/rigid3.h"
+#include "slslam/core/time.h"
 #include "slslam/inertial/inertial_initialization.h"
 #include "slslam/inertial/inertial_state.h"
 #include "slslam/optimization/pose_optimizer.h"
@@ -80,6 +84,7 @@ struct InertialOptions {
 
   ImuNoiseOptions Noise() const;
   InertialInitOptions Init() const;
+  int64_t time_offset_ns() const { return NsFromSeconds(time_offset_s); }
   void Check() const;
 };
 
@@ -87,36 +92,36 @@ class InertialEstimator {
  public:
   explicit InertialEstimator(const InertialOptions& options);
 
-  // One IMU sample at t_imu_s [s] (increasing; else std::invalid_argument).
-  void AddImu(double t_imu_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
+  // One IMU sample at t_imu_ns on the IMU's clock (increasing; else std::invalid_argument).
+  void AddImu(int64_t t_imu_ns, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
 
-  // The state propagated to camera time t_s from the last one, without keeping it; false when
+  // The state propagated to camera time t_ns from the last one, without keeping it; false when
   // not initialised or the samples do not cover the interval.
-  bool Predict(double t_s, InertialState* out) const;
-  // The prior that prediction gives the pose optimiser at t_s (false as Predict).
-  bool PosePriorAt(double t_s, PosePrior* prior) const;
+  bool Predict(int64_t t_ns, InertialState* out) const;
+  // The prior that prediction gives the pose optimiser at t_ns (false as Predict).
+  bool PosePriorAt(int64_t t_ns, PosePrior* prior) const;
 
-  // A pose the camera estimated at t_s. `information` (left tangent): the pose optimiser's,
-  // computed with the prior of PosePriorAt(t_s) when `with_prior`, without it otherwise (it is
+  // A pose the camera estimated at t_ns. `information` (left tangent): the pose optimiser's,
+  // computed with the prior of PosePriorAt(t_ns) when `with_prior`, without it otherwise (it is
   // then fused with the prediction); zero: a pose without an uncertainty (relocalised), taken as
   // it is. Before initialisation the pose joins the initialisation window and may complete it.
   // `unobserved_world`: a unit world direction along which the images do not observe the
   // camera's position (a pose from parallel lines alone): their information along it is dropped
   // (zero: none).
-  void AddVisualPose(double t_s, const Rigid3d& cam_from_world, const Matrix6d& information,
+  void AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_world, const Matrix6d& information,
                      bool with_prior,
                      const Eigen::Vector3d& unobserved_world = Eigen::Vector3d::Zero());
-  // The frame at t_s keeps the propagated state (the camera contributed nothing). False when it
+  // The frame at t_ns keeps the propagated state (the camera contributed nothing). False when it
   // cannot be propagated (not initialised, samples missing): the caller then forgets the state.
-  bool Propagate(double t_s);
+  bool Propagate(int64_t t_ns);
   // Whether the propagated state is still worth a pose (the lost rule above).
   bool Trustworthy() const;
 
-  // Local BA estimated the state of a keyframe at camera time t_s (its pose, the body's velocity
+  // Local BA estimated the state of a keyframe at camera time t_ns (its pose, the body's velocity
   // and the biases, with gravity in the world): the state is that one propagated to the state's
-  // time by the IMU (the covariance is kept). False (state unchanged) when not initialised, t_s is
-  // after the state's time or the samples do not cover the interval.
-  bool Rebase(double t_s, const Rigid3d& cam_from_world, const Eigen::Vector3d& v_world_body,
+  // time by the IMU (the covariance is kept). False (state unchanged) when not initialised, t_ns
+  // is after the state's time or the samples do not cover the interval.
+  bool Rebase(int64_t t_ns, const Rigid3d& cam_from_world, const Eigen::Vector3d& v_world_body,
               const ImuBias& bias, const Eigen::Vector3d& g_world);
   // The world moved (loop correction, merge): the state follows, new_from_old mapping old world
   // coordinates to new ones.
@@ -127,16 +132,16 @@ class InertialEstimator {
 
   bool initialised() const { return initialised_; }
   const InertialState& state() const { return state_; }
-  double state_time_s() const { return state_t_s_; }
+  int64_t state_t_ns() const { return state_t_ns_; }
   Rigid3d cam_from_world() const { return CamFromWorld(state_.nav, options_.body_from_cam); }
   const Eigen::Vector3d& g_world() const { return state_.g_world; }
-  double seconds_without_vision() const { return state_t_s_ - last_visual_s_; }
+  double seconds_without_vision() const { return SecondsBetween(last_visual_t_ns_, state_t_ns_); }
 
   // For the run's report (metrics.json).
   struct Report {
-    double first_init_s = -1.0;  ///< camera time of the first successful initialisation [s]
-    double first_pose_s = -1.0;  ///< camera time of the first pose it was given [s]
-    int initialisations = 0;     ///< successful (after a reset too), refinements not counted
+    std::optional<int64_t> first_init_t_ns;  ///< camera time of the first initialisation [ns]
+    std::optional<int64_t> first_pose_t_ns;  ///< camera time of the first pose it was given [ns]
+    int initialisations = 0;  ///< successful (after a reset too), refinements not counted
     int refinements = 0;
     std::string last_failure;  ///< the last initialisation attempt's reason, if it failed
   };
@@ -144,24 +149,25 @@ class InertialEstimator {
 
  private:
   void TryInitialise(bool refine);
-  bool PropagateState(double t_s, InertialState* out) const;
+  bool PropagateState(int64_t t_ns, InertialState* out) const;
 
   InertialOptions options_;
   ImuNoiseOptions noise_;
   ImuBuffer imu_;
   struct TimedPose {
-    double t_s;
+    int64_t t_ns;
     Rigid3d world_from_body;
   };
   std::deque<TimedPose> window_;  ///< tracked poses, the last window_s of them
   bool initialised_ = false;
-  double init_s_ = -1.0;  ///< when the state was last initialised [s]
+  int64_t init_t_ns_ = 0;  ///< when the state was last initialised
   bool refined_ = false;
-  double last_attempt_s_ = -1e300;
+  std::optional<int64_t>
+      last_attempt_t_ns_;  ///< the last initialisation attempt (none: since reset)
   InertialState state_;
-  double state_t_s_ = 0.0;
-  ImuBias bias_start_;          ///< the next initialisation's linearisation point
-  double last_visual_s_ = 0.0;  ///< camera time of the last visual correction [s]
+  int64_t state_t_ns_ = 0;
+  ImuBias bias_start_;            ///< the next initialisation's linearisation point
+  int64_t last_visual_t_ns_ = 0;  ///< camera time of the last visual correction
   Eigen::Vector3d last_visual_p_ = Eigen::Vector3d::Zero();  ///< body position then [m]
   double driven_m_ = 0.0;  ///< path of the propagated state since then [m]
   Report report_;

@@ -32,7 +32,7 @@ StereoFrontend::StereoFrontend(const StereoFrontendOptions& options) : options_(
 }
 
 std::shared_ptr<StereoFrame> StereoFrontend::Build(
-    int index, double timestamp, const cv::Mat& left_image, const cv::Mat& right_image,
+    int index, int64_t t_ns, const cv::Mat& left_image, const cv::Mat& right_image,
     const Keypoints& left_keypoints, const Keypoints& right_keypoints, StereoFrontendTiming* timing,
     const LineFeatures* given_left_lines, cv::Mat* left_used, cv::Mat* right_used,
     bool denoised) const {
@@ -62,7 +62,7 @@ std::shared_ptr<StereoFrame> StereoFrontend::Build(
   const double line_ms = Ms(start);
   start = std::chrono::steady_clock::now();
   auto frame = std::make_shared<StereoFrame>(MakeStereoFrame(
-      index, timestamp, left_keypoints, right_keypoints, options_.use_lines ? &left_lines : nullptr,
+      index, t_ns, left_keypoints, right_keypoints, options_.use_lines ? &left_lines : nullptr,
       right_now ? &right_lines : nullptr, options_.rig, options_.stereo));
   frame->stereo_lines_pending = options_.use_lines && !right_now;
   frame->left_lines_pending = options_.left_lines_on_demand && given_left_lines == nullptr;

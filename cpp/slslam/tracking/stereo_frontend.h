@@ -4,6 +4,7 @@
 // C++ callers and the Python bindings share it.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include <opencv2/core.hpp>
@@ -60,7 +61,7 @@ class StereoFrontend {
   // without the noise estimate (0.1 ms an image). The same frame as without it whenever one blur
   // leaves an image quiet (every frame of the simulated sequences; a pattern whose estimate
   // stays above the threshold after one blur would have been blurred a second time).
-  std::shared_ptr<StereoFrame> Build(int index, double timestamp, const cv::Mat& left,
+  std::shared_ptr<StereoFrame> Build(int index, int64_t t_ns, const cv::Mat& left,
                                      const cv::Mat& right, const Keypoints& left_keypoints,
                                      const Keypoints& right_keypoints,
                                      StereoFrontendTiming* timing = nullptr,

@@ -24,15 +24,13 @@ void CheckKeypoints(const Keypoints& k, const char* side) {
 
 }  // namespace
 
-StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
-                            const Keypoints& right, const LineFeatures* left_lines,
-                            const LineFeatures* right_lines, const StereoRig& rig,
-                            const StereoMatchOptions& options) {
+StereoFrame MakeStereoFrame(int index, int64_t t_ns, const Keypoints& left, const Keypoints& right,
+                            const LineFeatures* left_lines, const LineFeatures* right_lines,
+                            const StereoRig& rig, const StereoMatchOptions& options) {
   rig.Check();
   options.Check();
   CheckKeypoints(left, "left");
   CheckKeypoints(right, "right");
-  Require(std::isfinite(timestamp), "frame timestamp must be finite");
   const bool have_right = right.size() > 0 && left.size() > 0;
   if (have_right) {
     Require(left.descriptors.type() == right.descriptors.type() &&
@@ -42,7 +40,7 @@ StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
 
   StereoFrame frame;
   frame.index = index;
-  frame.timestamp = timestamp;
+  frame.t_ns = t_ns;
   frame.keypoints = left;
   const int n = left.size();
   frame.u_right.assign(n, -1.0);

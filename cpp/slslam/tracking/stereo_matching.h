@@ -2,6 +2,8 @@
 // keypoints with subpixel refinement, stereo matching and triangulation of the line segments.
 #pragma once
 
+#include <cstdint>
+
 #include <opencv2/core.hpp>
 
 #include "slslam/core/stereo_rig.h"
@@ -42,12 +44,12 @@ struct StereoMatchOptions {
   void Check() const;
 };
 
-// Builds a frame: row-band stereo matching of the keypoints (same descriptor type on both sides),
-// and stereo matching + triangulation of the lines when line features are given (may be null).
-StereoFrame MakeStereoFrame(int index, double timestamp, const Keypoints& left,
-                            const Keypoints& right, const LineFeatures* left_lines,
-                            const LineFeatures* right_lines, const StereoRig& rig,
-                            const StereoMatchOptions& options = {});
+// Builds the frame captured at t_ns [ns]: row-band stereo matching of the keypoints (same
+// descriptor type on both sides), and stereo matching + triangulation of the lines when line
+// features are given (may be null).
+StereoFrame MakeStereoFrame(int index, int64_t t_ns, const Keypoints& left, const Keypoints& right,
+                            const LineFeatures* left_lines, const LineFeatures* right_lines,
+                            const StereoRig& rig, const StereoMatchOptions& options = {});
 
 // The frame's left-image line segments and descriptors, none with stereo depth yet
 // (MakeStereoFrame's first line step, also run on its own when the left image's lines are

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "slslam/core/check.h"
+#include "slslam/core/time.h"
 #include "slslam/tracking/keyframe_decision.h"
 #include "slslam/tracking/tracker_internal.h"
 
@@ -196,17 +197,17 @@ void Tracker::Flush() {
   if (loop_closer_) loop_closer_->WaitForGlobalBa();
 }
 
-void Tracker::AddImu(double t_s, const Eigen::Vector3d& gyro_radps,
+void Tracker::AddImu(int64_t t_ns, const Eigen::Vector3d& gyro_radps,
                      const Eigen::Vector3d& acc_mps2) {
   if (!options_.use_imu) return;
   if (!inertial_) inertial_ = std::make_unique<InertialEstimator>(options_.imu);
-  inertial_->AddImu(t_s, gyro_radps, acc_mps2);
-  if (options_.imu.local_ba_keyframes > 0) keyframe_imu_.Add(t_s, gyro_radps, acc_mps2);
+  inertial_->AddImu(t_ns, gyro_radps, acc_mps2);
+  if (options_.imu.local_ba_keyframes > 0) keyframe_imu_.Add(t_ns, gyro_radps, acc_mps2);
 }
 
 bool Tracker::InertialPrior(const StereoFrame& frame, PosePrior* prior) const {
   return inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
-         inertial_->PosePriorAt(frame.timestamp, prior);
+         inertial_->PosePriorAt(frame.t_ns, prior);
 }
 
 void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
@@ -214,13 +215,13 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
   if (!inertial_) return;
   // (without a chain to extend, the next keyframe's interval starts after this frame)
   if (options_.imu.local_ba_keyframes > 0 && imu_chain_keyframe_ < 0) {
-    keyframe_imu_.DropBefore(frame.timestamp - options_.imu.time_offset_s);
+    keyframe_imu_.DropBefore(frame.t_ns - options_.imu.time_offset_ns());
   }
   if (inertial_map_ != active_) {  // another map's world: the state before does not fit
     inertial_->Reset();
     inertial_map_ = active_;
   }
-  inertial_->AddVisualPose(frame.timestamp, cam_from_world, information, with_prior);
+  inertial_->AddVisualPose(frame.t_ns, cam_from_world, information, with_prior);
   // The map learns gravity's direction from each (re)initialisation (loop correction in 4 DoF).
   const InertialEstimator::Report& report = inertial_->report();
   const int fits = report.initialisations + report.refinements;
@@ -246,15 +247,15 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
     return weak.with_prior && pose.success && !pose.information.isZero(0.0);
   };
   if (min_inliers > 0 && all.point_inliers + all.line_inliers >= min_inliers && usable(all)) {
-    inertial_->AddVisualPose(frame.timestamp, all.cam_from_world, all.information,
+    inertial_->AddVisualPose(frame.t_ns, all.cam_from_world, all.information,
                              /*with_prior=*/true);
     ++stats_.inertial_weak_updates;
   } else if (min_lines > 0 && weak.lines.line_inliers >= min_lines && usable(weak.lines)) {
-    inertial_->AddVisualPose(frame.timestamp, weak.lines.cam_from_world, weak.lines.information,
+    inertial_->AddVisualPose(frame.t_ns, weak.lines.cam_from_world, weak.lines.information,
                              /*with_prior=*/true, weak.lines_along_world);
     ++stats_.inertial_weak_updates;
     *by_lines = true;
-  } else if (!inertial_->Propagate(frame.timestamp)) {
+  } else if (!inertial_->Propagate(frame.t_ns)) {
     inertial_->Reset();
     return false;
   }
@@ -266,29 +267,30 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   return true;
 }
 
-void Tracker::AttachImu(double t_s, bool camera_tracked, bool same_world, Map* map, KeyFrame* kf) {
+void Tracker::AttachImu(int64_t t_ns, bool camera_tracked, bool same_world, Map* map,
+                        KeyFrame* kf) {
   if (options_.imu.local_ba_keyframes <= 0) return;
   const bool stateful = same_world && inertial_ && inertial_->initialised() &&
-                        inertial_map_ == active_ && inertial_->state_time_s() == t_s;
+                        inertial_map_ == active_ && inertial_->state_t_ns() == t_ns;
+  const int64_t offset_ns = options_.imu.time_offset_ns();
   if (!stateful) {
     imu_chain_keyframe_ = -1;
-    keyframe_imu_.DropBefore(t_s - options_.imu.time_offset_s);
+    keyframe_imu_.DropBefore(t_ns - offset_ns);
     return;
   }
-  const double t_imu_s = t_s - options_.imu.time_offset_s;
+  const int64_t t_imu_ns = t_ns - offset_ns;
   KeyFrameInertial imu;
-  imu.t_s = t_s;
+  imu.t_ns = t_ns;
   imu.v_world_body = inertial_->state().nav.v_world_body;
   imu.bias = inertial_->state().bias;
   imu.camera_tracked = camera_tracked;
   auto previous = imu_chain_map_ == active_ ? map->keyframe(imu_chain_keyframe_) : nullptr;
   if (previous && previous->inertial) {
     imu.previous = previous->id;
-    imu.samples_from_previous =
-        keyframe_imu_.Slice(previous->inertial->t_s - options_.imu.time_offset_s, t_imu_s);
+    imu.samples_from_previous = keyframe_imu_.Slice(previous->inertial->t_ns - offset_ns, t_imu_ns);
   }
   kf->inertial = std::move(imu);
-  keyframe_imu_.DropBefore(t_imu_s);
+  keyframe_imu_.DropBefore(t_imu_ns);
   imu_chain_keyframe_ = kf->id;
   imu_chain_map_ = active_;
   imu_chain_refined_ = 0;
@@ -326,14 +328,14 @@ void Tracker::FollowLocalBa() {
       return;
     }
     imu_chain_refined_ = kf->inertial->refined;
-    imu.t_s = kf->inertial->t_s;
+    imu.t_ns = kf->inertial->t_ns;
     imu.v_world_body = kf->inertial->v_world_body;
     imu.bias = kf->inertial->bias;
     cam_from_world = kf->cam_from_world;
     if (!map.inertial()) return;
     g_world = map.inertial()->g_world;
   }
-  inertial_->Rebase(imu.t_s, cam_from_world, imu.v_world_body, imu.bias, g_world);
+  inertial_->Rebase(imu.t_ns, cam_from_world, imu.v_world_body, imu.bias, g_world);
 }
 
 bool Tracker::MapGravityDirection(int map_index, Eigen::Vector3d* g_world) const {
@@ -368,8 +370,8 @@ Tracker::InertialReport Tracker::inertial_report() const {
   r.has_imu = true;
   r.initialised = inertial_->initialised();
   const InertialEstimator::Report& e = inertial_->report();
-  r.first_pose_s = e.first_pose_s;
-  r.first_init_s = e.first_init_s;
+  r.first_pose_t_ns = e.first_pose_t_ns;
+  r.first_init_t_ns = e.first_init_t_ns;
   r.initialisations = e.initialisations;
   r.refinements = e.refinements;
   r.last_failure = e.last_failure;
@@ -484,7 +486,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
     kf->pose_from_imu = pose_from_imu;
     // (after a correction landed meanwhile the inertial state is in the world before it: the
     // chain ends rather than take its velocity)
-    AttachImu(frame->timestamp, camera_tracked && !corrected, !corrected, &map, kf.get());
+    AttachImu(frame->t_ns, camera_tracked && !corrected, !corrected, &map, kf.get());
     if (keyframe_images_ && current_left_ != nullptr) {
       // (for local mapping's triangulated points, which sample their patches from it; a copy:
       // the caller's image is not the tracker's to keep. Released after local mapping.)
@@ -547,7 +549,7 @@ void Tracker::InsertKeyFrame(const std::shared_ptr<const StereoFrame>& frame,
   if (!bow.empty()) atlas_.database(active_).Add(kf_id, bow);
   last_keyframe_ = kf_id;
   last_keyframe_frame_ = frame->index;
-  last_keyframe_time_s_ = frame->timestamp;
+  last_keyframe_t_ns_ = frame->t_ns;
   first_tracked_ = 0;
   mapper_->Insert(live, kf_id);
 }
@@ -615,7 +617,7 @@ bool Tracker::AcceptTracking(const StereoFrame& frame, Map& map, const LocalTrac
   if (!decide_only && !projected) first_tracked_ = first_tracked;
   KeyframeEvidence evidence;
   evidence.frames_since = frames_since;
-  evidence.seconds_since = frame.timestamp - last_keyframe_time_s_;
+  evidence.seconds_since = SecondsBetween(last_keyframe_t_ns_, frame.t_ns);
   evidence.noisy = frame.noisy;
   evidence.tracked = tracked;
   evidence.reference = std::max(reference, first_tracked);
@@ -1074,7 +1076,7 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
     // stereo points new map points for the frames after it.
     const double interval = options_.imu.keyframe_interval_s;
     if (interval > 0.0 && !options_.localise_only &&
-        frame->timestamp - last_keyframe_time_s_ >= interval) {
+        SecondsBetween(last_keyframe_t_ns_, frame->t_ns) >= interval) {
       InertialKeyFrame(frame, inertial, weak.line_match, &result);
     }
     RecordFrame(*frame, result.keyframe);

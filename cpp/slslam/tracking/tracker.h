@@ -13,11 +13,13 @@
 // make a keyframe and to start a map, so lines carry the low-texture stretches.
 #pragma once
 
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <initializer_list>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -328,7 +330,7 @@ TrackerOptions AdaptToRig(const TrackerOptions& options);
 // correction, merging and bundle adjustment that move the keyframe move the frame too.
 struct FramePose {
   int index = 0;           ///< input frame number
-  double timestamp = 0.0;  ///< [s]
+  int64_t t_ns = 0;        ///< capture time [ns]
   int map_index = -1;      ///< map of the atlas the pose is in (after merges)
   Rigid3d cam_from_world;  ///< world -> camera
 };
@@ -391,10 +393,11 @@ class Tracker {
                     const cv::Mat& left_image = cv::Mat(),
                     const StereoLineCompleter& complete_left_lines = {},
                     const cv::Mat& right_image = cv::Mat());
-  // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_s, on the frames'
-  // clock; samples up to a frame's time must be added before the frame is tracked. Ignored when
-  // options.use_imu is off. Throws std::invalid_argument on a non-finite or non-increasing sample.
-  void AddImu(double t_s, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
+  // One IMU sample (body frame: gyro [rad/s], specific force [m/s^2]) at t_ns on the IMU's clock
+  // (t_cam = t_imu + imu.time_offset_s); samples up to a frame's time must be added before the
+  // frame is tracked. Ignored when options.use_imu is off. Throws std::invalid_argument on a
+  // non-finite or non-increasing sample.
+  void AddImu(int64_t t_ns, const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& acc_mps2);
   // Waits for local mapping to finish its queue and for a global BA running in the background
   // to be written back (threaded mode).
   void Flush();
@@ -408,8 +411,8 @@ class Tracker {
   struct InertialReport {
     bool has_imu = false;
     bool initialised = false;
-    double first_pose_s = -1.0;
-    double first_init_s = -1.0;  ///< camera time of the first initialisation (-1: never) [s]
+    std::optional<int64_t> first_pose_t_ns;  ///< camera time of the first pose it was given [ns]
+    std::optional<int64_t> first_init_t_ns;  ///< camera time of the first initialisation [ns]
     int initialisations = 0;
     int refinements = 0;
     std::string last_failure;
@@ -629,12 +632,12 @@ class Tracker {
   // world), with the pose optimiser's information (zero: none) and whether it had the prior.
   void InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_world,
                     const Matrix6d& information, bool with_prior);
-  // A new keyframe (at camera time t_s) of the active map `map` joins the IMU chain with the
-  // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_s, in the
+  // A new keyframe (at camera time t_ns) of the active map `map` joins the IMU chain with the
+  // inertial state at its time (imu.local_ba_keyframes > 0; the state must be at t_ns, in the
   // map's world), and the map gets the IMU settings; else the chain ends. Caller holds the lock.
   // `same_world`: the inertial state is in the map's world (no correction landed since the frame
   // was tracked).
-  void AttachImu(double t_s, bool camera_tracked, bool same_world, Map* map, KeyFrame* kf)
+  void AttachImu(int64_t t_ns, bool camera_tracked, bool same_world, Map* map, KeyFrame* kf)
       SLSLAM_REQUIRES(map->mutex());
   // Local BA estimated the IMU chain's last keyframe again: the inertial state restarts from it
   // (its pose, velocity and biases, propagated to the state's time), as ORB-SLAM3's tracking
@@ -696,8 +699,8 @@ class Tracker {
   Rigid3d velocity_;  ///< last camera from the camera before: T_last * T_prev^-1
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
-  double last_keyframe_time_s_ = 0.0;  ///< timestamp of the frame of the last keyframe [s]
-  int first_tracked_ = 0;              ///< inliers of the first frame after the last keyframe
+  int64_t last_keyframe_t_ns_ = 0;  ///< capture time of the frame of the last keyframe [ns]
+  int first_tracked_ = 0;           ///< inliers of the first frame after the last keyframe
   // After a loop correction or merge moved the active map: the active map index and the last
   // pose follow (the pose through its reference keyframe).
   void FollowCorrections();
@@ -722,7 +725,7 @@ class Tracker {
 
   struct FrameRecord {
     int index = 0;
-    double timestamp = 0.0;
+    int64_t t_ns = 0;
     int map_index = -1;
     int reference_kf = -1;
     Rigid3d frame_from_ref;  ///< reference keyframe camera -> frame camera

@@ -132,7 +132,7 @@ int Tracker::live_maps() const {
 void Tracker::RecordFrame(const StereoFrame& frame, bool keyframe) {
   FrameRecord r;
   r.index = frame.index;
-  r.timestamp = frame.timestamp;
+  r.t_ns = frame.t_ns;
   r.map_index = active_;
   r.reference_kf = last_keyframe_;
   r.cam_from_world = last_cam_from_world_;
@@ -198,7 +198,7 @@ std::vector<FramePose> Tracker::Trajectory() const {
   for (const FrameRecord& r : records_) {
     FramePose f;
     f.index = r.index;
-    f.timestamp = r.timestamp;
+    f.t_ns = r.t_ns;
     f.map_index = atlas_.Resolve(r.map_index);
     f.cam_from_world = r.cam_from_world;
     Map& map = atlas_.map(f.map_index);

@@ -77,7 +77,7 @@ bool Tracker::Relocalise(const StereoFrame& frame, const std::vector<int>& order
     active_ = m;
     last_keyframe_ = keyframe_id;
     last_keyframe_frame_ = frame.index;
-    last_keyframe_time_s_ = frame.timestamp;
+    last_keyframe_t_ns_ = frame.t_ns;
     first_tracked_ = 0;
     ++stats_.relocalisations;
     result->relocalisation_ms = Ms(start);

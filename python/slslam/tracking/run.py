@@ -49,7 +49,7 @@ import numpy as np
 from evo.core.trajectory import PoseTrajectory3D
 
 from slslam.config import Config, check_config, default_config, dump_config
-from slslam.datasets.euroc import EurocSequence, is_euroc
+from slslam.datasets.euroc import EurocSequence, StereoFrame, is_euroc
 from slslam.datasets.kitti import KittiSequence, is_kitti
 from slslam.datasets.rosbag import is_rosbag
 from slslam.datasets.trajectory_io import tum_lines, tum_time
@@ -220,15 +220,8 @@ def _with_frame_rate(config: Config, stamps_ns: list[int] | None) -> Config:
     return dataclasses.replace(config, tracking=tracking)
 
 
-def _stamp(stamps_ns: list[int] | None, index: int, timestamp_s: float) -> str:
-    if stamps_ns is not None and 0 <= index < len(stamps_ns):
-        return tum_time(stamps_ns[index])
-    return f"{timestamp_s:.9f}"
-
-
-def _tum_line(result: TrackResult, stamps_ns: list[int] | None = None) -> str:
-    time = _stamp(stamps_ns, result.index, result.timestamp)
-    return tum_lines([time], result.T_world_cam)[0]
+def _tum_line(result: TrackResult) -> str:
+    return tum_lines([tum_time(result.t_ns)], result.T_world_cam)[0]
 
 
 def write_ply(path: Path, points: np.ndarray, lines: np.ndarray) -> Path:
@@ -278,9 +271,7 @@ def tracked_trajectory(results: list[TrackResult]) -> PoseTrajectory3D | None:
     )
 
 
-def _write_final_trajectory(
-    tracker: Tracker, out: Path, stamps_ns: list[int] | None = None
-) -> PoseTrajectory3D | None:
+def _write_final_trajectory(tracker: Tracker, out: Path) -> PoseTrajectory3D | None:
     """trajectory.tum replaced by the final-map poses (the online file kept as
     trajectory_online.tum); both renames are atomic. None when fewer than 2 poses."""
     final = tracker.final_trajectory()
@@ -288,10 +279,7 @@ def _write_final_trajectory(
         return None
     tmp = out / "trajectory.tum.partial"
     try:
-        times = [
-            _stamp(stamps_ns, int(i), float(t))
-            for i, t in zip(final.index, final.timestamp, strict=True)
-        ]
+        times = [tum_time(int(t)) for t in final.t_ns]
         with tmp.open("w", encoding="ascii") as f:
             f.writelines(tum_lines(times, final.T_world_cam))
         online = out / "trajectory.tum"
@@ -363,11 +351,10 @@ def _groundtruth(sequence: EurocSequence | KittiSequence, groundtruth: str | Pat
     return None
 
 
-def _stereo_frames(sequence: EurocSequence | KittiSequence, n: int) -> Iterator[tuple]:
-    """(left, right, timestamp [s]) of the first n frames, read as they are asked for."""
+def _stereo_frames(sequence: EurocSequence | KittiSequence, n: int) -> Iterator[StereoFrame]:
+    """The first n frames (with their exact t_ns), read as they are asked for."""
     for i in range(n):
-        frame = sequence[i]
-        yield frame.left, frame.right, frame.t_ns * 1e-9
+        yield sequence[i]
 
 
 def _map_metrics(map_data: MapData) -> dict:
@@ -386,8 +373,12 @@ def _map_metrics(map_data: MapData) -> dict:
         "merges": stats.merges,
         "imu": stats.imu
         | (
-            {"init_after_s": round(stats.imu["first_init_s"] - stats.imu["first_pose_s"], 6)}
-            if stats.imu.get("first_init_s", -1.0) >= 0.0
+            {
+                "init_after_s": round(
+                    (stats.imu["first_init_t_ns"] - stats.imu["first_pose_t_ns"]) / 1e9, 6
+                )
+            }
+            if stats.imu.get("first_init_t_ns") is not None
             else {}
         ),
         "global_ba_runs": stats.global_ba_runs,
@@ -526,12 +517,12 @@ def run_sequence(
                 for result in bar:
                     results.append(result)
                     pose_file = traj_file if result.state in TRACKED_STATES else lost_file
-                    pose_file.write(_tum_line(result, stamps_ns))
+                    pose_file.write(_tum_line(result))
                     pose_file.flush()
                     writer.writerow(
                         [
                             result.index,
-                            _stamp(stamps_ns, result.index, result.timestamp),
+                            tum_time(result.t_ns),
                             result.state,
                             *(getattr(result.counts, c) for c in COUNTS),
                             *(f"{getattr(result.timings_ms, s):.3f}" for s in STAGES),
@@ -563,7 +554,7 @@ def run_sequence(
         nonlocal map_data, final
         map_data = tracker.map()
         write_ply(out / "map.ply", map_data.points, map_data.lines)
-        final = _write_final_trajectory(tracker, out, stamps_ns)
+        final = _write_final_trajectory(tracker, out)
         if save_map is not None:
             tracker.save_map(save_map)
 
@@ -632,11 +623,13 @@ def _give_imu(sequence, config: Config, tracker: Tracker) -> None:
         log.info("no IMU samples (%s): camera only", imu_csv)
         return
     samples = sequence.imu()
-    t = samples["t_ns"].astype(np.float64) * 1e-9
-    tracker.add_imu(t, samples["gyro"], samples["acc"])
-    if len(t) > 1:
-        rate = (len(t) - 1) / (t[-1] - t[0])
-        log.info("IMU: %d samples at %.0f Hz, coupled into tracking (tracking.imu)", len(t), rate)
+    t_ns = np.asarray(samples["t_ns"], dtype=np.int64)
+    tracker.add_imu(t_ns, samples["gyro"], samples["acc"])
+    if len(t_ns) > 1:
+        rate = (len(t_ns) - 1) / ((int(t_ns[-1]) - int(t_ns[0])) / 1e9)
+        log.info(
+            "IMU: %d samples at %.0f Hz, coupled into tracking (tracking.imu)", len(t_ns), rate
+        )
 
 
 def _show(viewer, show: Callable, *args):

@@ -6,7 +6,7 @@ with the GIL released.
 
     with slslam.Tracker(camera, config) as tracker:
         for frame in sequence:
-            result = tracker.track(frame.left, frame.right, frame.t_ns * 1e-9)
+            result = tracker.track(frame.left, frame.right, t_ns=frame.t_ns)
         stamps, poses, states = tracker.trajectory()
         cloud = tracker.map()
 
@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 import numbers
 import time
 import warnings
@@ -33,7 +32,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, Protocol, cast
 
 import numpy as np
 
@@ -54,6 +53,13 @@ from slslam.errors import InputError, SlslamError
 from slslam.features.frontend import PointFrontEnd, frontend_capabilities
 from slslam.features.keypoints import Keypoints, check_gray_image
 from slslam.features.low_light import LowLightEnhancer
+from slslam.timestamps import (
+    INT64_MAX,
+    INT64_MIN,
+    ns_from_seconds,
+    seconds_from_ns,
+    seconds_from_ns_array,
+)
 from slslam.tracking.pipeline import FrontEndThreads, run_ahead
 
 log = logging.getLogger(__name__)
@@ -150,6 +156,8 @@ class TrackResult:
     """The outcome of one frame.
 
     Attributes:
+        index: input frame number (0-based).
+        t_ns: capture time [ns] as given (``timestamp`` is it in float seconds).
         state: one of ``STATES``.
         T_world_cam: 4x4 pose of the left camera in the world (map) frame (``T_wc`` is a
             deprecated alias, kept for one release).
@@ -158,11 +166,16 @@ class TrackResult:
     """
 
     index: int
-    timestamp: float
+    t_ns: int
     state: str
     T_world_cam: np.ndarray
     timings_ms: StageTimings = field(default_factory=StageTimings)
     counts: FrameCounts = field(default_factory=FrameCounts)
+
+    @property
+    def timestamp(self) -> float:
+        """The capture time in seconds (:func:`slslam.timestamps.seconds_from_ns`)."""
+        return seconds_from_ns(self.t_ns)
 
     @property
     def tracked(self) -> bool:
@@ -177,13 +190,54 @@ class TrackResult:
         return self.T_world_cam
 
 
+class SupportsStereoFrame(Protocol):
+    """A rectified stereo frame with its exact time, as the readers' ``StereoFrame``."""
+
+    @property
+    def left(self) -> np.ndarray: ...
+    @property
+    def right(self) -> np.ndarray: ...
+    @property
+    def t_ns(self) -> int: ...
+
+
+def _unpack_frame(
+    frame: tuple[np.ndarray, np.ndarray, float] | SupportsStereoFrame,
+) -> tuple[np.ndarray, np.ndarray, float | None, int | None]:
+    """(left, right, seconds, t_ns) of a track_stream item: a (left, right, timestamp [s])
+    triple, or a frame with ``left``, ``right`` and ``t_ns``."""
+    if isinstance(frame, tuple):
+        left, right, seconds = frame
+        return left, right, seconds, None
+    return frame.left, frame.right, None, frame.t_ns
+
+
+def _frame_time_ns(where: str, timestamp: float | None, t_ns: int | None) -> int:
+    """The frame's time [ns] from exactly one of float seconds and integer nanoseconds; bad
+    values raise ``InputError`` naming the frame."""
+    if (timestamp is None) == (t_ns is None):
+        raise InputError(where, "give the frame's time as timestamp [s] or t_ns [ns], once")
+    if t_ns is not None:
+        if isinstance(t_ns, bool) or not isinstance(t_ns, numbers.Integral):
+            raise InputError(where, f"t_ns must be an integer [ns], got {t_ns!r}")
+        if not INT64_MIN <= int(t_ns) <= INT64_MAX:
+            raise InputError(where, f"t_ns {t_ns} does not fit int64 nanoseconds")
+        return int(t_ns)
+    try:
+        return ns_from_seconds(cast(float, timestamp))
+    except (TypeError, ValueError):
+        raise InputError(
+            where, f"timestamp {timestamp} s is not finite or beyond int64 nanoseconds"
+        ) from None
+
+
 @dataclass
 class _Prepared:
     """A checked frame with its keypoints and stereo matching, ready for the core (the images,
     keypoints and lines the core needs travel inside ``stereo``)."""
 
     index: int
-    timestamp: float
+    t_ns: int
     left: np.ndarray  #: as the core saw it (the viewer's last image)
     left_keypoints: Keypoints
     inference_ms: float  #: point front end, both images (wall)
@@ -244,7 +298,8 @@ class MapStats:
     welding_ba_runs: int = 0  #: welding BAs over the seam of a merge
     welding_ba_ms: float = 0.0  #: their build, solve and write back
     loop_events: tuple[LoopEvent, ...] = ()
-    #: the IMU: has_imu, initialised, first_pose_s and first_init_s (camera time [s], -1: never),
+    #: the IMU: has_imu, initialised, first_pose_t_ns and first_init_t_ns (camera time [ns], None:
+    #: never),
     #: initialisations, refinements, last_failure, gyro_bias_radps, acc_bias_mps2, g_world_mps2
     imu: dict = field(default_factory=dict)
 
@@ -288,12 +343,18 @@ class MapData:
 @dataclass(frozen=True)
 class FinalTrajectory:
     """Estimated frame poses in the final map (see :meth:`Tracker.final_trajectory`): per frame its
-    ``index``, ``timestamp`` [s], ``map_index`` (after merges) and ``T_world_cam`` (N, 4, 4)."""
+    ``index``, ``t_ns`` [ns] (``timestamp`` in seconds), ``map_index`` (after merges) and
+    ``T_world_cam`` (N, 4, 4)."""
 
     index: np.ndarray
-    timestamp: np.ndarray
+    t_ns: np.ndarray
     map_index: np.ndarray
     T_world_cam: np.ndarray
+
+    @property
+    def timestamp(self) -> np.ndarray:
+        """The capture times in seconds (:func:`slslam.timestamps.seconds_from_ns`)."""
+        return seconds_from_ns_array(self.t_ns)
 
 
 def _set_core(options: Any, path: str, value: Any) -> None:
@@ -485,7 +546,7 @@ class Tracker:
         # IMU samples given (add_imu) and not yet handed to the core: each frame's core call
         # first takes those up to its timestamp (so offline runs may give them all at once).
         self._imu_pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._imu_last_t: float = -math.inf
+        self._imu_last_t_ns: int | None = None
         # The right image on a helper thread, and the left image's lines beside the point front
         # end (a thread of their own: LSD + LBD cost about what ORB of both images costs, and
         # XFeat's network half of it); with the right image's lines every frame
@@ -511,45 +572,52 @@ class Tracker:
         self._threads.lines = executor
 
     # -- per frame -----------------------------------------------------------------------------
-    def add_imu(self, t_s: np.ndarray, gyro_radps: np.ndarray, acc_mps2: np.ndarray) -> None:
+    def add_imu(self, t_ns: np.ndarray, gyro_radps: np.ndarray, acc_mps2: np.ndarray) -> None:
         """IMU samples for the visual-inertial tracking (``tracking.imu`` in
-        configs/default.yaml, docs/imu.md): ``t_s`` (N,) seconds on the IMU's clock (the frames'
-        clock shifted by ``tracking.imu.time_offset_s``: t_cam = t_imu + offset), increasing;
+        configs/default.yaml, docs/imu.md): ``t_ns`` (N,) integer nanoseconds on the IMU's clock
+        (the frames' clock shifted by ``tracking.imu.time_offset_s``: t_cam = t_imu + offset),
+        increasing (float seconds are refused: convert with
+        :func:`slslam.timestamps.ns_from_seconds`);
         ``gyro_radps`` and ``acc_mps2`` (N, 3) in the IMU (body) frame, angular rate and specific
         force. Give them before the frames they precede (online) or all at once before the first
         frame (offline); each frame uses those up to its timestamp. Bad samples raise
         ``InputError``; with ``tracking.imu.enabled: false`` they are ignored."""
-        t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+        t = np.asarray(t_ns).reshape(-1)
+        if t.size and not np.issubdtype(t.dtype, np.integer):
+            raise InputError(
+                "IMU samples", f"times must be integer nanoseconds (int64), got dtype {t.dtype}"
+            )
+        t = t.astype(np.int64)
         gyro = np.asarray(gyro_radps, dtype=np.float64)
         acc = np.asarray(acc_mps2, dtype=np.float64)
         n = len(t)
         if gyro.shape != (n, 3) or acc.shape != (n, 3):
             raise InputError(
                 "IMU samples",
-                f"{n} timestamps need gyro and acc of shape ({n}, 3), got {gyro.shape} and "
-                f"{acc.shape}",
+                f"{n} times need gyro and acc of shape ({n}, 3), got {gyro.shape} and {acc.shape}",
             )
         if n == 0:
             return
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(gyro)) and np.all(np.isfinite(acc))):
-            raise InputError("IMU samples", "a timestamp, rate or specific force is not finite")
-        if np.any(np.diff(t) <= 0) or t[0] <= self._imu_last_t:
-            raise InputError("IMU samples", "timestamps must increase (and follow the last given)")
-        self._imu_last_t = float(t[-1])
+        if not (np.all(np.isfinite(gyro)) and np.all(np.isfinite(acc))):
+            raise InputError("IMU samples", "a rate or specific force is not finite")
+        last = self._imu_last_t_ns
+        if np.any(np.diff(t) <= 0) or (last is not None and int(t[0]) <= last):
+            raise InputError("IMU samples", "times must increase (and follow the last given)")
+        self._imu_last_t_ns = int(t[-1])
         if self._imu_pending is not None:
             t0, g0, a0 = self._imu_pending
             t, gyro, acc = (np.concatenate(p) for p in ((t0, t), (g0, gyro), (a0, acc)))
         self._imu_pending = (t, gyro, acc)
 
-    def _feed_imu(self, timestamp: float) -> None:
-        """Hands the core the pending IMU samples up to ``timestamp`` (consumer thread)."""
+    def _feed_imu(self, t_ns: int) -> None:
+        """Hands the core the pending IMU samples up to the frame time ``t_ns`` (consumer
+        thread)."""
         if self._imu_pending is None:
             return
         t, gyro, acc = self._imu_pending
         # (the samples are on the IMU's clock: t_cam = t_imu + tracking.imu.time_offset_s)
-        n = int(
-            np.searchsorted(t, timestamp - self.config.tracking.imu.time_offset_s, side="right")
-        )
+        offset_ns = ns_from_seconds(self.config.tracking.imu.time_offset_s)
+        n = int(np.searchsorted(t, t_ns - offset_ns, side="right"))
         if n == 0:
             return
         self._core.add_imu(t[:n], np.ascontiguousarray(gyro[:n]), np.ascontiguousarray(acc[:n]))
@@ -602,8 +670,16 @@ class Tracker:
             return keypoints
         return keypoints.select(limit(keypoints.uv, keypoints.scores))
 
-    def track(self, left: np.ndarray, right: np.ndarray, timestamp: float) -> TrackResult:
-        """Tracks one rectified stereo pair taken at ``timestamp`` seconds.
+    def track(
+        self,
+        left: np.ndarray,
+        right: np.ndarray,
+        timestamp: float | None = None,
+        *,
+        t_ns: int | None = None,
+    ) -> TrackResult:
+        """Tracks one rectified stereo pair taken at ``timestamp`` seconds, or exactly at ``t_ns``
+        integer nanoseconds (give one; a reader's frames carry ``t_ns``).
 
         Images as ``cv2.imread`` gives them: uint8 gray (H x W) as they are; uint8 BGR / BGRA
         (H x W x 3 / 4) to gray with OpenCV's weights (0.299 R + 0.587 G + 0.114 B); 16-bit gray
@@ -617,16 +693,19 @@ class Tracker:
         if self._closed:
             raise RuntimeError("the tracker is closed")
         index = len(self._results)
-        previous = self._results[-1].timestamp if self._results else None
-        return self._track_prepared(self._prepare(index, left, right, timestamp, previous))
+        stamp = _frame_time_ns(f"frame {index}", timestamp, t_ns)
+        previous = self._results[-1].t_ns if self._results else None
+        return self._track_prepared(self._prepare(index, left, right, stamp, previous))
 
     def track_stream(
         self,
-        frames: Iterable[tuple[np.ndarray, np.ndarray, float]],
+        frames: Iterable[tuple[np.ndarray, np.ndarray, float] | SupportsStereoFrame],
         pipeline: bool = True,
         frames_ahead: int | None = None,
     ) -> Generator[TrackResult, None, None]:
-        """Tracks (left, right, timestamp) triples in order, yielding each frame's result.
+        """Tracks frames in order, yielding each frame's result: (left, right, timestamp [s])
+        triples, or objects with ``left``, ``right`` and ``t_ns`` [ns] (a reader's
+        ``StereoFrame``: its exact time).
 
         With ``pipeline`` the point front end and the stereo matching of the next frames (and
         reading them from ``frames``) run on a worker thread while the core tracks frame k: at most
@@ -642,22 +721,26 @@ class Tracker:
         if self._closed:
             raise RuntimeError("the tracker is closed")
         if not pipeline:
-            for left, right, timestamp in frames:
-                yield self.track(left, right, timestamp)
+            for frame in frames:
+                left, right, seconds, ns = _unpack_frame(frame)
+                yield self.track(left, right, seconds, t_ns=ns)
             return
         ahead = self.config.tracking.pipeline_frames_ahead if frames_ahead is None else frames_ahead
         if isinstance(ahead, bool) or not isinstance(ahead, numbers.Integral) or ahead < 1:
             raise ValueError(f"frames_ahead must be an integer >= 1, got {ahead!r}")
         ahead = int(ahead)  # numpy integers too
         first = len(self._results)
-        previous = self._results[-1].timestamp if self._results else None
+        previous = self._results[-1].t_ns if self._results else None
 
-        def prepare(position: int, frame: tuple[np.ndarray, np.ndarray, float]) -> _Prepared:
+        def prepare(
+            position: int, frame: tuple[np.ndarray, np.ndarray, float] | SupportsStereoFrame
+        ) -> _Prepared:
             """The worker's part of one frame (slslam.tracking.pipeline.run_ahead)."""
             nonlocal previous
-            left, right, timestamp = frame
-            prepared = self._prepare(first + position, left, right, timestamp, previous)
-            previous = timestamp
+            left, right, seconds, ns = _unpack_frame(frame)
+            stamp = _frame_time_ns(f"frame {first + position}", seconds, ns)
+            prepared = self._prepare(first + position, left, right, stamp, previous)
+            previous = stamp
             return prepared
 
         with closing(run_ahead(frames, prepare, ahead, name="slslam-frontend")) as prepared:
@@ -669,8 +752,8 @@ class Tracker:
         index: int,
         left: np.ndarray,
         right: np.ndarray,
-        timestamp: float,
-        previous: float | None,
+        t_ns: int,
+        previous: int | None,
     ) -> _Prepared:
         """Checks one frame, runs the point front end on both images, or on the left one with
         ``tracking.stereo_row_search``, and the stereo matching (thread-safe: no state of the
@@ -688,20 +771,16 @@ class Tracker:
                 f"image sizes {left.shape[::-1]} / {right.shape[::-1]} differ from the "
                 f"calibration's {expected[::-1]} (width x height)",
             )
-        if not math.isfinite(timestamp):
-            raise InputError(where, f"timestamp {timestamp} is not finite")
-        if previous is not None and timestamp <= previous:
-            raise InputError(
-                where, f"timestamp {timestamp} does not increase (previous {previous})"
-            )
+        if previous is not None and t_ns <= previous:
+            raise InputError(where, f"time {t_ns} ns does not increase (previous {previous} ns)")
         return self._prepare_checked(
-            index, float(timestamp), left, right, detect=self._detect_ahead(index), lines=None
+            index, t_ns, left, right, detect=self._detect_ahead(index), lines=None
         )
 
     def _prepare_checked(
         self,
         index: int,
-        timestamp: float,
+        t_ns: int,
         left: np.ndarray,
         right: np.ndarray,
         detect: bool,
@@ -747,7 +826,7 @@ class Tracker:
         # tracking of the frame before (the same frame either way; TrackerCore.prepare).
         stereo = self._core.prepare(
             index,
-            float(timestamp),
+            t_ns,
             left,
             right,
             np.ascontiguousarray(kl.uv, dtype=np.float32).reshape(-1, 2),
@@ -762,7 +841,7 @@ class Tracker:
         front_ms = (time.perf_counter() - start) * 1e3
         return _Prepared(
             index,
-            float(timestamp),
+            t_ns,
             left,
             kl,
             inference_ms,
@@ -777,7 +856,7 @@ class Tracker:
         """The core's part of one frame (GIL released inside): tracking and local mapping (and
         the left image's lines when no lines thread extracted them)."""
         index, where = frame.index, f"frame {frame.index}"
-        self._feed_imu(frame.timestamp)
+        self._feed_imu(frame.t_ns)
         start = time.perf_counter()
         front_ms = frame.front_ms
         out = self._core.track_prepared(frame.stereo)
@@ -788,7 +867,7 @@ class Tracker:
             redo_start = time.perf_counter()
             frame = self._prepare_checked(
                 frame.index,
-                frame.timestamp,
+                frame.t_ns,
                 frame.raw_left,
                 frame.raw_right,
                 detect=True,
@@ -797,7 +876,7 @@ class Tracker:
             out = self._core.track_prepared(frame.stereo)
             front_ms += (time.perf_counter() - redo_start) * 1e3 - frame.front_ms  # (counted once)
         kl = frame.left_keypoints
-        timestamp, inference_ms = frame.timestamp, frame.inference_ms
+        inference_ms = frame.inference_ms
         T_world_cam = np.linalg.inv(out.cam_from_world)
         if not np.all(np.isfinite(T_world_cam)):  # never hand out a NaN pose
             raise RuntimeError(f"{where}: the tracker produced a non-finite pose")
@@ -827,7 +906,7 @@ class Tracker:
             imu=int(out.imu_initialised),
             position_sigma_m=round(float(out.position_sigma_m), 6),
         )
-        result = TrackResult(index, timestamp, out.state, T_world_cam, timings, counts)
+        result = TrackResult(index, frame.t_ns, out.state, T_world_cam, timings, counts)
         self.last_image, self.last_keypoints_uv = frame.left, kl.uv
         self._results.append(result)
         return result
@@ -973,7 +1052,7 @@ class Tracker:
         T_world_cam[:, :3, 3] = -np.einsum("nji,nj->ni", R_cam_world, t_cam_world)
         return FinalTrajectory(
             np.asarray(t["index"], dtype=int),
-            np.asarray(t["timestamp"], dtype=float),
+            np.asarray(t["t_ns"], dtype=np.int64),
             np.asarray(t["map_index"], dtype=int),
             T_world_cam,
         )

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "slslam/core/time.h"
+
 #include "synthetic_motion.h"
 
 namespace slslam {
@@ -180,25 +182,28 @@ TEST(ImuBuffer, PreintegratesPartialIntervalsAndRefusesGaps) {
   for (int k = 0; k <= 100; ++k) {
     const double t = 0.01 * k;
     const Eigen::Vector3d w(0.1, 0.2 * k / 100.0, -0.1), a(0.5, 9.81, -0.2 * k / 100.0);
-    buffer.Add(t, w, a);
+    buffer.Add(NsFromSeconds(t), w, a);
     if (t >= 0.2 - 1e-12 && t < 0.7 - 1e-12) direct.Integrate(w, a, 0.01);
   }
   ImuPreintegration from_buffer;
-  ASSERT_TRUE(buffer.Preintegrate(0.2, 0.7, 0.05, &from_buffer));
+  ASSERT_TRUE(buffer.Preintegrate(NsFromSeconds(0.2), NsFromSeconds(0.7), 0.05, &from_buffer));
   EXPECT_NEAR(from_buffer.dt_s(), 0.5, 1e-12);
   EXPECT_LT((from_buffer.delta_p() - direct.delta_p()).norm(), 1e-9);
   ImuPreintegration partial;
-  ASSERT_TRUE(buffer.Preintegrate(0.205, 0.3, 0.05, &partial));
+  ASSERT_TRUE(buffer.Preintegrate(NsFromSeconds(0.205), NsFromSeconds(0.3), 0.05, &partial));
   EXPECT_NEAR(partial.dt_s(), 0.095, 1e-12);
   ImuPreintegration refused;
-  EXPECT_FALSE(buffer.Preintegrate(-0.1, 0.3, 0.05, &refused));  // before the first sample
-  EXPECT_FALSE(buffer.Preintegrate(0.9, 1.2, 0.05, &refused));   // past the last one
-  EXPECT_FALSE(buffer.Preintegrate(0.2, 0.7, 0.005, &refused));  // samples 10 ms apart
-  EXPECT_THROW(buffer.Add(0.5, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()),
+  EXPECT_FALSE(buffer.Preintegrate(NsFromSeconds(-0.1), NsFromSeconds(0.3), 0.05,
+                                   &refused));  // before the first sample
+  EXPECT_FALSE(buffer.Preintegrate(NsFromSeconds(0.9), NsFromSeconds(1.2), 0.05,
+                                   &refused));  // past the last one
+  EXPECT_FALSE(buffer.Preintegrate(NsFromSeconds(0.2), NsFromSeconds(0.7), 0.005,
+                                   &refused));  // samples 10 ms apart
+  EXPECT_THROW(buffer.Add(NsFromSeconds(0.5), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()),
                std::invalid_argument);
-  buffer.DropBefore(0.5);
-  EXPECT_FALSE(buffer.Preintegrate(0.2, 0.7, 0.05, &refused));
-  EXPECT_TRUE(buffer.Preintegrate(0.5, 0.7, 0.05, &refused));
+  buffer.DropBefore(NsFromSeconds(0.5));
+  EXPECT_FALSE(buffer.Preintegrate(NsFromSeconds(0.2), NsFromSeconds(0.7), 0.05, &refused));
+  EXPECT_TRUE(buffer.Preintegrate(NsFromSeconds(0.5), NsFromSeconds(0.7), 0.05, &refused));
 }
 
 // A keyframe's samples (Slice) integrate like the whole buffer over its interval, and two
@@ -208,16 +213,17 @@ TEST(ImuBuffer, SlicesIntegrateAsTheBufferAndJoinAcrossAKeyframe) {
   ImuBuffer buffer;
   for (int k = 0; k <= 200; ++k) {
     const double t = 0.005 * k + 0.001;
-    buffer.Add(t, Eigen::Vector3d(0.1, 0.3 * std::sin(t), -0.1),
+    buffer.Add(NsFromSeconds(t), Eigen::Vector3d(0.1, 0.3 * std::sin(t), -0.1),
                Eigen::Vector3d(0.5 * std::cos(t), 9.81, -0.2 * t));
   }
   const auto integrated = [](const ImuBuffer& b, double t0, double t1) {
     ImuPreintegration pre;
-    EXPECT_TRUE(b.Preintegrate(t0, t1, 0.05, &pre)) << t0 << " " << t1;
+    EXPECT_TRUE(b.Preintegrate(NsFromSeconds(t0), NsFromSeconds(t1), 0.05, &pre))
+        << t0 << " " << t1;
     return pre;
   };
-  const ImuBuffer first = buffer.Slice(0.2031, 0.4502);
-  const ImuBuffer second = buffer.Slice(0.4502, 0.8007);
+  const ImuBuffer first = buffer.Slice(NsFromSeconds(0.2031), NsFromSeconds(0.4502));
+  const ImuBuffer second = buffer.Slice(NsFromSeconds(0.4502), NsFromSeconds(0.8007));
   EXPECT_LT(first.size(), buffer.size());
   const ImuPreintegration whole = integrated(buffer, 0.2031, 0.4502);
   const ImuPreintegration sliced = integrated(first, 0.2031, 0.4502);
@@ -230,6 +236,27 @@ TEST(ImuBuffer, SlicesIntegrateAsTheBufferAndJoinAcrossAKeyframe) {
   EXPECT_EQ(from_joined.delta_p(), both.delta_p());
   EXPECT_EQ(from_joined.delta_v(), both.delta_v());
   EXPECT_EQ(from_joined.covariance(), both.covariance());
+}
+
+// Times are int64 ns: on a Unix clock (1.6e18 ns) the intervals are those of the same samples
+// near zero, bit for bit (float seconds there resolve 0.2 us and each interval would differ).
+TEST(ImuBuffer, IntegratesTheSameAtAnEpochClock) {
+  constexpr int64_t kEpochNs = 1'600'000'000'123'456'789;
+  ImuBuffer near_zero, at_epoch;
+  for (int k = 0; k <= 100; ++k) {
+    const int64_t t_ns = 2'500'000 * k + 1'234;  // 400 Hz
+    const Eigen::Vector3d w(0.1, 0.2 * std::sin(0.1 * k), -0.1), a(0.5, 9.81, 0.01 * k);
+    near_zero.Add(t_ns, w, a);
+    at_epoch.Add(kEpochNs + t_ns, w, a);
+  }
+  ImuPreintegration a, b;
+  ASSERT_TRUE(near_zero.Preintegrate(10'001'000, 210'000'017, 0.05, &a));
+  ASSERT_TRUE(at_epoch.Preintegrate(kEpochNs + 10'001'000, kEpochNs + 210'000'017, 0.05, &b));
+  EXPECT_EQ(a.dt_s(), b.dt_s());
+  EXPECT_NEAR(a.dt_s(), 0.199'999'017, 1e-15);
+  EXPECT_EQ(a.delta_p(), b.delta_p());
+  EXPECT_EQ(a.delta_R(), b.delta_R());
+  EXPECT_EQ(a.covariance(), b.covariance());
 }
 
 }  // namespace

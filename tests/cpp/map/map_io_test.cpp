@@ -17,6 +17,8 @@
 #include <gtest/gtest.h>
 
 #include "slslam/core/byte_io.h"
+#include "slslam/core/check.h"
+#include "slslam/core/time.h"
 #include "slslam/map/map_io.h"
 
 namespace slslam {
@@ -51,7 +53,7 @@ std::shared_ptr<StereoFrame> MakeFrame(std::mt19937& rng, int index, int n, int 
   std::uniform_real_distribution<double> depth(0.5, 30.0);
   auto f = std::make_shared<StereoFrame>();
   f->index = index;
-  f->timestamp = 1403715273.262142 + 0.05 * index;
+  f->t_ns = 1'403'715'273'000'000'000 + 250'000'000 * int64_t{index};  // (exact in f64 seconds)
   f->keypoints.uv.resize(n, 2);
   f->keypoints.score.resize(n);
   f->keypoints.octave.resize(n);
@@ -135,7 +137,7 @@ void ExpectSameMat(const cv::Mat& a, const cv::Mat& b, const std::string& what) 
 
 void ExpectSameFrame(const StereoFrame& a, const StereoFrame& b) {
   EXPECT_EQ(a.index, b.index);
-  EXPECT_EQ(a.timestamp, b.timestamp);
+  EXPECT_EQ(a.t_ns, b.t_ns);
   EXPECT_EQ(a.keypoints.uv, b.keypoints.uv);
   EXPECT_EQ(a.keypoints.score, b.keypoints.score);
   EXPECT_EQ(a.keypoints.octave, b.keypoints.octave);
@@ -285,7 +287,7 @@ void PutU32(std::vector<uint8_t>* bytes, size_t offset, uint32_t v) {
 void PutF64(std::vector<uint8_t>* bytes, size_t offset, double v) {
   uint64_t bits;
   std::memcpy(&bits, &v, 8);
-  for (int i = 0; i < 8; ++i) (*bytes)[offset + i] = static_cast<uint8_t>(bits >> (8 * i));
+  for (int i = 0; i < 8; ++i) bytes->at(offset + i) = static_cast<uint8_t>(bits >> (8 * i));
 }
 
 // Offsets of the fields the crafted-file tests edit, derived from Header() and the layout in
@@ -434,15 +436,24 @@ TEST_F(MapIo, NewerAndZeroVersionsAreRefused) {
   ExpectRefused(Write(bytes, "zero.slmap"), "format version 0");
 }
 
+// Defined with the layout helpers below.
+void FrameTimesAsSeconds(const std::vector<const Map*>& maps, size_t map_count_offset,
+                         std::vector<uint8_t>* bytes);
+
 TEST_F(MapIo, VersionOneFilesReadAsOpenCvLineDescriptors) {
-  // A version-2 file less its line descriptor name is the version-1 layout of the same maps;
-  // version 1 predates the name, and its lines carry OpenCV's LBD whatever the name said.
+  // A version-3 file with f64 frame times and less its line descriptor name is the version-1
+  // layout of the same maps; version 1 predates the name, and its lines carry OpenCV's LBD
+  // whatever the name said.
   SaveAtlas();
   MapFileHeader h = Header();
   h.line_descriptor = LineDescriptor::kLbd;
   SaveMaps(path_, {first_.get(), second_.get()}, h);
   std::vector<uint8_t> bytes = ReadBytes(path_);
   EXPECT_EQ(LoadMaps(path_).header.line_descriptor, LineDescriptor::kLbd);
+  FrameTimesAsSeconds({first_.get(), second_.get()},
+                      MapCountOffset() - LineDescriptorName(LineDescriptor::kOpenCvLbd).size() +
+                          LineDescriptorName(LineDescriptor::kLbd).size(),
+                      &bytes);
   const size_t name =
       kPreambleBytes + 4 + h.slslam_version.size() + 4 + 4 + 4 + h.vocabulary.size();
   ASSERT_EQ(std::string(bytes.begin() + name + 4, bytes.begin() + name + 4 + 3), "lbd");
@@ -565,6 +576,53 @@ size_t FirstSectionBytes(const std::vector<uint8_t>& bytes) {
   return static_cast<size_t>(size);
 }
 
+void FrameTimesAsSeconds(const std::vector<const Map*>& maps, size_t map_count_offset,
+                         std::vector<uint8_t>* bytes) {
+  size_t section = map_count_offset + 4 + 24 * maps.size();
+  for (size_t m = 0; m < maps.size(); ++m) {
+    size_t at = section;
+    for (const auto& [id, kf] : maps[m]->keyframes()) {
+      (void)id;
+      PutF64(bytes, at + KeyFrameHeadBytes(*kf) + 4, Seconds(kf->frame->t_ns));
+      at += KeyFrameRecordBytes(*kf);
+    }
+    uint64_t size = 0;
+    for (int i = 0; i < 8; ++i) {
+      size |= uint64_t{bytes->at(map_count_offset + 4 + 24 * m + 16 + i)} << (8 * i);
+    }
+    section += static_cast<size_t>(size);
+  }
+}
+
+// A version-2 file (f64 frame times [s]) reads each time as the nanosecond nearest it; a time
+// that is not finite or beyond int64 nanoseconds is refused, naming the keyframe.
+TEST_F(MapIo, VersionTwoFrameSecondsReadAsNanoseconds) {
+  std::vector<uint8_t> bytes = SaveAtlas();
+  FrameTimesAsSeconds({first_.get(), second_.get()}, MapCountOffset(), &bytes);
+  PutU32(&bytes, 8, 2);
+  Rechecksum(&bytes);
+  LoadedMaps loaded = LoadMaps(Write(bytes, "v2.slmap"));
+  ASSERT_EQ(loaded.maps.size(), 2u);
+  ExpectSameMap(*first_, *loaded.maps[0]);  // (the fixture's times are exact in f64 seconds)
+  ExpectSameMap(*second_, *loaded.maps[1]);
+  const auto kf0 = first_->keyframes().begin()->second;
+  const size_t first_time = FirstSectionOffset(2) + KeyFrameHeadBytes(*kf0) + 4;
+  PutF64(&bytes, first_time, 1403715273.262142);
+  Rechecksum(&bytes);
+  loaded = LoadMaps(Write(bytes, "v2.slmap"));
+  const int64_t t_ns = loaded.maps[0]->keyframes().begin()->second->frame->t_ns;
+  EXPECT_EQ(t_ns, NsFromSeconds(1403715273.262142));
+  EXPECT_LE(std::abs(t_ns - 1'403'715'273'262'142'000), 120);  // (f64's spacing there: 238 ns)
+  for (const double bad : {double{INFINITY}, std::nan(""), 1e300}) {
+    SCOPED_TRACE(bad);
+    PutF64(&bytes, first_time, bad);
+    Rechecksum(&bytes);
+    ExpectRefused(Write(bytes, "v2.slmap"),
+                  Message("keyframe ", kf0->id, ": frame timestamp ", bad, " s is not finite"),
+                  /*summary_too=*/false);
+  }
+}
+
 // Files with a correct checksum whose content is wrong, as another writer could produce: each
 // is refused by the check behind it, before any allocation the file could not back.
 TEST_F(MapIo, CraftedFilesWithValidChecksumsAreRefused) {
@@ -606,8 +664,6 @@ TEST_F(MapIo, CraftedFilesWithValidChecksumsAreRefused) {
       {"keyframe ids out of order", section, false, 5000, "keyframe id 2 follows 5000"},
       {"negative keyframe id", section, false, 0xFFFFFFFEu, "keyframe id -2 is outside"},
       {"NaN keypoint", first_frame + 12 + 4, false, 0x7FC00000u, "keypoint position"},
-      {"infinite timestamp", first_frame + 4, true, INFINITY, "s is not finite or beyond"},
-      {"timestamp of 1e300 s", first_frame + 4, true, 1e300, "timestamp 1e+300 s is not finite"},
       {"translation of 1e300 m", first_kf_pose + 9 * 8, true, 1e300, "beyond 1e+07 m"},
       {"id counter at int32's end", map_count - 12, false, 0x7FFFFFFFu,
        "leave fewer than 16777216 new ids"},

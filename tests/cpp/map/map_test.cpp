@@ -4,6 +4,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "slslam/core/time.h"
+
 #include <vector>
 
 namespace slslam {
@@ -46,11 +48,11 @@ TEST(Map, CulledKeyFrameJoinsTheImuChainAcrossIt) {
   for (int k = 0; k < 3; ++k) {
     kfs.push_back(map.AddKeyFrame(Rigid3d(), EmptyFrame()));
     KeyFrameInertial imu;
-    imu.t_s = 0.5 * k;
+    imu.t_ns = NsFromSeconds(0.5 * k);
     imu.previous = k > 0 ? kfs[k - 1]->id : -1;
     for (int s = 0; k > 0 && s <= 10; ++s) {
-      imu.samples_from_previous.Add(0.5 * (k - 1) + 0.05 * s, Eigen::Vector3d::Zero(),
-                                    Eigen::Vector3d::UnitZ());
+      imu.samples_from_previous.Add(NsFromSeconds(0.5 * (k - 1) + 0.05 * s),
+                                    Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
     }
     kfs.back()->inertial = imu;
   }
@@ -59,7 +61,7 @@ TEST(Map, CulledKeyFrameJoinsTheImuChainAcrossIt) {
   EXPECT_EQ(last.previous, kfs[0]->id);
   EXPECT_EQ(last.samples_from_previous.size(), 21u);  // (the shared sample at 0.5 s once)
   ImuPreintegration pre;
-  EXPECT_TRUE(last.samples_from_previous.Preintegrate(0.0, 1.0, 0.06, &pre));
+  EXPECT_TRUE(last.samples_from_previous.Preintegrate(0, NsFromSeconds(1.0), 0.06, &pre));
   EXPECT_NEAR(pre.dt_s(), 1.0, 1e-12);
   // The chain's first keyframe culled: its successor starts a chain.
   map.EraseKeyFrame(kfs[0]->id);

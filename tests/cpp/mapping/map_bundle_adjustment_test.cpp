@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "../inertial/synthetic_motion.h"
+#include "slslam/core/time.h"
 
 namespace slslam {
 namespace {
@@ -190,12 +191,12 @@ TEST(MapBundleAdjustment, TheImuChainOfAWindowJoinsWithItsPredecessorFixed) {
     const double t = times[k];
     auto kf = map.AddKeyFrame(motion.WorldFromBody(t).Inverse(), EmptyFrame());
     KeyFrameInertial state;
-    state.t_s = t;
+    state.t_ns = NsFromSeconds(t);
     state.v_world_body = motion.Velocity(t) + Eigen::Vector3d(0.2, -0.1, 0.1);  // (off)
     if (k > 0) {
       state.previous = kfs.back()->id;
       for (double s = times[k - 1]; s < t - 1e-9; s += 0.005) {
-        state.samples_from_previous.Add(s, motion.Gyro(s + 0.0025),
+        state.samples_from_previous.Add(NsFromSeconds(s), motion.Gyro(s + 0.0025),
                                         motion.Accelerometer(s + 0.0025));
       }
     }

@@ -36,7 +36,8 @@ void FeedImu(const SyntheticMotion& motion, double duration, const ImuBias& bias
       wn(i) = unit(rng) * defaults.gyro_noise_density / std::sqrt(dt);
       an(i) = unit(rng) * defaults.acc_noise_density / std::sqrt(dt);
     }
-    estimator->AddImu(t, motion.Gyro(t) + bias.gyro + wn, motion.Accelerometer(t) + bias.acc + an);
+    estimator->AddImu(NsFromSeconds(t), motion.Gyro(t) + bias.gyro + wn,
+                      motion.Accelerometer(t) + bias.acc + an);
   }
 }
 
@@ -67,7 +68,7 @@ TEST(InertialEstimator, InitialisesThenCarriesTenSecondsWithinItsUncertainty) {
     Vector6d noise;
     for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
     // The camera's pose alone: the estimator fuses it with its prediction.
-    estimator.AddVisualPose(t, LeftPlus(noise, CameraPose(motion, t)), information,
+    estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
                             /*with_prior=*/false);
     if (init_at < 0.0 && estimator.initialised()) init_at = t;
   }
@@ -81,7 +82,7 @@ TEST(InertialEstimator, InitialisesThenCarriesTenSecondsWithinItsUncertainty) {
   // 10 s without vision: every frame propagated, still trustworthy, the error within 3 sigma.
   for (int k = 201; k <= 400; ++k) {
     const double t = 0.05 * k;
-    ASSERT_TRUE(estimator.Propagate(t)) << t;
+    ASSERT_TRUE(estimator.Propagate(NsFromSeconds(t))) << t;
     EXPECT_TRUE(estimator.Trustworthy()) << t << " s: sigma " << estimator.state().PositionSigma();
   }
   const double error = (estimator.state().nav.p_world_body - motion.Position(20.0)).norm();
@@ -102,14 +103,15 @@ TEST(InertialEstimator, AtRestItInitialisesAndAnUncertaintyPastTheFloorIsLost) {
   FeedImu(motion, 40.0, {}, &estimator);
   const Matrix6d information = 1e6 * Matrix6d::Identity();
   for (int k = 0; k <= 40; ++k) {
-    estimator.AddVisualPose(0.05 * k, CameraPose(motion, 0.05 * k), information, false);
+    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
+                            false);
   }
   ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
   EXPECT_LT(estimator.state().nav.v_world_body.norm(), 0.02);
   // Standing still without vision: nothing is driven, so the floor decides.
   double lost_after = -1.0;
   for (int k = 41; k <= 800 && lost_after < 0.0; ++k) {
-    ASSERT_TRUE(estimator.Propagate(0.05 * k));
+    ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
     if (!estimator.Trustworthy()) lost_after = estimator.seconds_without_vision();
   }
   EXPECT_GT(lost_after, 0.5);
@@ -134,18 +136,19 @@ TEST(InertialEstimator, APoseFromParallelLinesDoesNotMoveTheStateAlongThem) {
     InertialEstimator estimator(options);
     FeedImu(motion, 6.0, {}, &estimator);
     for (int k = 0; k <= 40; ++k) {
-      estimator.AddVisualPose(0.05 * k, CameraPose(motion, 0.05 * k), information, false);
+      estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
+                              false);
     }
     ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
-    for (int k = 41; k < 100; ++k) ASSERT_TRUE(estimator.Propagate(0.05 * k));
+    for (int k = 41; k < 100; ++k) ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
     const double t = 5.0;
     InertialState predicted;
-    ASSERT_TRUE(estimator.Predict(t, &predicted));
+    ASSERT_TRUE(estimator.Predict(NsFromSeconds(t), &predicted));
     // The true camera moved 0.5 m along the direction (world_from_cam translated).
     const Rigid3d truth = CameraPose(motion, t);
     Rigid3d shifted = truth;
     shifted.translation -= truth.rotation * (0.5 * along);
-    estimator.AddVisualPose(t, shifted, information, /*with_prior=*/false,
+    estimator.AddVisualPose(NsFromSeconds(t), shifted, information, /*with_prior=*/false,
                             marginalised ? along : Eigen::Vector3d::Zero());
     moved[marginalised] = estimator.state().nav.p_world_body - predicted.nav.p_world_body;
   }
@@ -160,8 +163,8 @@ TEST(InertialEstimator, FollowsAWorldChangeAndRefusesBadOptions) {
   InertialEstimator estimator(options);
   FeedImu(motion, 4.0, {}, &estimator);
   for (int k = 0; k <= 40; ++k) {
-    estimator.AddVisualPose(0.05 * k, CameraPose(motion, 0.05 * k), 1e6 * Matrix6d::Identity(),
-                            false);
+    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k),
+                            1e6 * Matrix6d::Identity(), false);
   }
   ASSERT_TRUE(estimator.initialised());
   const Rigid3d new_from_old(ExpSO3(Eigen::Vector3d(0.0, 0.0, 0.5)), Eigen::Vector3d(1, 2, 3));

@@ -167,7 +167,8 @@ std::shared_ptr<StereoFrame> Render(const Scene& scene, int k, double sigma_px,
   };
   describe(lli, &ll);
   describe(lri, &lr);
-  return std::make_shared<StereoFrame>(MakeStereoFrame(k, 0.05 * k, left, right, &ll, &lr, rig));
+  return std::make_shared<StereoFrame>(
+      MakeStereoFrame(k, NsFromSeconds(0.05 * k), left, right, &ll, &lr, rig));
 }
 
 TrackerOptions Options(bool sequential = true, bool lines = true) {
@@ -362,7 +363,7 @@ void FeedTrueImu(double duration, Tracker* tracker) {
       wn(j) = unit(rng) * noise.gyro_noise_density / std::sqrt(dt);
       an(j) = unit(rng) * noise.acc_noise_density / std::sqrt(dt);
     }
-    tracker->AddImu(t, omega + gyro_bias + wn,
+    tracker->AddImu(NsFromSeconds(t), omega + gyro_bias + wn,
                     pose.rotation.transpose() * (a_world - g_world) + acc_bias + an);
   }
 }
@@ -409,8 +410,10 @@ void TenSecondsWithoutAnyFeature(int local_ba_keyframes) {
   EXPECT_LE(tracker.stats().inertial_frames, 205);
   const Tracker::InertialReport report = tracker.inertial_report();
   EXPECT_TRUE(report.has_imu);
-  EXPECT_GT(report.first_init_s, 0.9);
-  EXPECT_LT(report.first_init_s, 2.0);
+  ASSERT_TRUE(report.first_init_t_ns.has_value());
+  EXPECT_GT(*report.first_init_t_ns, NsFromSeconds(0.9));
+  EXPECT_LT(*report.first_init_t_ns, NsFromSeconds(2.0));
+  EXPECT_EQ(report.first_pose_t_ns, 0);
   EXPECT_LT((report.gyro_bias - Eigen::Vector3d(0.002, -0.001, 0.003)).norm(), 1e-3);
   // The map knows gravity (+y in the first camera's frame): its loops correct in 4 DoF.
   Eigen::Vector3d g_map;
@@ -559,7 +562,7 @@ TEST(TrackerTest, RelocalisesAFrameAtAKnownKeyframePoseWithinOneCentimetre) {
   // Back at the start of the run (frame 0 was the first keyframe), with a later frame number.
   auto frame = Render(scene, 0, 0.5);
   frame->index = 34;
-  frame->timestamp = 34 * 0.05;
+  frame->t_ns = NsFromSeconds(34 * 0.05);
   const TrackResult r = tracker.Track(frame);
   ASSERT_EQ(r.state, TrackingState::kRelocalised);
   EXPECT_LT(CenterError(r, 0), 0.01);
@@ -570,7 +573,7 @@ std::shared_ptr<StereoFrame> RenderAt(const Scene& scene, int pose_k, int index,
                                       bool blind = false) {
   auto frame = Render(scene, pose_k, sigma_px, blind);
   frame->index = index;
-  frame->timestamp = 0.05 * index;
+  frame->t_ns = NsFromSeconds(0.05 * index);
   return frame;
 }
 
