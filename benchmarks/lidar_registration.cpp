@@ -24,7 +24,7 @@ namespace {
 struct Pair {
   std::string name;
   lidar::PointMatrix source, target;
-  Eigen::Matrix4d truth;  // T_target_source
+  slslam::Rigid3d truth;  // target_from_source
 };
 
 std::vector<Pair> LoadPairs(const std::string& dir) {
@@ -32,7 +32,7 @@ std::vector<Pair> LoadPairs(const std::string& dir) {
   const std::string kitti = dir + "/kitti00_scancontext/";
   if (std::filesystem::exists(kitti + "000094.bin")) {
     const auto poses = lidar::ReadKittiPoses(kitti + "poses_cam0_kitti_format.txt");
-    const Eigen::Matrix4d tr = lidar::ReadKittiCalibTr(kitti + "calib_Tr_velo_to_cam0_seq00.txt");
+    const slslam::Rigid3d tr = lidar::ReadKittiCalibTr(kitti + "calib_Tr_velo_to_cam0_seq00.txt");
     for (auto [t, s] : {std::pair{94, 95}, std::pair{198, 199}}) {
       char name[64], src[16], tgt[16];
       std::snprintf(name, sizeof(name), "kitti00_%d->%d", s, t);
@@ -46,10 +46,10 @@ std::vector<Pair> LoadPairs(const std::string& dir) {
   if (std::filesystem::exists(gicp + "small_gicp_source.ply")) {
     pairs.push_back({"small_gicp", lidar::ReadPly(gicp + "small_gicp_source.ply"),
                      lidar::ReadPly(gicp + "small_gicp_target.ply"),
-                     lidar::ReadMatrix4(gicp + "small_gicp_T_target_source.txt")});
+                     lidar::ReadRigid3d(gicp + "small_gicp_T_target_source.txt")});
     pairs.push_back({"fast_gicp", lidar::ReadPcd(gicp + "fast_gicp_251371071.pcd"),
                      lidar::ReadPcd(gicp + "fast_gicp_251370668.pcd"),
-                     lidar::ReadMatrix4(gicp + "fast_gicp_relative.txt")});
+                     lidar::ReadRigid3d(gicp + "fast_gicp_relative.txt")});
   }
   return pairs;
 }
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       }
       std::sort(times.begin(), times.end());
       const double median = times[times.size() / 2];
-      const lidar::PoseError e = lidar::ComparePoses(result.transform, pair.truth);
+      const lidar::PoseError e = lidar::ComparePoses(result.target_from_source, pair.truth);
       const std::string name = lidar::MethodName(method);
       std::printf("%-18s %-16s %9.1f %7.3f %7.3f %7.3f %7.3f %8.4f %8.4f %8.4f %8.4f %6.3f %6d\n",
                   pair.name.c_str(), name.c_str(), median, e.roll_deg, e.pitch_deg, e.yaw_deg,

@@ -89,7 +89,9 @@ void BindLidar(py::module_& m) {
   py::class_<RegistrationResult> result(m, "RegistrationResult",
                                         "T_target_source, quality and per-stage times [ms].");
 #define SLSLAM_FIELD(name) result.def_readonly(#name, &RegistrationResult::name)
-  SLSLAM_FIELD(transform);
+  result.def_property_readonly(
+      "transform", [](const RegistrationResult& r) { return r.target_from_source.ToMatrix4(); },
+      "4x4 T_target_source (target_from_source): maps source points into the target frame.");
   SLSLAM_FIELD(fitness);
   SLSLAM_FIELD(inlier_rmse);
   SLSLAM_FIELD(iterations);

@@ -84,15 +84,25 @@ void BindLidarSlam(py::module_& m) {
                               SLSLAM_FIELD(LidarOdometryOptions, use_imu)
                                   SLSLAM_FIELD(LidarOdometryOptions, scan_information_scale)
                                       SLSLAM_FIELD(LidarOdometryOptions, gravity_window_s)
-                                          SLSLAM_FIELD(LidarOdometryOptions, T_body_sensor)
-                                              SLSLAM_FIELD(LidarOdometryOptions, map)
-                                                  SLSLAM_FIELD(LidarOdometryOptions, match)
-                                                      SLSLAM_FIELD(LidarOdometryOptions, smoother)
-                                                          SLSLAM_FIELD(LidarOdometryOptions, imu);
+                                          SLSLAM_FIELD(LidarOdometryOptions, map)
+                                              SLSLAM_FIELD(LidarOdometryOptions, match)
+                                                  SLSLAM_FIELD(LidarOdometryOptions, smoother)
+                                                      SLSLAM_FIELD(LidarOdometryOptions, imu)
+      .def_property(
+          "T_body_sensor",
+          [](const LidarOdometryOptions& o) { return o.body_from_sensor.ToMatrix4(); },
+          [](LidarOdometryOptions& o, const Eigen::Matrix4d& T) {
+            o.body_from_sensor = Rigid3d::FromMatrix4(T);
+          },
+          "4x4 pose of the LiDAR in the IMU (body) frame (body_from_sensor).");
   py::class_<OdometryResult>(m, "OdometryResult", "One sweep's pose, state, quality and timing.")
       .def_readonly("t_ns", &OdometryResult::t_ns)
-      .def_readonly("T_world_sensor", &OdometryResult::T_world_sensor)
-      .def_readonly("T_world_body", &OdometryResult::T_world_body)
+      .def_property_readonly(
+          "T_world_sensor", [](const OdometryResult& r) { return r.world_from_sensor.ToMatrix4(); },
+          "4x4 pose of the LiDAR in the world at the sweep start.")
+      .def_property_readonly(
+          "T_world_body", [](const OdometryResult& r) { return r.world_from_body.ToMatrix4(); },
+          "4x4 pose of the IMU (body) in the world at the sweep start.")
       .def_readonly("velocity_world", &OdometryResult::velocity_world)
       .def_readonly("gyro_bias", &OdometryResult::gyro_bias)
       .def_readonly("acc_bias", &OdometryResult::acc_bias)
@@ -167,12 +177,21 @@ void BindLidarSlam(py::module_& m) {
 #undef SLSLAM_FIELD
   m.def(
       "optimize_lidar_pose_graph",
-      [](const std::vector<Eigen::Matrix4d>& poses, const std::vector<int>& a,
+      [](const std::vector<Eigen::Matrix4d>& T_world_keyframe, const std::vector<int>& a,
          const std::vector<int>& b, const std::vector<Eigen::Matrix4d>& T_a_b,
          const std::vector<Eigen::Matrix<double, 6, 6>>& information, const std::vector<bool>& loop,
          const LidarPoseGraphOptions& options) {
-        py::gil_scoped_release release;
-        return OptimizeLidarPoseGraph(poses, a, b, T_a_b, information, loop, options);
+        std::vector<Rigid3d> poses, edges;
+        for (const Eigen::Matrix4d& T : T_world_keyframe) poses.push_back(Rigid3d::FromMatrix4(T));
+        for (const Eigen::Matrix4d& T : T_a_b) edges.push_back(Rigid3d::FromMatrix4(T));
+        std::vector<Rigid3d> optimised;
+        {
+          py::gil_scoped_release release;
+          optimised = OptimizeLidarPoseGraph(poses, a, b, edges, information, loop, options);
+        }
+        std::vector<Eigen::Matrix4d> out;
+        for (const Rigid3d& pose : optimised) out.push_back(pose.ToMatrix4());
+        return out;
       },
       py::arg("T_world_keyframe"), py::arg("a"), py::arg("b"), py::arg("T_a_b"),
       py::arg("information"), py::arg("loop"), py::arg("options") = LidarPoseGraphOptions(),
@@ -189,15 +208,14 @@ void BindLidarSlam(py::module_& m) {
         map_options.max_distance_m = 1e6;
         VoxelMap map(map_options);
         map.Add(ToVectors(target));
-        Eigen::Isometry3d T;
-        T.matrix() = T_target_source;
         ScanMatchResult r;
         {
           py::gil_scoped_release release;
-          r = MatchScanToMap(ToVectors(source), map, T, options);
+          r = MatchScanToMap(ToVectors(source), map, Rigid3d::FromMatrix4(T_target_source),
+                             options);
         }
-        return py::make_tuple(Eigen::Matrix4d(r.T_world_sensor.matrix()), r.fitness,
-                              r.inlier_rmse_m, r.information);
+        return py::make_tuple(r.world_from_sensor.ToMatrix4(), r.fitness, r.inlier_rmse_m,
+                              r.information);
       },
       py::arg("source"), py::arg("target"), py::arg("T_target_source"),
       py::arg("options") = ScanMatchOptions(), py::arg("voxel_m") = 0.5,

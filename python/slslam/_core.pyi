@@ -2102,9 +2102,11 @@ class LidarOdometryOptions:
         ...
     @property
     def T_body_sensor(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
-        ...
+        """
+        4x4 pose of the LiDAR in the IMU (body) frame (body_from_sensor).
+        """
     @T_body_sensor.setter
-    def T_body_sensor(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
+    def T_body_sensor(self, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"]) -> None:
         ...
     @property
     def gravity_window_s(self) -> float:
@@ -2154,10 +2156,14 @@ class OdometryResult:
     """
     @property
     def T_world_body(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
-        ...
+        """
+        4x4 pose of the IMU (body) in the world at the sweep start.
+        """
     @property
     def T_world_sensor(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
-        ...
+        """
+        4x4 pose of the LiDAR in the world at the sweep start.
+        """
     @property
     def acc_bias(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
         ...
@@ -2607,7 +2613,9 @@ class RegistrationResult:
         ...
     @property
     def transform(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
-        ...
+        """
+        4x4 T_target_source (target_from_source): maps source points into the target frame.
+        """
 def adapt_to_rig(options: TrackerOptions) -> TrackerOptions:
     """
     The options the tracker runs with: counts in frames turned to frame_rate_hz against reference_rate_hz, pixel windows to the rig's fx against reference_focal_px.

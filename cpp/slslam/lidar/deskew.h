@@ -6,21 +6,23 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/Geometry>
+
+#include "slslam/core/rigid3.h"
 
 namespace slslam::lidar {
 
-// Poses T_start_t of the sensor at increasing times t [s after the sweep start] relative to its
-// pose at the start. Between samples the motion is interpolated (slerp and linear translation);
-// before the first and after the last sample it is held.
+// Poses start_from_t of the sensor at increasing times t [s after the sweep start]: the sensor
+// at t in the sensor frame at the start. Between samples the motion is interpolated (slerp and
+// linear translation); before the first and after the last sample it is held.
 struct SweepMotion {
   std::vector<double> time_s;
-  std::vector<Eigen::Isometry3d> T_start_t;
+  std::vector<Rigid3d> start_from_t;
 
   // Pose at time t [s] (interpolated as above). Identity when empty.
-  Eigen::Isometry3d At(double t) const;
-  // Constant velocity: T_start_t = Exp(t / period * Log(T_start_end)), sampled `samples` times.
-  static SweepMotion ConstantVelocity(const Eigen::Isometry3d& T_start_end, double period_s,
+  Rigid3d At(double t) const;
+  // Constant velocity: the rotation Exp(t / period * Log(R_start_end)) and the translation along
+  // the straight line to start_from_end's, sampled `samples` times.
+  static SweepMotion ConstantVelocity(const Rigid3d& start_from_end, double period_s,
                                       int samples = 10);
 };
 

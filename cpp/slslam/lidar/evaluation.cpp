@@ -38,17 +38,18 @@ std::vector<std::vector<double>> ReadNumberLines(const std::string& path) {
   return lines;
 }
 
-Eigen::Matrix4d FromRowMajor12(const double* v) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+Rigid3d FromRowMajor12(const double* v) {
+  Rigid3d T;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 4; ++c) T(r, c) = v[4 * r + c];
+    for (int c = 0; c < 3; ++c) T.rotation(r, c) = v[4 * r + c];
+    T.translation(r) = v[4 * r + 3];
   }
   return T;
 }
 
 }  // namespace
 
-Eigen::Matrix4d ReadMatrix4(const std::string& path) {
+Rigid3d ReadRigid3d(const std::string& path) {
   std::vector<double> all;
   for (const auto& line : ReadNumberLines(path)) all.insert(all.end(), line.begin(), line.end());
   SLSLAM_CHECK(all.size() == 12 || all.size() == 16, path,
@@ -56,10 +57,10 @@ Eigen::Matrix4d ReadMatrix4(const std::string& path) {
   return FromRowMajor12(all.data());
 }
 
-Eigen::Matrix4d ReadKittiCalibTr(const std::string& path) { return ReadMatrix4(path); }
+Rigid3d ReadKittiCalibTr(const std::string& path) { return ReadRigid3d(path); }
 
-std::map<int, Eigen::Matrix4d> ReadKittiPoses(const std::string& path) {
-  std::map<int, Eigen::Matrix4d> poses;
+std::map<int, Rigid3d> ReadKittiPoses(const std::string& path) {
+  std::map<int, Rigid3d> poses;
   int index = 0;
   for (const auto& line : ReadNumberLines(path)) {
     if (line.size() == 12) {
@@ -74,23 +75,22 @@ std::map<int, Eigen::Matrix4d> ReadKittiPoses(const std::string& path) {
   return poses;
 }
 
-Eigen::Matrix4d KittiRelativeVelo(const Eigen::Matrix4d& T_world_cam_target,
-                                  const Eigen::Matrix4d& T_world_cam_source,
-                                  const Eigen::Matrix4d& T_cam_velo) {
-  return (T_world_cam_target * T_cam_velo).inverse() * (T_world_cam_source * T_cam_velo);
+Rigid3d KittiRelativeVelo(const Rigid3d& world_from_cam_target,
+                          const Rigid3d& world_from_cam_source, const Rigid3d& cam_from_velo) {
+  return (world_from_cam_target * cam_from_velo).Inverse() *
+         (world_from_cam_source * cam_from_velo);
 }
 
-PoseError ComparePoses(const Eigen::Matrix4d& estimate, const Eigen::Matrix4d& truth) {
+PoseError ComparePoses(const Rigid3d& estimate, const Rigid3d& truth) {
   constexpr double kDeg = 180.0 / M_PI;
-  const Eigen::Matrix3d residual =
-      truth.topLeftCorner<3, 3>().transpose() * estimate.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d residual = truth.rotation.transpose() * estimate.rotation;
   PoseError e;
   // Roll-pitch-yaw of residual = Rz(yaw) Ry(pitch) Rx(roll); small angles, so no wrap issues.
   e.roll_deg = std::abs(std::atan2(residual(2, 1), residual(2, 2))) * kDeg;
   e.pitch_deg = std::abs(std::asin(std::clamp(-residual(2, 0), -1.0, 1.0))) * kDeg;
   e.yaw_deg = std::abs(std::atan2(residual(1, 0), residual(0, 0))) * kDeg;
   e.rotation_deg = Eigen::AngleAxisd(residual).angle() * kDeg;
-  const Eigen::Vector3d dt = estimate.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>();
+  const Eigen::Vector3d dt = estimate.translation - truth.translation;
   e.x_m = std::abs(dt.x());
   e.y_m = std::abs(dt.y());
   e.z_m = std::abs(dt.z());

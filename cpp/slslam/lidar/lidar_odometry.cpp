@@ -14,6 +14,10 @@ namespace {
 // A sweep-to-sweep jump beyond this means registration diverged (100 m/s at 10 Hz) [m].
 constexpr double kMaxJumpM = 10.0;
 
+Rigid3d WorldFromBody(const NavState& nav) {
+  return Rigid3d(nav.R_world_body.toRotationMatrix(), nav.p_world_body);
+}
+
 double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
@@ -33,11 +37,11 @@ void LidarOdometryOptions::Check() const {
                "LidarOdometryOptions.scan_information_scale must be > 0, got ",
                scan_information_scale);
   SLSLAM_CHECK(gravity_window_s > 0, "LidarOdometryOptions.gravity_window_s must be > 0 s");
-  SLSLAM_CHECK(T_body_sensor.allFinite() && (T_body_sensor.topLeftCorner<3, 3>().transpose() *
-                                                 T_body_sensor.topLeftCorner<3, 3>() -
-                                             Eigen::Matrix3d::Identity())
-                                                    .norm() < 1e-6,
-               "LidarOdometryOptions.T_body_sensor must be a rigid transform");
+  SLSLAM_CHECK(body_from_sensor.rotation.allFinite() && body_from_sensor.translation.allFinite() &&
+                   (body_from_sensor.rotation.transpose() * body_from_sensor.rotation -
+                    Eigen::Matrix3d::Identity())
+                           .norm() < 1e-6,
+               "LidarOdometryOptions.body_from_sensor (T_body_sensor) must be a rigid transform");
   map.Check();
   match.Check();
   smoother.Check();
@@ -46,11 +50,11 @@ void LidarOdometryOptions::Check() const {
 
 LidarOdometry::LidarOdometry(const LidarOdometryOptions& options)
     : options_(options), map_((options.Check(), options.map)) {
-  T_body_sensor_.matrix() = options_.T_body_sensor;
   // The world frame is the body frame at the first sweep (gravity-aligned with the IMU).
-  T_world_sensor_ = T_body_sensor_;
+  world_from_sensor_ = options_.body_from_sensor;
   if (options_.use_imu) {
-    smoother_ = std::make_unique<LioSmoother>(options_.smoother, options_.imu, T_body_sensor_);
+    smoother_ =
+        std::make_unique<LioSmoother>(options_.smoother, options_.imu, options_.body_from_sensor);
   }
 }
 
@@ -114,15 +118,11 @@ SweepMotion LidarOdometry::ImuSweepMotion(const LioState& start, int64_t t_ns) c
   const int64_t end = t_ns + static_cast<int64_t>(options_.scan_period_s * 1e9);
   SLSLAM_CHECK(!imu_t_ns_.empty() && imu_t_ns_.front() <= t_ns,
                "LiDAR-inertial odometry: no IMU sample before the sweep at ", t_ns, " ns");
-  const Eigen::Isometry3d T_start_inv = [&] {
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = start.nav.R_world_body.toRotationMatrix();
-    T.translation() = start.nav.p_world_body;
-    return (T * T_body_sensor_).inverse();
-  }();
+  const Rigid3d& body_from_sensor = options_.body_from_sensor;
+  const Rigid3d start_from_world = (WorldFromBody(start.nav) * body_from_sensor).Inverse();
   SweepMotion motion;
   motion.time_s.push_back(0.0);
-  motion.T_start_t.push_back(Eigen::Isometry3d::Identity());
+  motion.start_from_t.emplace_back();
   std::vector<int64_t> knots;
   for (size_t k = std::upper_bound(imu_t_ns_.begin(), imu_t_ns_.end(), t_ns) - imu_t_ns_.begin();
        k < imu_t_ns_.size() && imu_t_ns_[k] < end; ++k) {
@@ -137,11 +137,8 @@ SweepMotion LidarOdometry::ImuSweepMotion(const LioState& start, int64_t t_ns) c
     t = knot;
     ++k;
     const NavState nav = pre.Predict(start.nav, start.bias);
-    Eigen::Isometry3d T_wb = Eigen::Isometry3d::Identity();
-    T_wb.linear() = nav.R_world_body.toRotationMatrix();
-    T_wb.translation() = nav.p_world_body;
     motion.time_s.push_back((knot - t_ns) * 1e-9);
-    motion.T_start_t.push_back(T_start_inv * T_wb * T_body_sensor_);
+    motion.start_from_t.push_back(start_from_world * WorldFromBody(nav) * body_from_sensor);
   }
   return motion;
 }
@@ -160,7 +157,8 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
   result.t_ns = t_ns;
 
   // Prediction of the sensor pose at the sweep start and of the motion during the sweep.
-  Eigen::Isometry3d T_pred = T_world_sensor_;
+  const Rigid3d& body_from_sensor = options_.body_from_sensor;
+  Rigid3d world_from_predicted = world_from_sensor_;
   LioState predicted = state_;
   std::unique_ptr<ImuPreintegration> pre;
   if (imu && scans_ == 0) {
@@ -169,14 +167,9 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
     pre = std::make_unique<ImuPreintegration>(Preintegrate(last_t_ns_, t_ns, state_.bias));
     predicted.nav = pre->Predict(state_.nav, state_.bias);
   } else {
-    T_pred = T_world_sensor_ * T_prev_curr_;
+    world_from_predicted = world_from_sensor_ * previous_from_current_;
   }
-  if (imu) {
-    Eigen::Isometry3d T_wb = Eigen::Isometry3d::Identity();
-    T_wb.linear() = predicted.nav.R_world_body.toRotationMatrix();
-    T_wb.translation() = predicted.nav.p_world_body;
-    T_pred = T_wb * T_body_sensor_;
-  }
+  if (imu) world_from_predicted = WorldFromBody(predicted.nav) * body_from_sensor;
 
   // Range crop and deskew into the sensor frame at the sweep start.
   auto t0 = std::chrono::steady_clock::now();
@@ -197,8 +190,9 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
   std::vector<Eigen::Vector3d> deskewed = raw;
   if (options_.deskew && !times.empty()) {
     const double interval_s = scans_ > 0 ? (t_ns - last_t_ns_) * 1e-9 : options_.scan_period_s;
-    const SweepMotion motion = imu ? ImuSweepMotion(predicted, t_ns)
-                                   : SweepMotion::ConstantVelocity(T_prev_curr_, interval_s, 10);
+    const SweepMotion motion =
+        imu ? ImuSweepMotion(predicted, t_ns)
+            : SweepMotion::ConstantVelocity(previous_from_current_, interval_s, 10);
     deskewed = DeskewPoints(raw, times, motion);
   }
   const std::vector<Eigen::Vector3d> source = VoxelDownsample(deskewed, options_.source_voxel_m);
@@ -208,13 +202,13 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
 
   // Scan-to-map registration from the prediction.
   t0 = std::chrono::steady_clock::now();
-  Eigen::Isometry3d T_world_sensor = T_pred;
+  Rigid3d world_from_sensor = world_from_predicted;
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   if (scans_ > 0 && map_.num_voxels() > 0) {
     ScanMatchOptions match = options_.match;
     if (!imu) match.prior_translation_sigma_m = match.prior_rotation_sigma_rad = 0.0;
-    const ScanMatchResult m = MatchScanToMap(source, map_, T_pred, match);
-    T_world_sensor = m.T_world_sensor;
+    const ScanMatchResult m = MatchScanToMap(source, map_, world_from_predicted, match);
+    world_from_sensor = m.world_from_sensor;
     information = m.information * options_.scan_information_scale;
     result.matched = true;
     result.correspondences = m.correspondences;
@@ -230,36 +224,33 @@ OdometryResult LidarOdometry::ProcessScan(int64_t t_ns, const PointMatrix& point
     smoother_->Initialise(predicted);
     state_ = predicted;
   } else if (imu) {
-    state_ = smoother_->Update(*pre, T_world_sensor, information);
-    Eigen::Isometry3d T_wb = Eigen::Isometry3d::Identity();
-    T_wb.linear() = state_.nav.R_world_body.toRotationMatrix();
-    T_wb.translation() = state_.nav.p_world_body;
-    T_world_sensor = T_wb * T_body_sensor_;
+    state_ = smoother_->Update(*pre, world_from_sensor, information);
+    world_from_sensor = WorldFromBody(state_.nav) * body_from_sensor;
   }
   result.smoother_ms = MsSince(t0);
 
   // Map update.
   t0 = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3d> world(last_scan_.size());
-  for (size_t i = 0; i < world.size(); ++i) world[i] = T_world_sensor * last_scan_[i];
+  for (size_t i = 0; i < world.size(); ++i) world[i] = world_from_sensor * last_scan_[i];
   map_.Add(world);
-  map_.RemoveFar(T_world_sensor.translation());
+  map_.RemoveFar(world_from_sensor.translation);
   result.map_points = static_cast<int>(map_.num_points());
   result.map_ms = MsSince(t0);
 
-  if (!T_world_sensor.matrix().allFinite() ||
+  if (!world_from_sensor.rotation.allFinite() || !world_from_sensor.translation.allFinite() ||
       (scans_ > 0 &&
-       (T_world_sensor.translation() - T_world_sensor_.translation()).norm() > kMaxJumpM)) {
+       (world_from_sensor.translation - world_from_sensor_.translation).norm() > kMaxJumpM)) {
     throw std::runtime_error(Message("LiDAR odometry lost track at the sweep of ", t_ns,
                                      " ns: the pose is not finite or jumped more than ", kMaxJumpM,
                                      " m"));
   }
-  if (scans_ > 0) T_prev_curr_ = T_world_sensor_.inverse() * T_world_sensor;
-  T_world_sensor_ = T_world_sensor;
+  if (scans_ > 0) previous_from_current_ = world_from_sensor_.Inverse() * world_from_sensor;
+  world_from_sensor_ = world_from_sensor;
   last_t_ns_ = t_ns;
   ++scans_;
-  result.T_world_sensor = T_world_sensor.matrix();
-  result.T_world_body = (T_world_sensor * T_body_sensor_.inverse()).matrix();
+  result.world_from_sensor = world_from_sensor;
+  result.world_from_body = world_from_sensor * body_from_sensor.Inverse();
   result.velocity_world = state_.nav.v_world_body;
   result.gyro_bias = state_.bias.gyro;
   result.acc_bias = state_.bias.acc;

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/inertial/imu_preintegration.h"
 #include "slslam/lidar/deskew.h"
 #include "slslam/lidar/lio_smoother.h"
@@ -34,7 +35,7 @@ struct LidarOdometryOptions {
                                         ///< residuals of one scan are not independent [-]
   double gravity_window_s = 0.05;  ///< IMU time around the first sweep averaged for the initial
                                    ///< attitude; the robot must be at rest [s]
-  Eigen::Matrix4d T_body_sensor = Eigen::Matrix4d::Identity();  ///< LiDAR in the IMU frame
+  Rigid3d body_from_sensor;        ///< the LiDAR in the IMU frame (T_body_sensor in Python)
   VoxelMapOptions map;
   ScanMatchOptions match;
   LioSmootherOptions smoother;
@@ -44,8 +45,8 @@ struct LidarOdometryOptions {
 
 struct OdometryResult {
   int64_t t_ns = 0;  ///< sweep start; the poses hold at this time
-  Eigen::Matrix4d T_world_sensor = Eigen::Matrix4d::Identity();
-  Eigen::Matrix4d T_world_body = Eigen::Matrix4d::Identity();
+  Rigid3d world_from_sensor;
+  Rigid3d world_from_body;
   Eigen::Vector3d velocity_world = Eigen::Vector3d::Zero();  ///< [m/s]
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();       ///< [rad/s]
   Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();        ///< [m/s^2]
@@ -86,15 +87,14 @@ class LidarOdometry {
   LioState InitialState(int64_t t_ns) const;
 
   LidarOdometryOptions options_;
-  Eigen::Isometry3d T_body_sensor_;
   VoxelMap map_;
   std::unique_ptr<LioSmoother> smoother_;
   std::vector<int64_t> imu_t_ns_;
   std::vector<Eigen::Vector3d> imu_gyro_, imu_acc_;
   int64_t last_t_ns_ = 0;
   int scans_ = 0;
-  Eigen::Isometry3d T_world_sensor_ = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d T_prev_curr_ = Eigen::Isometry3d::Identity();  // last sweep-to-sweep motion
+  Rigid3d world_from_sensor_;
+  Rigid3d previous_from_current_;  ///< the last sweep-to-sweep motion (of the sensor)
   LioState state_;
   std::vector<Eigen::Vector3d> last_scan_;
 };

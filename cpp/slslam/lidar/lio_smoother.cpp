@@ -47,14 +47,15 @@ struct ImuFactor {
   Matrix15d sqrt_info;
 };
 
-// LiDAR pose of the sensor (body pose composed with T_body_sensor) against the scan-to-map pose.
+// LiDAR pose of the sensor (body pose composed with body_from_sensor) against the scan-to-map
+// pose.
 struct ScanFactor {
-  ScanFactor(const Eigen::Isometry3d& T_world_sensor, const Eigen::Isometry3d& T_body_sensor,
+  ScanFactor(const Rigid3d& world_from_sensor, const Rigid3d& body_from_sensor,
              const Eigen::Matrix<double, 6, 6>& sqrt_info)
-      : q_meas(T_world_sensor.linear()),
-        p_meas(T_world_sensor.translation()),
-        q_bs(T_body_sensor.linear()),
-        t_bs(T_body_sensor.translation()),
+      : q_meas(world_from_sensor.rotation),
+        p_meas(world_from_sensor.translation),
+        q_bs(body_from_sensor.rotation),
+        t_bs(body_from_sensor.translation),
         sqrt_info(sqrt_info) {}
 
   template <typename T>
@@ -120,7 +121,7 @@ struct LioSmoother::Node {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 9, 1> vb = Eigen::Matrix<double, 9, 1>::Zero();
   std::unique_ptr<ImuPreintegration> imu;  // from the previous node to this one (none: first)
-  Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();
+  Rigid3d world_from_sensor;
   Eigen::Matrix<double, 6, 6> sqrt_info = Eigen::Matrix<double, 6, 6>::Zero();
   bool has_scan = false;
   bool first = false;  // the run's first state: it carries the speed / bias prior
@@ -137,8 +138,8 @@ struct LioSmoother::Node {
 };
 
 LioSmoother::LioSmoother(const LioSmootherOptions& options, const ImuNoiseOptions& noise,
-                         const Eigen::Isometry3d& T_body_sensor)
-    : options_(options), noise_(noise), T_body_sensor_(T_body_sensor) {
+                         const Rigid3d& body_from_sensor)
+    : options_(options), noise_(noise), body_from_sensor_(body_from_sensor) {
   options_.Check();
   noise_.Check();
 }
@@ -164,17 +165,17 @@ const LioState& LioSmoother::newest() const {
   return state;
 }
 
-void LioSmoother::Transform(const Eigen::Isometry3d& T_new_old) {
-  const Eigen::Quaterniond q(T_new_old.linear());
+void LioSmoother::Transform(const Rigid3d& new_from_old) {
+  const Eigen::Quaterniond q(new_from_old.rotation);
   for (auto& node : states_) {
     node->q = (q * node->q).normalized();
-    node->p = T_new_old * node->p;
+    node->p = new_from_old * node->p;
     node->vb.head<3>() = q * node->vb.head<3>().eval();
-    node->T_world_sensor = T_new_old * node->T_world_sensor;
+    node->world_from_sensor = new_from_old * node->world_from_sensor;
   }
 }
 
-LioState LioSmoother::Update(const ImuPreintegration& imu, const Eigen::Isometry3d& T_world_sensor,
+LioState LioSmoother::Update(const ImuPreintegration& imu, const Rigid3d& world_from_sensor,
                              const Eigen::Matrix<double, 6, 6>& information) {
   SLSLAM_CHECK(!states_.empty(), "LioSmoother: Update before Initialise");
   SLSLAM_CHECK(imu.dt_s() > 0, "LioSmoother: empty IMU interval");
@@ -182,12 +183,12 @@ LioState LioSmoother::Update(const ImuPreintegration& imu, const Eigen::Isometry
   auto node = std::make_unique<Node>();
   // Initial guess: the IMU prediction for velocity and biases, the LiDAR pose for the pose.
   const NavState predicted = imu.Predict(prev.nav, prev.bias);
-  const Eigen::Isometry3d T_world_body = T_world_sensor * T_body_sensor_.inverse();
-  node->q = Eigen::Quaterniond(T_world_body.linear()).normalized();
-  node->p = T_world_body.translation();
+  const Rigid3d world_from_body = world_from_sensor * body_from_sensor_.Inverse();
+  node->q = Eigen::Quaterniond(world_from_body.rotation).normalized();
+  node->p = world_from_body.translation;
   node->vb << predicted.v_world_body, prev.bias.gyro, prev.bias.acc;
   node->imu = std::make_unique<ImuPreintegration>(imu);
-  node->T_world_sensor = T_world_sensor;
+  node->world_from_sensor = world_from_sensor;
   node->sqrt_info = SqrtInformation<6>(information);
   node->has_scan = true;
   states_.push_back(std::move(node));
@@ -202,8 +203,8 @@ LioState LioSmoother::Update(const ImuPreintegration& imu, const Eigen::Isometry
   for (size_t k = 0; k < states_.size(); ++k) {
     Node& n = *states_[k];
     if (n.has_scan) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScanFactor, 6, 4, 3>(
-                                   new ScanFactor(n.T_world_sensor, T_body_sensor_, n.sqrt_info)),
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScanFactor, 6, 4, 3>(new ScanFactor(
+                                   n.world_from_sensor, body_from_sensor_, n.sqrt_info)),
                                nullptr, n.q.coeffs().data(), n.p.data());
     }
     if (n.first) {

@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/inertial/imu_preintegration.h"
 
 namespace slslam::lidar {
@@ -45,7 +46,7 @@ struct LioState {
 class LioSmoother {
  public:
   LioSmoother(const LioSmootherOptions& options, const ImuNoiseOptions& noise,
-              const Eigen::Isometry3d& T_body_sensor);
+              const Rigid3d& body_from_sensor);
   ~LioSmoother();
 
   // The first state (pose from gravity alignment, velocity prior mean, zero biases).
@@ -53,20 +54,20 @@ class LioSmoother {
   bool initialised() const { return !states_.empty(); }
 
   // Adds the state reached through `imu` (integrated from the newest state with its bias) with
-  // the LiDAR pose T_world_sensor and its 6x6 information (order rho, phi: perturbation
+  // the LiDAR pose world_from_sensor and its 6x6 information (order rho, phi: perturbation
   // p <- p + rho, R <- Exp(phi) R), then optimises the window. Returns the newest state.
-  LioState Update(const ImuPreintegration& imu, const Eigen::Isometry3d& T_world_sensor,
+  LioState Update(const ImuPreintegration& imu, const Rigid3d& world_from_sensor,
                   const Eigen::Matrix<double, 6, 6>& information);
 
   const LioState& newest() const;
-  // Shifts every state by T_new_old (a loop correction of the odometry frame).
-  void Transform(const Eigen::Isometry3d& T_new_old);
+  // Shifts every state by new_from_old (a loop correction of the odometry frame).
+  void Transform(const Rigid3d& new_from_old);
 
  private:
   struct Node;
   LioSmootherOptions options_;
   ImuNoiseOptions noise_;
-  Eigen::Isometry3d T_body_sensor_;
+  Rigid3d body_from_sensor_;
   std::deque<std::unique_ptr<Node>> states_;
   Eigen::Quaterniond first_q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d first_p_ = Eigen::Vector3d::Zero();

@@ -206,7 +206,7 @@ RegistrationResult RegisterClouds(const PointMatrix& source, const PointMatrix& 
   result.fine_ms = MsSince(stage);
 
   Score(src, tgt, transform, options.icp_max_corr_fine_m, options, &result);
-  result.transform = transform.cast<double>();
+  result.target_from_source = Rigid3d::FromMatrix4(transform.cast<double>());
   result.total_ms = MsSince(start);
   return result;
 }

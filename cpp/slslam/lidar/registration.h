@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "slslam/core/rigid3.h"
+
 namespace slslam::lidar {
 
 // N x 3 (x, y, z) or N x 4 (x, y, z, intensity) points [m], row-major like a KITTI .bin file.
@@ -86,13 +88,13 @@ struct RegistrationOptions {
 };
 
 struct RegistrationResult {
-  Eigen::Matrix4d transform = Eigen::Matrix4d::Identity();  ///< T_target_source (source -> target)
-  double fitness = 0.0;      ///< fraction of fine source points with a target point within
-                             ///< icp_max_corr_fine_m after alignment [-]
-  double inlier_rmse = 0.0;  ///< RMSE of those inlier distances [m]
-  int iterations = 0;        ///< fine-alignment iterations over all levels (ICP or NDT) [-]
-  bool converged = false;    ///< the last fine-alignment level reported convergence
-  int source_points = 0;     ///< source points on the fine / coarse level after preprocessing
+  Rigid3d target_from_source;  ///< maps source points into the target frame
+  double fitness = 0.0;        ///< fraction of fine source points with a target point within
+                               ///< icp_max_corr_fine_m after alignment [-]
+  double inlier_rmse = 0.0;    ///< RMSE of those inlier distances [m]
+  int iterations = 0;          ///< fine-alignment iterations over all levels (ICP or NDT) [-]
+  bool converged = false;      ///< the last fine-alignment level reported convergence
+  int source_points = 0;       ///< source points on the fine / coarse level after preprocessing
   int source_keypoints = 0;
   int target_points = 0;  ///< target points on the fine / coarse level after preprocessing
   int target_keypoints = 0;
@@ -108,9 +110,10 @@ struct RegistrationResult {
 // value finite. `name` prefixes the message ("source", "target", a file path).
 void CheckPoints(const PointMatrix& points, const std::string& name, int min_points = 10);
 
-// Registers `source` onto `target`: returns T_target_source, which maps source points into the
-// target frame. Throws std::invalid_argument on bad input or options, or when preprocessing leaves
-// too few points to register.
+// Registers `source` onto `target`: returns target_from_source, which maps source points into
+// the target frame (inside, PCL's registration and Eigen::umeyama work on 4x4 float matrices, the
+// type they take and give). Throws std::invalid_argument on bad input or options, or when
+// preprocessing leaves too few points to register.
 RegistrationResult RegisterClouds(const PointMatrix& source, const PointMatrix& target,
                                   const RegistrationOptions& options = {},
                                   Method method = Method::kFpfhSacIaIcp);

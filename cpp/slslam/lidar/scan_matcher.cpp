@@ -49,7 +49,7 @@ struct Normal {
 };
 
 Normal Linearise(const std::vector<Eigen::Vector3d>& source, const VoxelMap& map,
-                 const Eigen::Isometry3d& T, const ScanMatchOptions& o) {
+                 const Rigid3d& world_from_sensor, const ScanMatchOptions& o) {
   const double k2 = o.robust_scale_m * o.robust_scale_m;
   const int n = static_cast<int>(source.size());
   Normal total;
@@ -63,8 +63,8 @@ Normal Linearise(const std::vector<Eigen::Vector3d>& source, const VoxelMap& map
 #pragma omp for schedule(static) nowait
 #endif
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d Rs = T.linear() * source[i];
-      const Eigen::Vector3d q = Rs + T.translation();
+      const Eigen::Vector3d Rs = world_from_sensor.rotation * source[i];
+      const Eigen::Vector3d q = Rs + world_from_sensor.translation;
       if (!o.point_to_plane) {
         Eigen::Vector3d nearest;
         if (!map.Nearest(q, o.max_correspondence_m, &nearest)) continue;
@@ -116,7 +116,7 @@ Normal Linearise(const std::vector<Eigen::Vector3d>& source, const VoxelMap& map
 }  // namespace
 
 ScanMatchResult MatchScanToMap(const std::vector<Eigen::Vector3d>& source_sensor,
-                               const VoxelMap& map, const Eigen::Isometry3d& T_world_predicted,
+                               const VoxelMap& map, const Rigid3d& world_from_predicted,
                                const ScanMatchOptions& options) {
   options.Check();
   SLSLAM_CHECK(!source_sensor.empty(), "scan matching needs source points");
@@ -132,29 +132,30 @@ ScanMatchResult MatchScanToMap(const std::vector<Eigen::Vector3d>& source_sensor
   // The scan's residuals are in metres with robust scale k: information r^2 / k^2.
   const double scale = 1.0 / (options.robust_scale_m * options.robust_scale_m);
   ScanMatchResult result;
-  Eigen::Isometry3d T = T_world_predicted;
+  Rigid3d world_from_sensor = world_from_predicted;
   Normal normal;
   for (int it = 0; it < options.max_iterations; ++it) {
-    normal = Linearise(source_sensor, map, T, options);
+    normal = Linearise(source_sensor, map, world_from_sensor, options);
     result.iterations = it + 1;
     // Prior residual e = (p - p_pred, Log(R R_pred^T)), Jacobian ~ identity.
     Vector6d e;
-    e.head<3>() = T.translation() - T_world_predicted.translation();
-    e.tail<3>() = LogSO3(Eigen::Quaterniond(T.linear() * T_world_predicted.linear().transpose()));
+    e.head<3>() = world_from_sensor.translation - world_from_predicted.translation;
+    e.tail<3>() = LogSO3(
+        Eigen::Quaterniond(world_from_sensor.rotation * world_from_predicted.rotation.transpose()));
     const Matrix6d H = scale * normal.H + prior;
     const Vector6d b = scale * normal.b + prior * e;
     if (normal.pairs < 6 && prior.isZero()) break;
     const Vector6d step = -(H + 1e-9 * Matrix6d::Identity()).ldlt().solve(b);
     if (!step.allFinite()) break;
-    T.translation() += step.head<3>();
-    T.linear() = (ExpSO3(step.tail<3>()) * T.linear()).eval();
+    world_from_sensor.translation += step.head<3>();
+    world_from_sensor.rotation = (ExpSO3(step.tail<3>()) * world_from_sensor.rotation).eval();
     if (step.head<3>().norm() < options.convergence_translation_m &&
         step.tail<3>().norm() < options.convergence_rotation_rad) {
       break;
     }
   }
-  normal = Linearise(source_sensor, map, T, options);
-  result.T_world_sensor = T;
+  normal = Linearise(source_sensor, map, world_from_sensor, options);
+  result.world_from_sensor = world_from_sensor;
   result.information = scale * normal.H;
   result.correspondences = normal.pairs;
   result.fitness = static_cast<double>(normal.inliers) / source_sensor.size();

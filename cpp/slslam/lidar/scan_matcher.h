@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "slslam/core/rigid3.h"
 #include "slslam/lidar/voxel_map.h"
 
 namespace slslam::lidar {
@@ -34,7 +35,7 @@ struct ScanMatchOptions {
 };
 
 struct ScanMatchResult {
-  Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();
+  Rigid3d world_from_sensor;
   // Gauss-Newton information of the scan alone (no prior) for the perturbation
   // R <- Exp(phi) R, p <- p + rho, ordered (rho, phi): [1/m^2] blocks, robust weights included,
   // divided by robust_scale_m^2.
@@ -46,9 +47,10 @@ struct ScanMatchResult {
   double degeneracy = 0.0;     ///< smallest / largest eigenvalue of the translation block [-]
 };
 
-// Registers `source_sensor` (points in the sensor frame, m) onto `map` from `T_world_predicted`.
+// Registers `source_sensor` (points in the sensor frame, m) onto `map` from the predicted pose
+// `world_from_predicted` (the sensor's).
 ScanMatchResult MatchScanToMap(const std::vector<Eigen::Vector3d>& source_sensor,
-                               const VoxelMap& map, const Eigen::Isometry3d& T_world_predicted,
+                               const VoxelMap& map, const Rigid3d& world_from_predicted,
                                const ScanMatchOptions& options = {});
 
 }  // namespace slslam::lidar

@@ -12,11 +12,9 @@
 namespace slslam::lidar {
 namespace {
 
-Eigen::Isometry3d Motion(double t) {  // 1 rad/s yaw and 1.5 m/s forward, 0.2 m/s up
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = ExpSO3(Eigen::Vector3d(0, 0, 1.0 * t));
-  T.translation() = Eigen::Vector3d(1.5, 0.0, 0.2) * t;
-  return T;
+// start_from_t: 1 rad/s yaw and 1.5 m/s forward, 0.2 m/s up.
+Rigid3d Motion(double t) {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0, 0, 1.0 * t)), Eigen::Vector3d(1.5, 0.0, 0.2) * t);
 }
 
 TEST(Deskew, KnownMotionIsUndone) {
@@ -26,7 +24,7 @@ TEST(Deskew, KnownMotionIsUndone) {
   SweepMotion motion;
   for (int k = 0; k <= 20; ++k) {
     motion.time_s.push_back(k * period / 20);
-    motion.T_start_t.push_back(Motion(k * period / 20));
+    motion.start_from_t.push_back(Motion(k * period / 20));
   }
   std::vector<Eigen::Vector3d> truth, seen;
   std::vector<double> times;
@@ -35,7 +33,7 @@ TEST(Deskew, KnownMotionIsUndone) {
     const double t = period * i / 500.0;
     truth.push_back(p);
     times.push_back(t);
-    seen.push_back(Motion(t).inverse() * p);  // what the sensor reports at time t
+    seen.push_back(Motion(t).Inverse() * p);  // what the sensor reports at time t
   }
   const std::vector<Eigen::Vector3d> fixed = DeskewPoints(seen, times, motion);
   double worst = 0.0, skew = 0.0;
@@ -60,7 +58,7 @@ TEST(Deskew, MismatchedTimesThrow) {
   SweepMotion motion;
   EXPECT_THROW(DeskewPoints({Eigen::Vector3d::Zero()}, {}, motion), std::invalid_argument);
   motion.time_s = {0.1, 0.05};
-  motion.T_start_t = {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()};
+  motion.start_from_t = {Rigid3d(), Rigid3d()};
   EXPECT_THROW(DeskewPoints({Eigen::Vector3d::Zero()}, {0.0}, motion), std::invalid_argument);
 }
 

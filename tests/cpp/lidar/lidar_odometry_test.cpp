@@ -112,7 +112,7 @@ void AddTrueImu(LidarOdometry* odometry, double duration) {
 double RunAndReportError(bool use_imu, double* rotation_error_rad) {
   LidarOdometryOptions options;
   options.use_imu = use_imu;
-  options.T_body_sensor = BodySensor().matrix();
+  options.body_from_sensor = Rigid3d(BodySensor().linear(), BodySensor().translation());
   LidarOdometry odometry(options);
   AddTrueImu(&odometry, 2.5);
   const std::vector<Eigen::Vector3d> room = Room();
@@ -124,7 +124,7 @@ double RunAndReportError(bool use_imu, double* rotation_error_rad) {
     result = odometry.ProcessScan(static_cast<int64_t>(std::llround(0.1 * k * 1e9)), points, times);
     if (std::getenv("H16DEBUG")) {
       Eigen::Isometry3d e;
-      e.matrix() = result.T_world_body;
+      e.matrix() = result.world_from_body.ToMatrix4();
       printf(
           "scan %d pts %d src %d err %.4f fit %.3f deg %.4f ms deskew %.1f match %.1f smooth %.1f "
           "map %.1f total %.1f\n",
@@ -134,7 +134,7 @@ double RunAndReportError(bool use_imu, double* rotation_error_rad) {
     }
   }
   Eigen::Isometry3d estimate;
-  estimate.matrix() = result.T_world_body;
+  estimate.matrix() = result.world_from_body.ToMatrix4();
   const Eigen::Isometry3d error = TrueBody(2.0).inverse() * estimate;
   *rotation_error_rad = LogSO3(Eigen::Quaterniond(error.linear())).norm();
   EXPECT_TRUE(result.matched);

@@ -31,7 +31,7 @@ TEST(LidarIoTest, MissingFileThrowsWithThePath) {
     }
   }
   EXPECT_THROW(ReadPointCloud("cloud.xyz"), std::invalid_argument);
-  EXPECT_THROW(ReadMatrix4("/nonexistent/T.txt"), std::invalid_argument);
+  EXPECT_THROW(ReadRigid3d("/nonexistent/T.txt"), std::invalid_argument);
 }
 
 TEST(LidarIoTest, KittiBinRoundTripAndBadSize) {
@@ -79,12 +79,12 @@ TEST(LidarIoTest, ReadsTheSharedKittiPcdAndPlyFiles) {
   // The 14-column pose file and Tr give the README's velodyne poses.
   const auto poses = ReadKittiPoses(kData + "/kitti00_scancontext/poses_cam0_kitti_format.txt");
   const auto velo = ReadKittiPoses(kData + "/kitti00_scancontext/poses_velo_in_velo0frame.txt");
-  const Eigen::Matrix4d tr =
+  const Rigid3d tr =
       ReadKittiCalibTr(kData + "/kitti00_scancontext/calib_Tr_velo_to_cam0_seq00.txt");
-  const Eigen::Matrix4d from_cam = KittiRelativeVelo(poses.at(94), poses.at(95), tr);
-  const Eigen::Matrix4d from_velo = velo.at(94).inverse() * velo.at(95);
-  EXPECT_LT((from_cam - from_velo).cwiseAbs().maxCoeff(), 1e-5);
-  EXPECT_NEAR(from_cam(0, 3), 0.474, 0.01);  // README: 94->95 moves ~0.47 m forward
+  const Rigid3d from_cam = KittiRelativeVelo(poses.at(94), poses.at(95), tr);
+  const Rigid3d from_velo = velo.at(94).Inverse() * velo.at(95);
+  EXPECT_LT((from_cam.ToMatrix4() - from_velo.ToMatrix4()).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_NEAR(from_cam.translation.x(), 0.474, 0.01);  // README: 94->95 moves ~0.47 m forward
 }
 
 }  // namespace

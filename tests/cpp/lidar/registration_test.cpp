@@ -62,25 +62,24 @@ PointMatrix SyntheticScene(int n, unsigned seed) {
   return points;
 }
 
-PointMatrix Transformed(const PointMatrix& points, const Eigen::Matrix4d& T) {
+PointMatrix Transformed(const PointMatrix& points, const Rigid3d& T) {
   PointMatrix out = points;
-  const Eigen::Matrix3f R = T.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
+  const Eigen::Matrix3f R = T.rotation.cast<float>();
+  const Eigen::Vector3f t = T.translation.cast<float>();
   for (Eigen::Index i = 0; i < out.rows(); ++i) {
     out.row(i).head<3>() = (R * points.row(i).head<3>().transpose() + t).transpose();
   }
   return out;
 }
 
-Eigen::Matrix4d MakeTransform(double roll_deg, double pitch_deg, double yaw_deg,
-                              const Eigen::Vector3d& t) {
+Rigid3d MakeTransform(double roll_deg, double pitch_deg, double yaw_deg, const Eigen::Vector3d& t) {
   const double k = M_PI / 180.0;
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = (Eigen::AngleAxisd(yaw_deg * k, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(pitch_deg * k, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(roll_deg * k, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-  T.topRightCorner<3, 1>() = t;
+  Rigid3d T;
+  T.rotation = (Eigen::AngleAxisd(yaw_deg * k, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(pitch_deg * k, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll_deg * k, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation = t;
   return T;
 }
 
@@ -97,11 +96,11 @@ RegistrationOptions SyntheticOptions() {
 
 TEST(LidarRegistrationTest, SyntheticSceneRecoveredByEveryMethod) {
   const PointMatrix source = SyntheticScene(60000, 1);
-  const Eigen::Matrix4d truth = MakeTransform(1.5, -2.0, 12.0, {0.8, -0.5, 0.15});
+  const Rigid3d truth = MakeTransform(1.5, -2.0, 12.0, {0.8, -0.5, 0.15});
   const PointMatrix target = Transformed(source, truth);
   for (Method method : {Method::kFpfhSacIaIcp, Method::kIcp, Method::kPfhSacIaIcp}) {
     const RegistrationResult result = RegisterClouds(source, target, SyntheticOptions(), method);
-    const PoseError e = ComparePoses(result.transform, truth);
+    const PoseError e = ComparePoses(result.target_from_source, truth);
     EXPECT_LT(e.translation_m, 1e-3) << MethodName(method);
     EXPECT_LT(e.rotation_deg, 0.01) << MethodName(method);
     EXPECT_GT(result.fitness, 0.95) << MethodName(method);
@@ -110,19 +109,19 @@ TEST(LidarRegistrationTest, SyntheticSceneRecoveredByEveryMethod) {
   }
   // NDT is a smooth approximation of the surfaces: it gets close, not exact.
   const RegistrationResult ndt = RegisterClouds(source, target, SyntheticOptions(), Method::kNdt);
-  const PoseError e = ComparePoses(ndt.transform, truth);
+  const PoseError e = ComparePoses(ndt.target_from_source, truth);
   EXPECT_LT(e.translation_m, 0.05);
   EXPECT_LT(e.rotation_deg, 0.5);
 }
 
 TEST(LidarRegistrationTest, FpfhCoarseStageHandlesALargeRotation) {
   const PointMatrix source = SyntheticScene(60000, 2);
-  const Eigen::Matrix4d truth = MakeTransform(0.0, 0.0, 60.0, {2.0, 1.0, 0.0});
+  const Rigid3d truth = MakeTransform(0.0, 0.0, 60.0, {2.0, 1.0, 0.0});
   const PointMatrix target = Transformed(source, truth);
   RegistrationOptions options = SyntheticOptions();
   options.sac_ia_iterations = 1000;
   const RegistrationResult result = RegisterClouds(source, target, options);
-  const PoseError e = ComparePoses(result.transform, truth);
+  const PoseError e = ComparePoses(result.target_from_source, truth);
   EXPECT_LT(e.translation_m, 1e-3);
   EXPECT_LT(e.rotation_deg, 0.01);
   EXPECT_GT(result.coarse_ms, 0.0);
@@ -131,14 +130,14 @@ TEST(LidarRegistrationTest, FpfhCoarseStageHandlesALargeRotation) {
 
 TEST(LidarRegistrationTest, PointToPointOneToOneAndSingleThreadAgree) {
   const PointMatrix source = SyntheticScene(60000, 4);
-  const Eigen::Matrix4d truth = MakeTransform(-1.0, 0.5, -8.0, {-0.6, 0.4, 0.1});
+  const Rigid3d truth = MakeTransform(-1.0, 0.5, -8.0, {-0.6, 0.4, 0.1});
   const PointMatrix target = Transformed(source, truth);
   RegistrationOptions options = SyntheticOptions();
   options.point_to_plane = false;
   options.icp_reject_one_to_one = true;
   options.icp_iterations_fine = 100;
   const RegistrationResult result = RegisterClouds(source, target, options);
-  const PoseError e = ComparePoses(result.transform, truth);
+  const PoseError e = ComparePoses(result.target_from_source, truth);
   // Point-to-point pairs voxel centroids, not surfaces: the two scans' voxel grids differ, which
   // leaves a bias of a small fraction of the 0.1 m voxel (measured 2 mm, 0.02 deg).
   EXPECT_LT(e.translation_m, 5e-3);
@@ -149,7 +148,10 @@ TEST(LidarRegistrationTest, PointToPointOneToOneAndSingleThreadAgree) {
   RegistrationOptions single = SyntheticOptions();
   single.num_threads = 1;
   const RegistrationResult sequential = RegisterClouds(source, target, single);
-  EXPECT_LT((parallel.transform - sequential.transform).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_LT((parallel.target_from_source.ToMatrix4() - sequential.target_from_source.ToMatrix4())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-5);
   EXPECT_EQ(parallel.iterations, sequential.iterations);
 }
 
@@ -184,13 +186,13 @@ TEST(LidarRegistrationTest, BadInputThrows) {
 
 struct RealPair {
   PointMatrix source, target;
-  Eigen::Matrix4d truth;
+  Rigid3d truth;  ///< target_from_source
 };
 
 RealPair LoadKitti(int target_frame, int source_frame) {
   const std::string dir = kData + "/kitti00_scancontext/";
   const auto poses = ReadKittiPoses(dir + "poses_cam0_kitti_format.txt");
-  const Eigen::Matrix4d tr = ReadKittiCalibTr(dir + "calib_Tr_velo_to_cam0_seq00.txt");
+  const Rigid3d tr = ReadKittiCalibTr(dir + "calib_Tr_velo_to_cam0_seq00.txt");
   char src[16], tgt[16];
   std::snprintf(src, sizeof(src), "%06d.bin", source_frame);
   std::snprintf(tgt, sizeof(tgt), "%06d.bin", target_frame);
@@ -204,7 +206,7 @@ RealPair LoadKitti(int target_frame, int source_frame) {
 void ExpectAccurate(const RealPair& pair, Method method, double max_deg, double max_m,
                     const RegistrationOptions& options = {}) {
   const RegistrationResult result = RegisterClouds(pair.source, pair.target, options, method);
-  const PoseError e = ComparePoses(result.transform, pair.truth);
+  const PoseError e = ComparePoses(result.target_from_source, pair.truth);
   std::printf("%s: %.4f deg, %.4f m, fitness %.3f, %.1f ms\n", MethodName(method).c_str(),
               e.rotation_deg, e.translation_m, result.fitness, result.total_ms);
   EXPECT_LT(e.rotation_deg, max_deg) << MethodName(method);
@@ -232,10 +234,10 @@ TEST(LidarRegistrationTest, GicpPairsMatchReferenceTransforms) {
   }
   const RealPair small{ReadPly(dir + "small_gicp_source.ply"),
                        ReadPly(dir + "small_gicp_target.ply"),
-                       ReadMatrix4(dir + "small_gicp_T_target_source.txt")};
+                       ReadRigid3d(dir + "small_gicp_T_target_source.txt")};
   const RealPair fast{ReadPcd(dir + "fast_gicp_251371071.pcd"),
                       ReadPcd(dir + "fast_gicp_251370668.pcd"),
-                      ReadMatrix4(dir + "fast_gicp_relative.txt")};
+                      ReadRigid3d(dir + "fast_gicp_relative.txt")};
   // Indoor scans (median range 3.8 m): finer voxels and a shorter blind zone than the defaults.
   RegistrationOptions indoor;
   indoor.min_range_m = 0.5;
