@@ -27,7 +27,8 @@ YAML = ROOT / "configs" / "default.yaml"
 
 def yaml_comments(path: Path) -> dict[str, str]:
     """Dotted key -> the comment beside it in the YAML file and on the comment-only lines that
-    continue it (indented under it), or above it (a comment block right before the key)."""
+    continue it (indented under it), or above it (a comment block right before the key, for a
+    key without a comment of its own beside it too)."""
     comments: dict[str, str] = {}
     stack: list[tuple[int, str]] = []  # (indent, key) of the open mappings
     pending: list[str] = []  # a comment block waiting for the key below it
@@ -54,16 +55,18 @@ def yaml_comments(path: Path) -> dict[str, str]:
         while stack and stack[-1][0] >= indent:
             stack.pop()
         dotted = ".".join([k for _, k in stack] + [key])
+        if indent == 0:
+            pending = []  # the file's own header, or a note on the layout: not this key's
         value, _, note = rest.partition("#")
         parts = [*pending, note.strip()] if note.strip() else pending
         if parts:
             comments[dotted] = " ".join(p for p in parts if p)
         pending = []
-        if value.strip():
-            last, last_indent = dotted, indent
-        else:  # a mapping: its keys follow, more indented (a comment under it is theirs)
+        if not value.strip():  # a mapping: its keys follow, more indented
             stack.append((indent, key))
-            last = None
+        # Comment-only lines below continue this key's comment when it has one beside it (a
+        # mapping without one: they are its first key's).
+        last, last_indent = (dotted, indent) if note.strip() else (None, -1)
     return comments
 
 
@@ -146,9 +149,11 @@ def render() -> str:
         "",
     ]
     for section, body in sections.items():
+        lines += [f"## `{section}`", ""]
+        if comments.get(section):
+            note = comments[section].rstrip(".")
+            lines += [note[0].upper() + note[1:] + ".", ""]
         lines += [
-            f"## `{section}`",
-            "",
             "| key | default | range | C++ option | meaning |",
             "|---|---|---|---|---|",
             *body,
