@@ -700,7 +700,9 @@ class Tracker {
   int last_keyframe_ = -1;
   int last_keyframe_frame_ = 0;
   int64_t last_keyframe_t_ns_ = 0;  ///< capture time of the frame of the last keyframe [ns]
-  int first_tracked_ = 0;           ///< inliers of the first frame after the last keyframe
+  TrackingState last_state_ = TrackingState::kNotInitialized;  ///< of the last frame tracked
+  std::optional<int64_t> last_relocalisation_t_ns_;  ///< the last relocalisation attempt's frame
+  int first_tracked_ = 0;  ///< inliers of the first frame after the last keyframe
   // After a loop correction or merge moved the active map: the active map index and the last
   // pose follow (the pose through its reference keyframe).
   void FollowCorrections();
