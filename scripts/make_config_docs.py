@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import re
-import sys
 import typing
 from pathlib import Path
 from typing import Any
@@ -166,15 +165,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="exit 1 when the page is stale")
     args = parser.parse_args()
-    text = render()
-    if args.check:
-        if PAGE.read_text(encoding="utf-8") != text:
-            print(f"{PAGE} is stale: run python scripts/make_config_docs.py", file=sys.stderr)
-            return 1
-        return 0
-    PAGE.write_text(text, encoding="utf-8")
-    print(f"wrote {PAGE}")
-    return 0
+    # (imported here: the tests load this file for render() alone, without scripts/ on the path)
+    from generated_file import write_or_check
+
+    return write_or_check(PAGE, render(), args.check, "python scripts/make_config_docs.py")
 
 
 if __name__ == "__main__":

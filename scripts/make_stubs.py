@@ -46,16 +46,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--check", action="store_true", help="compare instead of writing")
     args = parser.parse_args()
-    text = generate()
-    if args.check:
-        if STUB.read_text(encoding="utf-8") != text:
-            print(f"{STUB} is stale: run python scripts/make_stubs.py", file=sys.stderr)
-            return 1
-        print(f"{STUB} is up to date")
-        return 0
-    STUB.write_text(text, encoding="utf-8")
-    print(f"wrote {STUB}")
-    return 0
+    # (imported here: the tests load this file for generate() alone, without scripts/ on the path)
+    from generated_file import write_or_check
+
+    return write_or_check(STUB, generate(), args.check, "python scripts/make_stubs.py")
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "slslam/core/check.h"
+#include "slslam/core/time.h"
 
 namespace slslam::lidar {
 
@@ -98,11 +99,12 @@ ImuPreintegration LidarOdometry::Preintegrate(int64_t from_ns, int64_t to_ns,
 
 LioState LidarOdometry::InitialState(int64_t t_ns) const {
   // The robot starts at rest: the mean specific force points up in the body frame.
-  const int64_t end = t_ns + static_cast<int64_t>(options_.gravity_window_s * 1e9);
+  const int64_t window_ns = NsFromSeconds(options_.gravity_window_s);
+  const int64_t end = t_ns + window_ns;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   int n = 0;
   for (size_t k = 0; k < imu_t_ns_.size() && imu_t_ns_[k] <= end; ++k) {
-    if (imu_t_ns_[k] + static_cast<int64_t>(options_.gravity_window_s * 1e9) < t_ns) continue;
+    if (imu_t_ns_[k] + window_ns < t_ns) continue;
     mean += imu_acc_[k];
     ++n;
   }
@@ -115,7 +117,7 @@ LioState LidarOdometry::InitialState(int64_t t_ns) const {
 
 SweepMotion LidarOdometry::ImuSweepMotion(const LioState& start, int64_t t_ns) const {
   // Body poses at the IMU sample times within the sweep, from the state at its start.
-  const int64_t end = t_ns + static_cast<int64_t>(options_.scan_period_s * 1e9);
+  const int64_t end = t_ns + NsFromSeconds(options_.scan_period_s);
   SLSLAM_CHECK(!imu_t_ns_.empty() && imu_t_ns_.front() <= t_ns,
                "LiDAR-inertial odometry: no IMU sample before the sweep at ", t_ns, " ns");
   const Rigid3d& body_from_sensor = options_.body_from_sensor;

@@ -37,11 +37,11 @@ from slslam.datasets.images import GrayImageReader
 from slslam.datasets.trajectory_io import read_trajectory
 from slslam.errors import DatasetError
 from slslam.geometry import invert_transform
+from slslam.timestamps import INT64_MAX, INT64_MIN
 from slslam.yaml_io import short_repr
 
 log = logging.getLogger(__name__)
 
-INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 MIN_BASELINE_M = 1e-3  # a stereo pair closer than this has no usable disparity
 
 

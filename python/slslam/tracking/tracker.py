@@ -547,6 +547,8 @@ class Tracker:
         # first takes those up to its timestamp (so offline runs may give them all at once).
         self._imu_pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._imu_last_t_ns: int | None = None
+        # (the samples are on the IMU's clock: t_cam = t_imu + tracking.imu.time_offset_s)
+        self._imu_offset_ns = ns_from_seconds(self.config.tracking.imu.time_offset_s)
         # The right image on a helper thread, and the left image's lines beside the point front
         # end (a thread of their own: LSD + LBD cost about what ORB of both images costs, and
         # XFeat's network half of it); with the right image's lines every frame
@@ -615,9 +617,7 @@ class Tracker:
         if self._imu_pending is None:
             return
         t, gyro, acc = self._imu_pending
-        # (the samples are on the IMU's clock: t_cam = t_imu + tracking.imu.time_offset_s)
-        offset_ns = ns_from_seconds(self.config.tracking.imu.time_offset_s)
-        n = int(np.searchsorted(t, t_ns - offset_ns, side="right"))
+        n = int(np.searchsorted(t, t_ns - self._imu_offset_ns, side="right"))
         if n == 0:
             return
         self._core.add_imu(t[:n], np.ascontiguousarray(gyro[:n]), np.ascontiguousarray(acc[:n]))
