@@ -49,6 +49,9 @@ CASE_FRAMES = {
     "shotcrete_l015_dust": 600,
     "shotcrete_branch": 760,  # in the lining from t = 14.75 s; stop 24.5-27.5 s, turn -33.5 s
     "blackout_long": 300,  # dark from t = 8 s to 12 s
+    "shotcrete_relief_l100": 600,  # the three above with the lining's relief
+    "shotcrete_relief_l015_dust": 600,
+    "shotcrete_relief_branch": 760,
 }
 CASES = list(CASE_FRAMES)
 

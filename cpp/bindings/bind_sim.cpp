@@ -194,6 +194,53 @@ void BindSim(py::module_& m) {
       "uint8 (height, width) image; deterministic for a given sensor.seed and frame_index.");
 
   m.def(
+      "relief_normals",
+      [](const py::array& points, const py::array& normals, float height_m, float wavelength_m,
+         const py::object& footprint_m, int octaves) {
+        const std::size_t n = CheckVectors(points, "points");
+        if (CheckVectors(normals, "normals") != n) {
+          throw py::value_error("normals must have as many rows as points (" + std::to_string(n) +
+                                ")");
+        }
+        const float* footprint = nullptr;
+        FloatArray footprint_array;
+        if (!footprint_m.is_none()) {
+          footprint_array = FloatArray::ensure(footprint_m);
+          if (!footprint_array || footprint_array.ndim() != 1 ||
+              static_cast<std::size_t>(footprint_array.size()) != n) {
+            throw py::value_error("footprint_m must be a float32 (N,) array, N = " +
+                                  std::to_string(n));
+          }
+          footprint = footprint_array.data();
+        }
+        sim::ReliefOptions options;
+        options.height_m = height_m;
+        options.wavelength_m = wavelength_m;
+        options.octaves = octaves;
+        try {
+          options.Check();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        py::array_t<float> out(
+            {static_cast<py::ssize_t>(n), py::ssize_t{3}},
+            {static_cast<py::ssize_t>(3 * sizeof(float)), static_cast<py::ssize_t>(sizeof(float))});
+        const float* p = static_cast<const float*>(points.data());
+        const float* nrm = static_cast<const float*>(normals.data());
+        float* o = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          sim::ReliefNormals(p, nrm, footprint, n, options, o);
+        }
+        return out;
+      },
+      py::arg("points"), py::arg("normals"), py::arg("height_m"), py::arg("wavelength_m"),
+      py::arg("footprint_m") = py::none(), py::arg("octaves") = 3,
+      "Unit normals (float32 (N, 3)) of world points (float32 (N, 3) [m]) on surfaces with unit "
+      "normals once a relief h = height_m * fBm(p / wavelength_m, octaves) is added along them; "
+      "footprint_m (float32 (N,), [m]) fades octaves below a few pixel footprints.");
+
+  m.def(
       "solid_texture",
       [](const py::array& points, const py::array& material, const py::object& normals) {
         const std::size_t n = CheckVectors(points, "points");

@@ -72,6 +72,7 @@ py::dict MapDict(const SessionMap& session) {
   imu_out["first_init_t_ns"] = imu.first_init_t_ns;
   imu_out["initialisations"] = imu.initialisations;
   imu_out["refinements"] = imu.refinements;
+  imu_out["rejected_refinements"] = imu.rejected_refinements;
   imu_out["last_failure"] = imu.last_failure;
   imu_out["gyro_bias_radps"] = imu.gyro_bias;
   imu_out["acc_bias_mps2"] = imu.acc_bias;
@@ -256,6 +257,7 @@ void BindRecoveryOptions(py::module_& m) {
       .def_readwrite("gravity_mps2", &InertialOptions::gravity_mps2)
       .def_readwrite("gravity_tolerance_mps2", &InertialOptions::gravity_tolerance_mps2)
       .def_readwrite("acc_bias_prior_mps2", &InertialOptions::acc_bias_prior_mps2)
+      .def_readwrite("gyro_bias_sigma_radps", &InertialOptions::gyro_bias_sigma_radps)
       .def_readwrite("window_s", &InertialOptions::window_s)
       .def_readwrite("min_window_s", &InertialOptions::min_window_s)
       .def_readwrite("refine_after_s", &InertialOptions::refine_after_s)

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'TriangulationOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'adapt_to_rig', 'associate_points_to_lines', 'detect_lsd_segments', 'estimate_noise_sigma', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
+__all__: list[str] = ['AssociationOptions', 'BundleAdjustmentOptions', 'DynamicCellFilter', 'DynamicCellOptions', 'FrameOutput', 'GridLimitOptions', 'GuidedMatchOptions', 'HeadLamp', 'ImuNoiseOptions', 'InertialOptions', 'KeyframeDatabase', 'LbdOptions', 'LeftLines', 'LidarOdometry', 'LidarOdometryOptions', 'LidarPoseGraphOptions', 'LineExtractorOptions', 'LineMatchOptions', 'LinePreprocessOptions', 'LioSmootherOptions', 'LocalMapperOptions', 'LoopClosingOptions', 'MatchOptions', 'Material', 'OdometryResult', 'OrbOptions', 'PinholeCamera', 'PlaceCandidate', 'PoseGraphOptions', 'PoseOptimizerOptions', 'PreparedFrame', 'RadTanCamera', 'RayCaster', 'RegistrationMethod', 'RegistrationOptions', 'RegistrationResult', 'RelocalisationOptions', 'ScanContextDatabase', 'ScanContextMatch', 'ScanContextOptions', 'ScanMatchOptions', 'SensorModel', 'ShadingCamera', 'StereoLineOptions', 'StereoMatchOptions', 'StereoRectifier', 'StereoRig', 'TrackerCore', 'TrackerOptions', 'TriangulationOptions', 'Vocabulary', 'VocabularyOptions', 'VoxelMapOptions', 'adapt_to_rig', 'associate_points_to_lines', 'detect_lsd_segments', 'estimate_noise_sigma', 'extract_lines', 'extract_orb', 'grid_limit', 'guided_match', 'local_maxima', 'match_descriptors', 'match_lines_by_points', 'match_scan_to_points', 'match_stereo_lines', 'match_stereo_points', 'optimize_lidar_pose_graph', 'predict_with_robust_pose', 'preprocess_lines', 'read_gray_image', 'read_map_file_header', 'read_point_cloud', 'register_clouds', 'relief_normals', 'sample_dense_map', 'shade_image', 'smooth_if_noisy', 'solid_texture', 'suppress_non_maxima', 'triangulate_stereo_lines', 'write_image']
 class PinholeCamera:
     """
     Ideal pinhole intrinsics in pixels.
@@ -1103,6 +1103,12 @@ class InertialOptions:
         ...
     @gravity_tolerance_mps2.setter
     def gravity_tolerance_mps2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gyro_bias_sigma_radps(self) -> float:
+        ...
+    @gyro_bias_sigma_radps.setter
+    def gyro_bias_sigma_radps(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def gyro_noise_density(self) -> float:
@@ -2693,6 +2699,10 @@ def read_point_cloud(path: str) -> typing.Annotated[numpy.typing.NDArray[numpy.f
 def register_clouds(source: numpy.ndarray, target: numpy.ndarray, options: RegistrationOptions = ..., method: RegistrationMethod = RegistrationMethod.RegistrationMethod.FPFH_SAC_IA_ICP) -> RegistrationResult:
     """
     Register source onto target (float32 (N, 3|4) arrays [m]). Returns a RegistrationResult whose transform (4x4) is T_target_source: it maps source points into the target frame.
+    """
+def relief_normals(points: numpy.ndarray, normals: numpy.ndarray, height_m: typing.SupportsFloat | typing.SupportsIndex, wavelength_m: typing.SupportsFloat | typing.SupportsIndex, footprint_m: typing.Any = None, octaves: typing.SupportsInt | typing.SupportsIndex = 3) -> numpy.typing.NDArray[numpy.float32]:
+    """
+    Unit normals (float32 (N, 3)) of world points (float32 (N, 3) [m]) on surfaces with unit normals once a relief h = height_m * fBm(p / wavelength_m, octaves) is added along them; footprint_m (float32 (N,), [m]) fades octaves below a few pixel footprints.
     """
 def sample_dense_map(map: typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]", "flags.c_contiguous"], map_height: typing.SupportsInt | typing.SupportsIndex, map_width: typing.SupportsInt | typing.SupportsIndex, uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[m, 2]"], input_height: typing.SupportsInt | typing.SupportsIndex, input_width: typing.SupportsInt | typing.SupportsIndex, cubic: bool) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[m, n]"]:
     """

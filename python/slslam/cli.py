@@ -343,6 +343,14 @@ def sim_command(
             "roof and floor nearly uniform); 0 = none.",
         ),
     ] = 0.0,
+    shotcrete_relief: Annotated[
+        float,
+        typer.Option(
+            metavar="METRES",
+            help="Relief of the lining: scale of its lumps' height (e.g. 0.006; RMS about a "
+            "fifth), shaded by the headlamp as a faint texture; 0 = flat.",
+        ),
+    ] = 0.0,
     no_lidar: Annotated[bool, typer.Option("--no-lidar", help="Skip the LiDAR scans.")] = False,
     no_noise: Annotated[
         bool, typer.Option("--no-noise", help="Exact measurements (no image, IMU or range noise).")
@@ -381,6 +389,7 @@ def sim_command(
         stop_duration_s=stop_duration,
         shotcrete_start_m=shotcrete_start,
         shotcrete_length_m=shotcrete_length,
+        shotcrete_relief_m=shotcrete_relief,
         lidar=not no_lidar,
         noise=not no_noise,
         seed=seed,

@@ -222,6 +222,7 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "gravity_mps2",
             "gravity_tolerance_mps2",
             "acc_bias_prior_mps2",
+            "gyro_bias_sigma_radps",
             "window_s",
             "min_window_s",
             "refine_after_s",
@@ -415,6 +416,9 @@ class ImuConfig:
     # sigma of the accelerometer bias about zero before motion shows it: the initialisation's
     # prior, and the state's sigma after it (at most 0.1) [m/s^2]
     acc_bias_prior_mps2: float = _imu("acc_bias_prior_mps2", "(0, 100]")
+    # sigma of the gyroscope bias in the state after an initialisation, or the fit's own if
+    # larger (looser: the frames turn it with a map that turns slowly through weak texture) [rad/s]
+    gyro_bias_sigma_radps: float = _imu("gyro_bias_sigma_radps", "(0, 1]")
     window_s: float = _imu("window_s", "[0.1, 1000]")  # tracked poses the initialisation uses [s]
     # the initialisation needs tracked poses spanning at least this [s] (at most window_s)
     min_window_s: float = _imu("min_window_s", "[0.05, 1000]")

@@ -90,6 +90,48 @@ def test_shotcrete_lining_has_no_corners_and_little_gradient(lined):
     assert energy["lined"] < 0.1 * energy["bolted"], energy
 
 
+def _along_view(sim: Simulator, x: float) -> tuple[np.ndarray, np.ndarray]:
+    """Left image and hit materials from x [m] on the straight, looking along it (+x) at the
+    camera's height, at light 1.0 (the walls and floor seen at grazing angles)."""
+    T_world_cam = np.eye(4)
+    # camera z forward = world +x, x right = world -y, y down = world -z
+    T_world_cam[:3, :3] = [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]
+    T_world_cam[:3, 3] = [x, 0.0, 1.2]
+    T_world_body = T_world_cam @ np.linalg.inv(sim.camera.T_body_cam0)
+    hits = sim.cast_cameras([T_world_cam], 0.0)[0]
+    image = sim.shade(hits, T_world_cam, sim._headlamp(T_world_body), 1.0, 0)
+    return image, hits.material.reshape(image.shape)
+
+
+def test_shotcrete_relief_shades_a_faint_texture_along_the_roadway(lined):
+    """The lining's relief (shotcrete_relief_m) is seen where the headlamp grazes walls and
+    floor: more gradient and corners than the flat lining, far fewer than rock with arches; the
+    relief is a property of the world point (two renders agree exactly)."""
+    relief = Simulator(_small(noise=False, shotcrete_relief_m=0.006, **LINED))
+    flat_image, material = _along_view(lined, 12.0)
+    relief_image, _ = _along_view(relief, 12.0)
+    rock_image, _ = _along_view(lined, 41.0)
+    near = material == Material.SMOOTH_SHOTCRETE
+    assert near.mean() > 0.7
+    np.testing.assert_array_equal(relief_image, _along_view(relief, 12.0)[0])
+
+    def energy(image: np.ndarray) -> float:
+        """Mean squared detail [gray levels^2]: the image less its 3-pixel blur (the headlamp's
+        smooth falloff removed), on the lining's pixels away from the border."""
+        img = image.astype(np.float64)
+        detail = (img - ndimage.gaussian_filter(img, 3.0)) ** 2
+        return float(detail[8:-8, 8:-8][near[8:-8, 8:-8]].mean())
+
+    orb = Orb()
+    corners = {
+        k: len(orb.detect(v).uv)
+        for k, v in (("flat", flat_image), ("relief", relief_image), ("rock", rock_image))
+    }
+    assert energy(relief_image) > 2.0 * energy(flat_image)
+    assert energy(relief_image) < 0.2 * energy(rock_image)
+    assert corners["relief"] > corners["flat"], corners
+
+
 def test_stop_is_at_rest_in_ground_truth_and_imu(tmp_path):
     """3 s standing still, then a 90 degree turn on the spot: velocity exactly zero, the
     noiseless IMU reads gravity only (no rotation) during the stop, and the turn's rate after."""
@@ -152,6 +194,8 @@ def test_dead_end_branch_ends_in_a_face():
         ({"blackout": True, "blackout_s": 0.0}, "blackout_s"),
         ({"blackout": True, "blackout_at_s": 30.0, "frames": 100}, "blackout_at_s"),
         ({"spin_at_s": 8.0, "stop_duration_s": -1.0}, "stop_duration_s"),
+        ({"shotcrete_relief_m": 0.2}, "shotcrete_relief_m"),
+        ({"shotcrete_relief_m": float("nan")}, "shotcrete_relief_m"),
     ],
 )
 def test_bad_hard_case_options_name_the_key(kwargs, key):

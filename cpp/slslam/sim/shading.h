@@ -45,6 +45,25 @@ float SurfaceAlbedo(Material material, const Eigen::Vector3f& point_world,
 void SolidTexture(const float* points_world, const float* normals_world, const uint8_t* material,
                   std::size_t count, float* albedo);
 
+// A fine relief on a surface (sprayed concrete's lumps): the height field
+// h(p) = height_m * Fbm(p, 1 / wavelength_m, octaves, 0.5) (gradient noise in world coordinates,
+// so every view sees the same relief) along the surface normal. Under a light near the camera it
+// shades as a low-contrast texture that changes with the light's direction.
+struct ReliefOptions {
+  float height_m = 0.0f;      ///< scale of the height field [m] (its RMS is about a fifth)
+  float wavelength_m = 0.1f;  ///< wavelength of the coarsest octave [m]; each next one ~half
+  int octaves = 3;            ///< [-]
+
+  void Check() const;
+};
+
+// Unit normals of N points (N x 3 row-major, [m]) on surfaces with unit normals `normals_world`
+// once the relief is added: n' = normalize(n - grad_t h), grad_t the height's gradient in the
+// tangent plane. `footprint_m` (N, may be null) is each point's pixel footprint [m]: octaves
+// fade out below 3-6 footprints as the albedo's do (no aliasing into noise at distance).
+void ReliefNormals(const float* points_world, const float* normals_world, const float* footprint_m,
+                   std::size_t count, const ReliefOptions& options, float* normals_out);
+
 // Per-pixel ray hits of one image, row-major (pixel index = row * width + column).
 struct ShadingInput {
   const float* points_world = nullptr;   ///< N x 3 hit points [m] (ignored where no hit)

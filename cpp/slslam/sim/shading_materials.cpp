@@ -153,6 +153,49 @@ void SolidTexture(const float* points_world, const float* normals_world, const u
   }
 }
 
+void ReliefOptions::Check() const {
+  Require(std::isfinite(height_m) && height_m >= 0.0f && height_m <= 0.1f,
+          "relief height_m must be in [0, 0.1] m");
+  Require(std::isfinite(wavelength_m) && wavelength_m >= 1e-3f && wavelength_m <= 10.0f,
+          "relief wavelength_m must be in [0.001, 10] m");
+  Require(octaves >= 1 && octaves <= 8, "relief octaves must be in [1, 8]");
+}
+
+void ReliefNormals(const float* points_world, const float* normals_world, const float* footprint_m,
+                   std::size_t count, const ReliefOptions& options, float* normals_out) {
+  options.Check();
+  if (count == 0) return;
+  Require(points_world && normals_world && normals_out, "relief normals need points and normals");
+  constexpr uint32_t kReliefSalt = 131u;
+  const float frequency = 1.0f / options.wavelength_m;
+  // Central differences over a step well below the finest octave's wavelength (the octaves
+  // grow by 2.03 in Fbm).
+  const float finest_m = options.wavelength_m / std::pow(2.03f, options.octaves - 1);
+  const float step = 0.05f * finest_m;
+  const float scale = options.height_m / (2.0f * step);
+  const long long n = static_cast<long long>(count);
+#pragma omp parallel for schedule(static)
+  for (long long i = 0; i < n; ++i) {
+    const Vec3 p = Load3(points_world, i);
+    Vec3 normal = Load3(normals_world, i);
+    const float fp = footprint_m ? footprint_m[i] : 0.0f;
+    const auto h = [&](const Vec3& q) {
+      return Fbm(q, frequency, options.octaves, 0.5f, kReliefSalt, fp);
+    };
+    Vec3 gradient;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 d = Vec3::Zero();
+      d[k] = step;
+      gradient[k] = scale * (h(p + d) - h(p - d));
+    }
+    const Vec3 tangential = gradient - normal * normal.dot(gradient);
+    Vec3 relief = normal - tangential;
+    const float length = relief.norm();
+    if (length > 1e-6f) normal = relief / length;
+    for (int k = 0; k < 3; ++k) normals_out[3 * i + k] = normal[k];
+  }
+}
+
 namespace shading_detail {
 
 void RequireKnownMaterials(const uint8_t* material, std::size_t count) {

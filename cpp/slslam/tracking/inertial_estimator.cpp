@@ -18,23 +18,26 @@ namespace {
 constexpr double kInitRotationSigmaRad = 0.01;
 constexpr double kInitPositionSigmaM = 0.01;
 constexpr double kInitVelocitySigmaMps = 0.05;
-constexpr double kInitGyroBiasSigmaRadps = 0.002;
 constexpr double kInitAccBiasSigmaMps2 = 0.1;
 // ... and of gravity's direction: about half a degree (the accelerometer bias's share at rest).
 constexpr double kInitGravitySigmaMps2 = 0.1;
 // Poses the initialisation uses are at least this far apart [s] (20 Hz at most).
 constexpr double kInitPoseSpacingS = 0.05;
+// The lost rule's distance driven without vision is at most what this many times the speed at
+// the last visual fix covers.
+constexpr double kMaxSpeedRatio = 2.0;
 // An initialisation that failed is tried again after this much more camera time [s].
 constexpr double kInitRetryS = 0.25;
 
 // The initial covariance, gravity's uncertainty across its direction only (its magnitude is
 // known).
-Matrix18d InitialCovariance(const Eigen::Vector3d& g_world, double acc_bias_sigma_mps2) {
+Matrix18d InitialCovariance(const Eigen::Vector3d& g_world, double gyro_bias_sigma_radps,
+                            double acc_bias_sigma_mps2) {
   Eigen::Matrix<double, 18, 1> sigma;
   sigma << Eigen::Vector3d::Constant(kInitRotationSigmaRad),
       Eigen::Vector3d::Constant(kInitPositionSigmaM),
       Eigen::Vector3d::Constant(kInitVelocitySigmaMps),
-      Eigen::Vector3d::Constant(kInitGyroBiasSigmaRadps),
+      Eigen::Vector3d::Constant(gyro_bias_sigma_radps),
       Eigen::Vector3d::Constant(std::min(acc_bias_sigma_mps2, kInitAccBiasSigmaMps2)),
       Eigen::Vector3d::Zero();
   Matrix18d P = sigma.cwiseAbs2().asDiagonal();
@@ -169,12 +172,14 @@ void InertialEstimator::AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_worl
     predicted.nav.R_world_body = Eigen::Quaterniond(world_from_body.rotation).normalized();
     predicted.nav.p_world_body = world_from_body.translation;
     const Matrix18d kept = predicted.covariance;
-    predicted.covariance = InitialCovariance(predicted.g_world, options_.acc_bias_prior_mps2);
+    predicted.covariance = InitialCovariance(predicted.g_world, options_.gyro_bias_sigma_radps,
+                                             options_.acc_bias_prior_mps2);
     predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
   }
   if (full) {
     last_visual_t_ns_ = t_ns;
     last_visual_p_ = predicted.nav.p_world_body;
+    last_visual_speed_mps_ = predicted.nav.v_world_body.norm();
     driven_m_ = 0.0;
   } else {
     driven_m_ += (predicted.nav.p_world_body - state_.nav.p_world_body).norm();
@@ -197,8 +202,12 @@ bool InertialEstimator::Propagate(int64_t t_ns) {
 
 bool InertialEstimator::Trustworthy() const {
   if (!initialised_) return false;
-  const double bound =
-      std::max(options_.lost_sigma_min_m, options_.lost_sigma_fraction * driven_m_);
+  // The distance driven is the propagated state's, which a drifting estimate inflates itself
+  // (issue 62's dark relief lining: 5.5 times the true path, and the bound with it): at most
+  // what twice the speed at the last visual fix covers.
+  const double driven =
+      std::min(driven_m_, kMaxSpeedRatio * last_visual_speed_mps_ * seconds_without_vision());
+  const double bound = std::max(options_.lost_sigma_min_m, options_.lost_sigma_fraction * driven);
   return state_.PositionSigma() <= bound && seconds_without_vision() <= options_.max_gap_s;
 }
 
@@ -245,7 +254,10 @@ void InertialEstimator::ChangeWorld(const Rigid3d& new_from_old) {
 }
 
 void InertialEstimator::Reset() {
-  if (initialised_) bias_start_ = state_.bias;
+  if (initialised_) {
+    bias_start_ = state_.bias;
+    bias_known_ = true;
+  }
   initialised_ = false;
   refined_ = false;
   window_.clear();
@@ -290,15 +302,33 @@ void InertialEstimator::TryInitialise(bool refine) {
       return;
     }
   }
-  const InertialInitResult r = InitialiseInertial(poses, pre, options_.Init());
+  InertialInitOptions init = options_.Init();
+  // Once a fit has given the gyroscope bias, a new map's initialisation (after a loss: the
+  // weakest stretch of tracking) starts from it, held as the state held it (a fit on the lost
+  // stretch of issue 62's flat lining put it 2.4e-2 rad/s off).
+  if (!refine && bias_known_) init.gyro_bias_prior_radps = options_.gyro_bias_sigma_radps;
+  const InertialInitResult r = InitialiseInertial(poses, pre, init);
   if (!r.success) {
     report_.last_failure = r.reason;
     return;
   }
   report_.last_failure.clear();
+  // The fit's gyroscope-bias uncertainty: the rotation misfit of consecutive poses over the
+  // window's span (the increments' sum telescopes to the first and last poses' errors).
+  const double span_s = std::max(SecondsBetween(times.front(), times.back()), 1e-3);
+  const double fit_sigma = r.rotation_rms_rad / span_s;
   if (refine) {
+    refined_ = true;  // (one refinement per initialisation, taken or not)
+    // Taken when it is the better fit of the two and agrees with the first within 3 of their
+    // sigmas: a fit on a window tracked through weak texture can be far off (issue 62's dark
+    // relief lining: its 1 s initialisation 2.8e-3 rad/s), and the state holds its bias tight.
+    const double bound = 3.0 * std::hypot(init_fit_sigma_radps_, fit_sigma);
+    if (!(fit_sigma < init_fit_sigma_radps_) ||
+        (r.bias.gyro - state_.bias.gyro).cwiseAbs().maxCoeff() > bound) {
+      ++report_.rejected_refinements;
+      return;
+    }
     state_.g_world = r.g_world;
-    refined_ = true;
     ++report_.refinements;
     state_.bias = r.bias;
     state_.nav.v_world_body = r.v_world.back();
@@ -309,13 +339,16 @@ void InertialEstimator::TryInitialise(bool refine) {
   state_.nav.v_world_body = r.v_world.back();
   state_.bias = r.bias;
   state_.g_world = r.g_world;
-  state_.covariance = InitialCovariance(r.g_world, options_.acc_bias_prior_mps2);
+  state_.covariance = InitialCovariance(
+      r.g_world, std::max(options_.gyro_bias_sigma_radps, fit_sigma), options_.acc_bias_prior_mps2);
   state_t_ns_ = times.back();
   last_visual_t_ns_ = state_t_ns_;
   last_visual_p_ = state_.nav.p_world_body;
+  last_visual_speed_mps_ = state_.nav.v_world_body.norm();
   driven_m_ = 0.0;
   initialised_ = true;
   init_t_ns_ = state_t_ns_;
+  init_fit_sigma_radps_ = fit_sigma;
   ++report_.initialisations;
   if (!report_.first_init_t_ns) report_.first_init_t_ns = state_t_ns_;
 }
@@ -338,6 +371,7 @@ void InertialOptions::Check() const {
                "tracking.imu.gravity_mps2 must be in (0, 20), got ", gravity_mps2);
   CheckAboveInRange("tracking.imu.gravity_tolerance_mps2", gravity_tolerance_mps2, 0.0, 100.0);
   CheckAboveInRange("tracking.imu.acc_bias_prior_mps2", acc_bias_prior_mps2, 0.0, 100.0);
+  CheckAboveInRange("tracking.imu.gyro_bias_sigma_radps", gyro_bias_sigma_radps, 0.0, 1.0);
   CheckInRange("tracking.imu.window_s", window_s, 0.1, 1000.0);
   CheckInRange("tracking.imu.min_window_s", min_window_s, 0.05, 1000.0);
   SLSLAM_CHECK(min_window_s <= window_s, "tracking.imu.window_s (", window_s,

@@ -379,6 +379,7 @@ Tracker::InertialReport Tracker::inertial_report() const {
   r.first_init_t_ns = e.first_init_t_ns;
   r.initialisations = e.initialisations;
   r.refinements = e.refinements;
+  r.rejected_refinements = e.rejected_refinements;
   r.last_failure = e.last_failure;
   r.gyro_bias = inertial_->state().bias.gyro;
   r.acc_bias = inertial_->state().bias.acc;

@@ -415,6 +415,7 @@ class Tracker {
     std::optional<int64_t> first_init_t_ns;  ///< camera time of the first initialisation [ns]
     int initialisations = 0;
     int refinements = 0;
+    int rejected_refinements = 0;  ///< refinements not taken (InertialEstimator::Report)
     std::string last_failure;
     Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  ///< [rad/s]
     Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();   ///< [m/s^2]

@@ -56,6 +56,10 @@ T0_NS = 1_000_000_000_000
 SHOTCRETE_ALBEDO = 0.55
 SHOTCRETE_GRAIN_M = 0.006
 SHOTCRETE_GRAIN_CONTRAST = 0.03
+#: Relief of a lining with ``SimOptions.shotcrete_relief_m`` > 0: the coarsest lumps' wavelength
+#: [m] and the octaves (about 10, 5 and 2.4 cm), as sprayed concrete's lumps (C++ ReliefOptions).
+SHOTCRETE_RELIEF_WAVELENGTH_M = 0.1
+SHOTCRETE_RELIEF_OCTAVES = 3
 
 
 @dataclass(frozen=True)
@@ -92,6 +96,10 @@ class SimOptions:
     # face) nearly uniform. Length 0: none.
     shotcrete_start_m: float = 0.0
     shotcrete_length_m: float = 0.0
+    # Relief of the lining [m]: the scale of a lumpy height field (sub-centimetre for sprayed
+    # concrete; its RMS is about a fifth of this) that the headlamp shades as a faint texture
+    # changing with the light's direction. 0: flat, the camera sees only the faint grain.
+    shotcrete_relief_m: float = 0.0
     exposure: float = 2.0  # sensor exposure [-]: light 1.0 gives a median gray of about 90
     headlamp_power: float = 12.0  # [irradiance units * m^2]
     section: CrossSection = field(default_factory=CrossSection)
@@ -135,6 +143,9 @@ class SimOptions:
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise InputError(name, f"must be a distance >= 0 [m], got {value}")
+        relief = self.shotcrete_relief_m
+        if not (np.isfinite(relief) and 0.0 <= relief <= 0.05):
+            raise InputError("shotcrete_relief_m", f"must be in [0, 0.05] m, got {relief}")
         self.section.check()
         self.camera.check()
         self.trajectory_options()  # checks the spin options
@@ -170,9 +181,13 @@ def shotcrete_grain(points: np.ndarray) -> np.ndarray:
     return 1.0 + SHOTCRETE_GRAIN_CONTRAST * (2.0 * uniform - 1.0)
 
 
-def smooth_shotcrete_shading(hits: Hits) -> tuple[np.ndarray, np.ndarray]:
+def smooth_shotcrete_shading(
+    hits: Hits, relief_m: float = 0.0, fx: float = 458.654
+) -> tuple[np.ndarray, np.ndarray]:
     """Normals and material ids to shade hits with: smooth shotcrete pixels as SHOTCRETE whose
-    procedural texture and bolt plates are cancelled.
+    procedural texture and bolt plates are cancelled; with ``relief_m`` > 0 their normals first
+    tilted by the lining's relief (C++ ``relief_normals``, its octaves faded below a few pixel
+    footprints ``t / fx`` [m], ``fx`` the camera's focal length [px]).
 
     The shading kernel's light is linear in the normal's length (irradiance = power * n.l / d^2,
     n is not renormalised), so scaling the normal by ``target / albedo`` (``albedo`` the kernel's
@@ -189,6 +204,16 @@ def smooth_shotcrete_shading(hits: Hits) -> tuple[np.ndarray, np.ndarray]:
     material[smooth] = Material.SHOTCRETE
     points = np.ascontiguousarray(hits.point[smooth], dtype=np.float32)
     normals = np.ascontiguousarray(hits.normal[smooth], dtype=np.float32)
+    if relief_m > 0.0:
+        footprint = np.ascontiguousarray(hits.t[smooth] / fx, dtype=np.float32)
+        normals = _core.relief_normals(
+            points,
+            normals,
+            footprint_m=footprint,
+            height_m=relief_m,
+            wavelength_m=SHOTCRETE_RELIEF_WAVELENGTH_M,
+            octaves=SHOTCRETE_RELIEF_OCTAVES,
+        )
     albedo = _core.solid_texture(points, material[smooth], normals)
     scale = SHOTCRETE_ALBEDO * shotcrete_grain(points) / np.maximum(albedo, 1e-3)
     normal = np.array(hits.normal, dtype=np.float32, copy=True)
@@ -338,7 +363,7 @@ class Simulator:
         shading_camera = _core.ShadingCamera(  # type: ignore[call-overload]
             cam.fx, cam.fx, cam.cx, cam.cy, T_world_cam[:3, 3]
         )
-        normal, material = smooth_shotcrete_shading(hits)
+        normal, material = smooth_shotcrete_shading(hits, self.options.shotcrete_relief_m, cam.fx)
         return _core.shade_image(
             hits.point,
             normal,

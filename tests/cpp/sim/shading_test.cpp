@@ -325,5 +325,46 @@ TEST(Shading, BenchmarkEurocSizedRoadwayImage) {
   EXPECT_GT(cv::mean(view)[0], 5.0);
 }
 
+// The relief tilts unit normals by an amount that grows with its height, the same for every
+// call (a property of the world point), and none at zero height; distant points (large pixel
+// footprints) lose its octaves; bad options throw.
+TEST(Relief, TiltGrowsWithHeightAndFadesWithFootprint) {
+  const int n = 5000;
+  std::vector<float> points, normals;
+  for (int i = 0; i < n; ++i) {
+    points.insert(points.end(), {0.013f * i, 1.5f, 0.7f + 0.0007f * i});
+    normals.insert(normals.end(), {0.0f, -1.0f, 0.0f});
+  }
+  const auto rms_tilt = [&](float height_m, float footprint_m) {
+    std::vector<float> out(3 * n), again(3 * n);
+    const std::vector<float> footprint(n, footprint_m);
+    ReliefOptions options;
+    options.height_m = height_m;
+    ReliefNormals(points.data(), normals.data(), footprint.data(), n, options, out.data());
+    ReliefNormals(points.data(), normals.data(), footprint.data(), n, options, again.data());
+    EXPECT_EQ(out, again);
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3f v(out[3 * i], out[3 * i + 1], out[3 * i + 2]);
+      EXPECT_NEAR(v.norm(), 1.0f, 1e-5f);
+      const double angle = std::acos(std::clamp(-static_cast<double>(v.y()), -1.0, 1.0));
+      sum += angle * angle;
+    }
+    return std::sqrt(sum / n);
+  };
+  EXPECT_EQ(rms_tilt(0.0f, 0.0f), 0.0);
+  const double small = rms_tilt(0.002f, 0.0f), large = rms_tilt(0.006f, 0.0f);
+  EXPECT_GT(small, 0.005);
+  EXPECT_NEAR(large / small, 3.0, 0.3);  // the tilt is nearly linear in the height
+  // A footprint of 2 cm (a pixel at about 9 m) fades the two finer octaves (2.4 and 4.9 cm).
+  EXPECT_LT(rms_tilt(0.006f, 0.02f), 0.5 * large);
+  ReliefOptions bad;
+  bad.octaves = 0;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+  bad = ReliefOptions{};
+  bad.height_m = -1.0f;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace slslam::sim

@@ -389,6 +389,7 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(imu.gravity_mps2, "tracking.imu.gravity_mps2", 0, 20, "()"),
        FIELD(imu.gravity_tolerance_mps2, "tracking.imu.gravity_tolerance_mps2", 0, 100, "(]"),
        FIELD(imu.acc_bias_prior_mps2, "tracking.imu.acc_bias_prior_mps2", 0, 100, "(]"),
+       FIELD(imu.gyro_bias_sigma_radps, "tracking.imu.gyro_bias_sigma_radps", 0, 1, "(]"),
        FIELD(imu.window_s, "tracking.imu.window_s", 1, 1000, "[]"),          // >= min_window_s
        FIELD(imu.min_window_s, "tracking.imu.min_window_s", 0.05, 3, "[]"),  // <= window_s
        FIELD(imu.refine_after_s, "tracking.imu.refine_after_s", 0, 1e6, "[]"),
