@@ -2,7 +2,8 @@
 headlamp blackout of 4 s; the tracker on each, camera only by default.
 
     python benchmarks/hard_cases.py [--cases shotcrete_l100 shotcrete_l015_dust
-        shotcrete_branch blackout_long] [--configs orb_lines,xfeat_lines] [--imu]
+        shotcrete_branch blackout_long shotcrete_relief_l100 ...] [--configs orb_lines,xfeat_lines]
+        [--imu]
         [--frames-scale 1.0] [--data-dir DIR] [--out DIR] [--set tracking.KEY=VALUE ...]
 
 The cases are defined in tracking_recovery.py's SEQUENCES (so ``tracking_recovery.py
@@ -10,8 +11,11 @@ The cases are defined in tracking_recovery.py's SEQUENCES (so ``tracking_recover
 loop's first straight at light 1.0 (shotcrete_l100) and at 0.15 with dust (shotcrete_l015_dust);
 the dead-end branch lined with shotcrete up to its face, light 0.5 with flicker, a 3 s stop and
 a 360 degree turn on the spot 7 m into the lining (shotcrete_branch); a 4 s blackout on the
-junction at light 0.5 (blackout_long). Each is simulated (seed 0, no LiDAR) with the frames it
-needs to get through its hard part and a little beyond, once, into --data-dir.
+junction at light 0.5 (blackout_long); and the three shotcrete cases with the lining's relief
+(shotcrete_relief_l100, shotcrete_relief_l015_dust, shotcrete_relief_branch: SimOptions.
+shotcrete_relief_m 6 mm, a faint texture the headlamp shades; flat, the lining shows nothing).
+Each is simulated (seed 0, no LiDAR) with the frames it needs to get through its hard part and a
+little beyond, once, into --data-dir.
 
 Configurations as in tracking_recovery.py: ORB + lines (orb_lines, `slslam run --orb`), XFeat +
 lines (xfeat_lines, `slslam run --xfeat`), ... Camera only unless --imu (then the IMU is coupled
