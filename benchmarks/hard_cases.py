@@ -43,7 +43,16 @@ from slslam.sim import SimOptions, Simulator
 from slslam.sim.roadway import Stations
 from slslam.sim.sequence import preset_geometry
 from slslam.tracking import run_sequence
-from tracking_recovery import CONFIGS, ESTIMATED, SEQUENCES, config_for, simulate, summarise, table
+from tracking_recovery import (
+    CONFIGS,
+    ESTIMATED,
+    RELIEF_CASES,
+    SEQUENCES,
+    config_for,
+    simulate,
+    summarise,
+    table,
+)
 
 from common import RESULTS_DIR, parse_overrides, write_results
 
@@ -53,10 +62,9 @@ CASE_FRAMES = {
     "shotcrete_l015_dust": 600,
     "shotcrete_branch": 760,  # in the lining from t = 14.75 s; stop 24.5-27.5 s, turn -33.5 s
     "blackout_long": 300,  # dark from t = 8 s to 12 s
-    "shotcrete_relief_l100": 600,  # the three above with the lining's relief
-    "shotcrete_relief_l015_dust": 600,
-    "shotcrete_relief_branch": 760,
 }
+# the shotcrete cases with the lining's relief, as long as the flat ones
+CASE_FRAMES.update({name: CASE_FRAMES[flat] for name, flat in RELIEF_CASES.items()})
 CASES = list(CASE_FRAMES)
 
 

@@ -94,37 +94,6 @@ SEQUENCES = {
         "spin_deg": 360.0,
         "spin_duration_s": 6.0,
     },
-    # the three shotcrete cases again with the lining's relief (sim SimOptions.shotcrete_relief_m
-    # 6 mm: lumps of 2.4-10 cm, height RMS about 1.2 mm, slope RMS 0.059 rad) that the headlamp
-    # shades as a faint texture changing with the light's direction; above, the lining is flat
-    # (the camera sees nothing there but a 3 % grain: the limit of dead reckoning)
-    "shotcrete_relief_l100": {
-        "preset": "loop",
-        "light": 1.0,
-        "shotcrete_start_m": 5.0,
-        "shotcrete_length_m": 16.0,
-        "shotcrete_relief_m": 0.006,
-    },
-    "shotcrete_relief_l015_dust": {
-        "preset": "loop",
-        "light": 0.15,
-        "dust": True,
-        "shotcrete_start_m": 5.0,
-        "shotcrete_length_m": 16.0,
-        "shotcrete_relief_m": 0.006,
-    },
-    "shotcrete_relief_branch": {
-        "preset": "dead_end",
-        "light": 0.5,
-        "flicker": True,
-        "shotcrete_start_m": 11.0,
-        "shotcrete_length_m": 26.0,
-        "shotcrete_relief_m": 0.006,
-        "spin_at_s": 24.5,
-        "stop_duration_s": 3.0,
-        "spin_deg": 360.0,
-        "spin_duration_s": 6.0,
-    },
     # a 4 s blackout (twice the 2 s the earlier IMU bridge carried) from t = 8 s on the junction
     # at light 0.5
     "blackout_long": {
@@ -135,6 +104,18 @@ SEQUENCES = {
         "blackout_at_s": 8.0,
     },
 }
+# The three shotcrete cases again with the lining's relief (sim SimOptions.shotcrete_relief_m 6 mm:
+# lumps of 2.4-10 cm, height RMS about 1.2 mm, slope RMS 0.059 rad) that the headlamp shades as a
+# faint texture changing with the light's direction; without it the lining is flat (the camera
+# sees nothing there but a 3 % grain: the limit of dead reckoning). Name: flat case it varies.
+RELIEF_CASES = {
+    "shotcrete_relief_l100": "shotcrete_l100",
+    "shotcrete_relief_l015_dust": "shotcrete_l015_dust",
+    "shotcrete_relief_branch": "shotcrete_branch",
+}
+SEQUENCES.update(
+    {name: {**SEQUENCES[flat], "shotcrete_relief_m": 0.006} for name, flat in RELIEF_CASES.items()}
+)
 DEFAULT_SEQUENCES = ["loop_l100", "loop_l015_dust", "junction_hard", "junction_spin"]
 CONFIGS = {  # name: (label, point front end, low-texture fallback, lines)
     "orb_lines": ("ORB + lines", "orb", True, True),

@@ -217,11 +217,7 @@ void BindSim(py::module_& m) {
         options.height_m = height_m;
         options.wavelength_m = wavelength_m;
         options.octaves = octaves;
-        try {
-          options.Check();
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
+        options.Check();  // (std::invalid_argument reaches Python as ValueError)
         py::array_t<float> out(
             {static_cast<py::ssize_t>(n), py::ssize_t{3}},
             {static_cast<py::ssize_t>(3 * sizeof(float)), static_cast<py::ssize_t>(sizeof(float))});

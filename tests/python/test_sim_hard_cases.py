@@ -30,17 +30,29 @@ def _small(**kwargs) -> SimOptions:
     return SimOptions(camera=SMALL, **{"frames": 5, "lidar": False, **kwargs})
 
 
-def _wall_view(sim: Simulator, x: float, level: float = 0.15) -> tuple[np.ndarray, np.ndarray]:
-    """Left camera image and hit materials, the robot at x [m] on the straight, cameras turned
-    to face the left wall (world +y) from 2.2 m, at light ``level`` (brighter saturates there)."""
+#: Camera orientations R_world_cam (camera x right, y down, z forward) at 1.2 m on the straight:
+#: facing the left wall (z = world +y) and looking along the roadway (z = world +x).
+FACING_WALL = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+ALONG_ROADWAY = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+def _view(
+    sim: Simulator, x: float, R_world_cam: np.ndarray, level: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Left camera image and hit materials, the robot at x [m] on the straight, the camera
+    turned to R_world_cam at 1.2 m, at light ``level``."""
     T_world_cam = np.eye(4)
-    # camera z forward = world +y, x right = world +x, y down = world -z
-    T_world_cam[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
+    T_world_cam[:3, :3] = R_world_cam
     T_world_cam[:3, 3] = [x, 0.0, 1.2]
     T_world_body = T_world_cam @ np.linalg.inv(sim.camera.T_body_cam0)
     hits = sim.cast_cameras([T_world_cam], 0.0)[0]
     image = sim.shade(hits, T_world_cam, sim._headlamp(T_world_body), level, 0)
     return image, hits.material.reshape(image.shape)
+
+
+def _wall_view(sim: Simulator, x: float, level: float = 0.15) -> tuple[np.ndarray, np.ndarray]:
+    """Facing the left wall from 2.2 m (light 0.15: brighter saturates there)."""
+    return _view(sim, x, FACING_WALL, level)
 
 
 def _gradient_energy(image: np.ndarray) -> float:
@@ -91,16 +103,8 @@ def test_shotcrete_lining_has_no_corners_and_little_gradient(lined):
 
 
 def _along_view(sim: Simulator, x: float) -> tuple[np.ndarray, np.ndarray]:
-    """Left image and hit materials from x [m] on the straight, looking along it (+x) at the
-    camera's height, at light 1.0 (the walls and floor seen at grazing angles)."""
-    T_world_cam = np.eye(4)
-    # camera z forward = world +x, x right = world -y, y down = world -z
-    T_world_cam[:3, :3] = [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]
-    T_world_cam[:3, 3] = [x, 0.0, 1.2]
-    T_world_body = T_world_cam @ np.linalg.inv(sim.camera.T_body_cam0)
-    hits = sim.cast_cameras([T_world_cam], 0.0)[0]
-    image = sim.shade(hits, T_world_cam, sim._headlamp(T_world_body), 1.0, 0)
-    return image, hits.material.reshape(image.shape)
+    """Looking along the roadway (+x) at light 1.0: walls and floor seen at grazing angles."""
+    return _view(sim, x, ALONG_ROADWAY, 1.0)
 
 
 def test_shotcrete_relief_shades_a_faint_texture_along_the_roadway(lined):

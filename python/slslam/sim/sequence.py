@@ -182,7 +182,7 @@ def shotcrete_grain(points: np.ndarray) -> np.ndarray:
 
 
 def smooth_shotcrete_shading(
-    hits: Hits, relief_m: float = 0.0, fx: float = 458.654
+    hits: Hits, relief_m: float, fx: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Normals and material ids to shade hits with: smooth shotcrete pixels as SHOTCRETE whose
     procedural texture and bolt plates are cancelled; with ``relief_m`` > 0 their normals first
