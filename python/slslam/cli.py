@@ -1056,15 +1056,32 @@ def _signals_outside_commands(received: list[int]):
         received.append(signum)
         raise KeyboardInterrupt(signal.Signals(signum).name)
 
+    def redeliver(unraisable) -> None:
+        # The handler's KeyboardInterrupt can land where Python cannot raise it (a weakref
+        # callback of importlib's module locks, a __del__): the interpreter would print
+        # "Exception ignored ... Traceback" and go on as if nothing came. Send the signal again
+        # instead, from another thread a moment later (sent at once, the handler would run in
+        # this hook and be swallowed again), so the stop happens at the next point that can
+        # raise it; if that is such a place too, this hook sends it again.
+        if isinstance(unraisable.exc_value, KeyboardInterrupt) and received:
+            again = threading.Timer(0.05, os.kill, (os.getpid(), received[-1]))
+            again.daemon = True  # (a process ending meanwhile does not wait for it)
+            again.start()
+            return
+        previous_hook(unraisable)
+
     if threading.current_thread() is not threading.main_thread():
         yield received
         return
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    previous_hook = sys.unraisablehook
     for s in previous:
         signal.signal(s, stop)
+    sys.unraisablehook = redeliver
     try:
         yield received
     finally:
+        sys.unraisablehook = previous_hook
         for s, handler in previous.items():
             signal.signal(s, handler)
 

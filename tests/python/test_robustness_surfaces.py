@@ -18,6 +18,7 @@ import signal
 import struct
 import subprocess
 import sys
+import textwrap
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -1664,6 +1665,39 @@ def test_vocab_train_stopped_by_a_signal_writes_nothing_or_all(
         return
     assert proc.returncode == 128 + signum, err
     assert "stopped" in err and (not out.exists() or Vocabulary.load(out).num_words > 0)
+
+
+def test_a_signal_landing_where_python_cannot_raise_still_stops_without_a_traceback():
+    """The handler's KeyboardInterrupt raised inside a __del__ (as inside importlib's module-lock
+    callbacks while modules load) is swallowed by the interpreter with an "Exception ignored"
+    traceback: the CLI's handlers send the signal again, so the stop still happens, silently."""
+    script = textwrap.dedent(
+        """
+        import signal, time
+        from slslam.cli import _signals_outside_commands
+
+        class Dropped:
+            def __del__(self):
+                signal.raise_signal(signal.SIGINT)
+                for _ in range(1000):  # the handler runs in here
+                    pass
+
+        received = []
+        try:
+            with _signals_outside_commands(received):
+                Dropped()
+                time.sleep(5)
+            print("not stopped")
+        except KeyboardInterrupt:
+            print("stopped", sorted(set(received)))
+        """
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr, done.stderr
+    assert done.stdout.split() == ["stopped", "[2]"], done.stdout
 
 
 @pytest.fixture(scope="module")
