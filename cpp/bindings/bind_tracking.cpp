@@ -73,6 +73,9 @@ py::dict MapDict(const SessionMap& session) {
   imu_out["initialisations"] = imu.initialisations;
   imu_out["refinements"] = imu.refinements;
   imu_out["rejected_refinements"] = imu.rejected_refinements;
+  imu_out["nonholonomic_updates"] = imu.nonholonomic_updates;
+  imu_out["zero_velocity_updates"] = imu.zero_velocity_updates;
+  imu_out["travel_side_ratio"] = imu.travel_side_ratio;  // (-1: not measured)
   imu_out["last_failure"] = imu.last_failure;
   imu_out["gyro_bias_radps"] = imu.gyro_bias;
   imu_out["acc_bias_mps2"] = imu.acc_bias;
@@ -266,6 +269,10 @@ void BindRecoveryOptions(py::module_& m) {
       .def_readwrite("lost_sigma_fraction", &InertialOptions::lost_sigma_fraction)
       .def_readwrite("lost_sigma_min_m", &InertialOptions::lost_sigma_min_m)
       .def_readwrite("max_gap_s", &InertialOptions::max_gap_s)
+      .def_readwrite("nonholonomic_max_side_ratio", &InertialOptions::nonholonomic_max_side_ratio)
+      .def_readwrite("nonholonomic_sigma_mps", &InertialOptions::nonholonomic_sigma_mps)
+      .def_readwrite("zero_velocity_max_statistic", &InertialOptions::zero_velocity_max_statistic)
+      .def_readwrite("zero_velocity_sigma_mps", &InertialOptions::zero_velocity_sigma_mps)
       .def_readwrite("weak_update_min_inliers", &InertialOptions::weak_update_min_inliers)
       .def_readwrite("weak_update_min_lines", &InertialOptions::weak_update_min_lines)
       .def_readwrite("keyframe_min_stereo_lines", &InertialOptions::keyframe_min_stereo_lines)

@@ -231,6 +231,10 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "lost_sigma_fraction",
             "lost_sigma_min_m",
             "max_gap_s",
+            "nonholonomic_max_side_ratio",
+            "nonholonomic_sigma_mps",
+            "zero_velocity_max_statistic",
+            "zero_velocity_sigma_mps",
             "weak_update_min_inliers",
             "weak_update_min_lines",
             "keyframe_min_stereo_lines",
@@ -433,6 +437,18 @@ class ImuConfig:
     lost_sigma_fraction: float = _imu("lost_sigma_fraction", "[0, 10]")
     lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1000000]")  # ... or this floor [m]
     max_gap_s: float = _imu("max_gap_s", "[0, 1000000]")  # and after this long without vision [s]
+    # a frame without vision holds the body's velocity to the axis of travel when, over 2 s of
+    # tracked driving, the velocity across it was at most this fraction of the speed (RMS): a
+    # ground vehicle's non-holonomic constraint (0: never) [-]
+    nonholonomic_max_side_ratio: float = _imu("nonholonomic_max_side_ratio", "[0, 1]")
+    # ... within this sigma, or the RMS side speed measured while tracked when larger [m/s]
+    nonholonomic_sigma_mps: float = _imu("nonholonomic_sigma_mps", "(0, 100]")
+    # a frame without vision whose last 0.5 s of IMU samples show the body at rest (the SHOE
+    # statistic, about 1 at rest, at most this) is held at zero velocity, unless the state
+    # disagrees beyond 99.9 % (0: never) [-]
+    zero_velocity_max_statistic: float = _imu("zero_velocity_max_statistic", "[0, 1000000]")
+    # ... within this sigma [m/s]
+    zero_velocity_sigma_mps: float = _imu("zero_velocity_sigma_mps", "(0, 100]")
     # a frame not tracked (fewer than min_inliers) still corrects the state with this many
     # inliers (0: never)
     weak_update_min_inliers: int = _imu("weak_update_min_inliers", "[0, 100000]")

@@ -1059,6 +1059,10 @@ def test_with_the_imu_a_featureless_stretch_longer_than_the_old_bridge_stays_one
     m, results = summary.metrics, summary.results
     assert m["imu"]["has_imu"] and m["imu"]["initialised"], m["imu"]
     assert 0.5 <= m["imu"]["init_after_s"] <= 2.0, m["imu"]
+    # The simulated robot drives as a ground vehicle: learned from the tracked frames before the
+    # blackout, every dark frame holds its velocity to the axis of travel.
+    assert 0.0 <= m["imu"]["travel_side_ratio"] <= 0.1, m["imu"]
+    assert m["imu"]["nonholonomic_updates"] >= 55, m["imu"]
     assert m["posed_ratio_after_init"] == 1.0 and m["lost_frames"] == 0
     assert m["maps"] == 1
     t0 = results[0].timestamp  # (the simulator's clock starts at 1000 s)

@@ -140,6 +140,41 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
   return true;
 }
 
+bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& directions_body,
+                             double sigma_mps, InertialState* state, double max_mahalanobis_sq) {
+  const Eigen::Index m = directions_body.rows();
+  if (!(sigma_mps > 0.0) || m == 0 || m > 3 || !directions_body.allFinite()) return false;
+  const Eigen::Matrix3d R = state->nav.R_world_body.toRotationMatrix();
+  const Eigen::Vector3d u = R.transpose() * state->nav.v_world_body;  // the body's velocity
+  // With R -> R Exp(dtheta) and v -> v + dv: R^T v -> u + [u]x dtheta + R^T dv.
+  Eigen::Matrix<double, Eigen::Dynamic, 18> H =
+      Eigen::Matrix<double, Eigen::Dynamic, 18>::Zero(m, 18);
+  H.middleCols<3>(0) = directions_body * Skew(u);
+  H.middleCols<3>(6) = directions_body * R.transpose();
+  const Eigen::VectorXd residual = -(directions_body * u);
+  const Matrix18d& P = state->covariance;
+  const Eigen::MatrixXd PHt = P * H.transpose();
+  const Eigen::MatrixXd S = H * PHt + sigma_mps * sigma_mps * Eigen::MatrixXd::Identity(m, m);
+  const Eigen::LDLT<Eigen::MatrixXd> S_ldlt(S);
+  if (S_ldlt.info() != Eigen::Success || !(S_ldlt.vectorD().minCoeff() > 0.0)) return false;
+  if (!(residual.dot(S_ldlt.solve(residual)) <= max_mahalanobis_sq)) return false;
+  const Eigen::Matrix<double, 18, Eigen::Dynamic> K = S_ldlt.solve(PHt.transpose()).transpose();
+  const Eigen::Matrix<double, 18, 1> dx = K * residual;
+  if (!dx.allFinite()) return false;
+  // Joseph form: stays symmetric positive semi-definite with a gain computed in floating point.
+  const Matrix18d I_KH = Matrix18d::Identity() - K * H;
+  Matrix18d updated = I_KH * P * I_KH.transpose() + sigma_mps * sigma_mps * K * K.transpose();
+  state->covariance = 0.5 * (updated + updated.transpose());
+  state->nav.R_world_body =
+      (state->nav.R_world_body * Eigen::Quaterniond(ExpSO3(dx.segment<3>(0)))).normalized();
+  state->nav.p_world_body += dx.segment<3>(3);
+  state->nav.v_world_body += dx.segment<3>(6);
+  state->bias.gyro += dx.segment<3>(9);
+  state->bias.acc += dx.segment<3>(12);
+  state->g_world += dx.segment<3>(15);
+  return true;
+}
+
 void ImuBuffer::Add(int64_t t_ns, const Eigen::Vector3d& gyro_radps,
                     const Eigen::Vector3d& acc_mps2) {
   Require(gyro_radps.allFinite() && acc_mps2.allFinite(), "IMU sample is not finite");
@@ -175,6 +210,31 @@ bool ImuBuffer::Preintegrate(int64_t t0_ns, int64_t t1_ns, double max_sample_gap
 void ImuBuffer::DropBefore(int64_t t_ns) {
   // Keep the last sample at or before t_ns: it is held over t_ns.
   while (samples_.size() >= 2 && samples_[1].t_ns <= t_ns) samples_.pop_front();
+}
+
+std::optional<double> ImuBuffer::RestStatistic(int64_t t0_ns, int64_t t1_ns, const ImuBias& bias,
+                                               double gravity_mps2, double gyro_noise_density,
+                                               double acc_noise_density) const {
+  const auto first = std::lower_bound(samples_.begin(), samples_.end(), t0_ns,
+                                      [](const Sample& s, int64_t t) { return s.t_ns < t; });
+  const auto last = std::upper_bound(samples_.begin(), samples_.end(), t1_ns,
+                                     [](int64_t t, const Sample& s) { return t < s.t_ns; });
+  const std::ptrdiff_t n = last - first;
+  if (n < 10) return std::nullopt;
+  const double dt = SecondsBetween(first->t_ns, (last - 1)->t_ns) / static_cast<double>(n - 1);
+  if (!(dt > 0.0)) return std::nullopt;
+  const double gyro_var = gyro_noise_density * gyro_noise_density / dt;
+  const double acc_var = acc_noise_density * acc_noise_density / dt;
+  Eigen::Vector3d mean_acc = Eigen::Vector3d::Zero();
+  for (auto it = first; it != last; ++it) mean_acc += it->acc - bias.acc;
+  if (!(mean_acc.norm() > 0.0)) return std::nullopt;
+  const Eigen::Vector3d gravity = gravity_mps2 * mean_acc.normalized();
+  double sum = 0.0;
+  for (auto it = first; it != last; ++it) {
+    sum += (it->gyro - bias.gyro).squaredNorm() / gyro_var +
+           (it->acc - bias.acc - gravity).squaredNorm() / acc_var;
+  }
+  return sum / (6.0 * static_cast<double>(n));
 }
 
 ImuBuffer ImuBuffer::Slice(int64_t t0_ns, int64_t t1_ns) const {

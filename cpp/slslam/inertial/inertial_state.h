@@ -18,6 +18,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
+#include <optional>
 
 #include <Eigen/Core>
 
@@ -72,6 +74,17 @@ Matrix6d CamTangentFromBodyError(const NavState& nav, const Rigid3d& body_from_c
 bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& information,
                            const Rigid3d& body_from_cam, InertialState* state);
 
+// Conditions the state on the body's velocity having no component along the rows of
+// `directions_body` (unit vectors in the body frame, at most 3): rows * R_world_body^T * v = 0
+// within sigma_mps each, an extended Kalman update of the whole error state (a ground vehicle's
+// non-holonomic constraint: no velocity across or normal to its direction of travel; all three
+// axes: at rest). False (state unchanged) when sigma_mps is not positive, the update is not
+// well conditioned, or the innovation's squared Mahalanobis distance passes max_mahalanobis_sq
+// (the state disagrees with the constraint: a detection of rest while the state moves).
+bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& directions_body,
+                             double sigma_mps, InertialState* state,
+                             double max_mahalanobis_sq = std::numeric_limits<double>::infinity());
+
 // The marginal of the state's rotation and position as a prior on the camera pose: its
 // information in the left tangent (for the pose optimiser).
 Matrix6d CameraPosePriorInformation(const InertialState& state, const Rigid3d& body_from_cam);
@@ -92,6 +105,15 @@ class ImuBuffer {
   // The samples Preintegrate needs for [t0_ns, t1_ns]: from the last one at or before t0_ns to
   // the last one before t1_ns.
   ImuBuffer Slice(int64_t t0_ns, int64_t t1_ns) const;
+  // Whether the body was at rest over [t0_ns, t1_ns] as its samples show it (the SHOE detector
+  // of Skog et al. 2010): the mean over the samples of |gyro - bias|^2 / sigma_g^2 +
+  // |acc - bias - g u|^2 / sigma_a^2 (u: the mean specific force's direction, g its expected
+  // magnitude), sigma the white noise of one sample (density / sqrt(sample interval)), divided
+  // by its 6 degrees of freedom: about 1 at rest, far larger in motion (vibration, a turn).
+  // Nullopt with fewer than 10 samples in the interval.
+  std::optional<double> RestStatistic(int64_t t0_ns, int64_t t1_ns, const ImuBias& bias,
+                                      double gravity_mps2, double gyro_noise_density,
+                                      double acc_noise_density) const;
   // Appends the samples of `later` after this buffer's last one (those not after it are skipped).
   void Append(const ImuBuffer& later);
   bool empty() const { return samples_.empty(); }

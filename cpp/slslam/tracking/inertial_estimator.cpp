@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include "slslam/core/check.h"
 
@@ -28,6 +29,16 @@ constexpr double kInitPoseSpacingS = 0.05;
 constexpr double kMaxSpeedRatio = 2.0;
 // An initialisation that failed is tried again after this much more camera time [s].
 constexpr double kInitRetryS = 0.25;
+// The axis of travel (nonholonomic_max_side_ratio): learned from tracked frames at least this
+// fast (slower, the velocity estimate's noise decides the direction) [m/s], over at least this
+// much tracked driving [s], a gap between tracked frames counting as this much at most [s].
+constexpr double kTravelMinSpeedMps = 0.2;
+constexpr double kTravelMinSeconds = 2.0;
+constexpr double kTravelMaxFrameIntervalS = 0.2;
+// The IMU samples the rest detector looks at (zero_velocity_max_statistic) [s], and the
+// chi-square value (3 degrees of freedom, 99.9 %) past which the state's velocity disagrees.
+constexpr double kRestWindowS = 0.5;
+constexpr double kRestGateChi2 = 16.27;
 
 // The initial covariance, gravity's uncertainty across its direction only (its magnitude is
 // known).
@@ -176,6 +187,7 @@ void InertialEstimator::AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_worl
                                              options_.acc_bias_prior_mps2);
     predicted.covariance.bottomRightCorner<12, 12>() = kept.bottomRightCorner<12, 12>();
   }
+  if (full && conditioned) LearnTravel(predicted, t_ns);
   if (full) {
     last_visual_t_ns_ = t_ns;
     last_visual_p_ = predicted.nav.p_world_body;
@@ -191,9 +203,67 @@ void InertialEstimator::AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_worl
   }
 }
 
+void InertialEstimator::LearnTravel(const InertialState& state, int64_t t_ns) {
+  const std::optional<int64_t> last = travel_last_t_ns_;
+  travel_last_t_ns_ = t_ns;
+  const Eigen::Vector3d v_body =
+      state.nav.R_world_body.toRotationMatrix().transpose() * state.nav.v_world_body;
+  const double speed = v_body.norm();
+  if (!last || !(speed >= kTravelMinSpeedMps) || !v_body.allFinite()) return;
+  const Eigen::Vector3d u = v_body / speed;
+  travel_direction_scatter_ += u * u.transpose();
+  travel_velocity_scatter_ += v_body * v_body.transpose();
+  ++travel_samples_;
+  // (a gap between tracked frames counts as one frame interval at most)
+  travel_s_ += std::min(SecondsBetween(*last, t_ns), kTravelMaxFrameIntervalS);
+  if (travel_s_ >= kTravelMinSeconds) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(travel_direction_scatter_);
+    report_.travel_side_ratio =
+        std::sqrt(std::max(0.0, 1.0 - eig.eigenvalues()(2) / travel_samples_));
+  }
+}
+
+bool InertialEstimator::Nonholonomic(Eigen::Matrix<double, 2, 3>* across_body,
+                                     double* sigma_mps) const {
+  if (!(options_.nonholonomic_max_side_ratio > 0.0) || travel_s_ < kTravelMinSeconds ||
+      !(report_.travel_side_ratio >= 0.0) ||
+      report_.travel_side_ratio > options_.nonholonomic_max_side_ratio) {
+    return false;
+  }
+  // The axis is the direction scatter's principal eigenvector (driving backwards keeps it); the
+  // two others span the directions across it (eigenvalues in increasing order).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(travel_direction_scatter_);
+  const Eigen::Matrix3d& V = eig.eigenvectors();
+  across_body->row(0) = V.col(0).transpose();
+  across_body->row(1) = V.col(1).transpose();
+  const Eigen::Vector3d f = V.col(2);
+  const double side_ms2 =
+      (travel_velocity_scatter_.trace() - f.dot(travel_velocity_scatter_ * f)) / travel_samples_;
+  *sigma_mps = std::max(options_.nonholonomic_sigma_mps, std::sqrt(std::max(0.0, side_ms2)));
+  return true;
+}
+
 bool InertialEstimator::Propagate(int64_t t_ns) {
   InertialState next;
   if (!PropagateState(t_ns, &next)) return false;
+  Eigen::Matrix<double, 2, 3> across;
+  double sigma = 0.0;
+  if (Nonholonomic(&across, &sigma) && ConditionOnBodyVelocity(across, sigma, &next)) {
+    next.g_world = next.g_world.normalized() * options_.gravity_mps2;  // (the direction only)
+    ++report_.nonholonomic_updates;
+  }
+  if (options_.zero_velocity_max_statistic > 0.0) {
+    const int64_t t_imu_ns = t_ns - options_.time_offset_ns();
+    const std::optional<double> rest = imu_.RestStatistic(
+        t_imu_ns - NsFromSeconds(kRestWindowS), t_imu_ns, next.bias, options_.gravity_mps2,
+        options_.gyro_noise_density, options_.acc_noise_density);
+    if (rest && *rest <= options_.zero_velocity_max_statistic &&
+        ConditionOnBodyVelocity(Eigen::Matrix3d::Identity(), options_.zero_velocity_sigma_mps,
+                                &next, kRestGateChi2)) {
+      next.g_world = next.g_world.normalized() * options_.gravity_mps2;
+      ++report_.zero_velocity_updates;
+    }
+  }
   driven_m_ += (next.nav.p_world_body - state_.nav.p_world_body).norm();
   state_ = next;
   state_t_ns_ = std::max(state_t_ns_, t_ns);
@@ -262,6 +332,7 @@ void InertialEstimator::Reset() {
   refined_ = false;
   window_.clear();
   last_attempt_t_ns_.reset();
+  travel_last_t_ns_.reset();  // (the axis learned so far is kept)
 }
 
 void InertialEstimator::TryInitialise(bool refine) {
@@ -380,6 +451,10 @@ void InertialOptions::Check() const {
   CheckInRange("tracking.imu.refine_min_path_m", refine_min_path_m, 0.0, 1e6);
   CheckAboveInRange("tracking.imu.max_sample_gap_s", max_sample_gap_s, 0.0, 10.0);
   CheckInRange("tracking.imu.lost_sigma_fraction", lost_sigma_fraction, 0.0, 10.0);
+  CheckInRange("tracking.imu.nonholonomic_max_side_ratio", nonholonomic_max_side_ratio, 0.0, 1.0);
+  CheckAboveInRange("tracking.imu.nonholonomic_sigma_mps", nonholonomic_sigma_mps, 0.0, 100.0);
+  CheckInRange("tracking.imu.zero_velocity_max_statistic", zero_velocity_max_statistic, 0.0, 1e6);
+  CheckAboveInRange("tracking.imu.zero_velocity_sigma_mps", zero_velocity_sigma_mps, 0.0, 100.0);
   CheckInRange("tracking.imu.lost_sigma_min_m", lost_sigma_min_m, 0.0, 1e6);
   CheckInRange("tracking.imu.max_gap_s", max_gap_s, 0.0, 1e6);
   CheckInRange("tracking.imu.weak_update_min_inliers", weak_update_min_inliers, 0, 100000);

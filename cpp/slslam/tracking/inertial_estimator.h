@@ -67,6 +67,25 @@ struct InertialOptions {
   double lost_sigma_fraction = 0.1;
   double lost_sigma_min_m = 0.3;  ///< ... or this, whichever is larger [m]
   double max_gap_s = 60.0;        ///< and at the latest after this long without vision [s]
+  /// A frame without vision holds the body's velocity to the axis it kept while the camera
+  /// tracked (a ground vehicle's non-holonomic constraint: it neither slides sideways nor lifts
+  /// off; at rest and in a turn on the spot the axis turns with it) when, over at least 2 s
+  /// of tracked driving, the velocity across that axis was at most this
+  /// fraction of the speed (RMS); a drone or a hand-held rig moves every way and never gets it
+  /// (0: never). Without it the vertical and lateral position of a blind stretch drift with the
+  /// accelerometer bias's random walk (issue 62's dark relief lining: 2.9 m down and 2.0 m
+  /// sideways after 20 s, 0.3 m along the path) [-]
+  double nonholonomic_max_side_ratio = 0.1;
+  /// ... within this standard deviation [m/s] per frame, or the RMS side speed measured while
+  /// tracked when larger (the rig's vibration, a lever arm from the turning axis)
+  double nonholonomic_sigma_mps = 0.05;
+  /// A frame without vision whose last kRestWindowS (0.5 s) of IMU samples show the body at rest
+  /// (ImuBuffer::RestStatistic, about 1 at rest, at most this) is conditioned on zero velocity
+  /// (a mine robot stops and waits), unless the state disagrees beyond 99.9 % (chi-square, 3
+  /// degrees of freedom): a rig gliding at constant speed looks at rest to the IMU alone
+  /// (0: never) [-]
+  double zero_velocity_max_statistic = 3.0;
+  double zero_velocity_sigma_mps = 0.01;  ///< ... within this standard deviation [m/s]
   /// A frame the camera does not track (fewer than the tracker's min_inliers) still corrects the
   /// state with its pose optimisation when it keeps this many inliers (0: never). Off: on smooth
   /// shotcrete the few matches are sensor noise and pull the state away from the truth faster
@@ -156,11 +175,23 @@ class InertialEstimator {
     /// Refinements not taken: no better fit than the initialisation's, or too far from it
     int rejected_refinements = 0;
     std::string last_failure;  ///< the last initialisation attempt's reason, if it failed
+    /// Frames without vision whose velocity the non-holonomic constraint held
+    int nonholonomic_updates = 0;
+    /// Frames without vision conditioned on zero velocity (the IMU at rest)
+    int zero_velocity_updates = 0;
+    /// RMS of the velocity across the axis of travel over speed, tracked driving so far (-1:
+    /// not measured yet, less than 2 s of it)
+    double travel_side_ratio = -1.0;
   };
   const Report& report() const { return report_; }
 
  private:
   void TryInitialise(bool refine);
+  // A tracked frame's body velocity (the state after its correction) into the axis of travel.
+  void LearnTravel(const InertialState& state, int64_t t_ns);
+  // The directions across the axis of travel and the constraint's sigma, when the rig moves as
+  // a ground vehicle (nonholonomic_max_side_ratio); false otherwise.
+  bool Nonholonomic(Eigen::Matrix<double, 2, 3>* across_body, double* sigma_mps) const;
   bool PropagateState(int64_t t_ns, InertialState* out) const;
 
   InertialOptions options_;
@@ -185,6 +216,14 @@ class InertialEstimator {
   int64_t last_visual_t_ns_ = 0;        ///< camera time of the last visual correction
   Eigen::Vector3d last_visual_p_ = Eigen::Vector3d::Zero();  ///< body position then [m]
   double driven_m_ = 0.0;  ///< path of the propagated state since then [m]
+  // The axis of travel in the body frame, from tracked frames faster than kTravelMinSpeedMps
+  // (kept across resets: the rig's kinematics, not a map's): sums of the unit body velocity's
+  // and the body velocity's outer products, and the tracked time they span.
+  Eigen::Matrix3d travel_direction_scatter_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d travel_velocity_scatter_ = Eigen::Matrix3d::Zero();
+  int travel_samples_ = 0;
+  double travel_s_ = 0.0;
+  std::optional<int64_t> travel_last_t_ns_;
   Report report_;
 };
 

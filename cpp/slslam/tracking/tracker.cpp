@@ -380,6 +380,9 @@ Tracker::InertialReport Tracker::inertial_report() const {
   r.initialisations = e.initialisations;
   r.refinements = e.refinements;
   r.rejected_refinements = e.rejected_refinements;
+  r.nonholonomic_updates = e.nonholonomic_updates;
+  r.zero_velocity_updates = e.zero_velocity_updates;
+  r.travel_side_ratio = e.travel_side_ratio;
   r.last_failure = e.last_failure;
   r.gyro_bias = inertial_->state().bias.gyro;
   r.acc_bias = inertial_->state().bias.acc;

@@ -415,7 +415,10 @@ class Tracker {
     std::optional<int64_t> first_init_t_ns;  ///< camera time of the first initialisation [ns]
     int initialisations = 0;
     int refinements = 0;
-    int rejected_refinements = 0;  ///< refinements not taken (InertialEstimator::Report)
+    int rejected_refinements = 0;     ///< refinements not taken (InertialEstimator::Report)
+    int nonholonomic_updates = 0;     ///< frames held by the non-holonomic constraint
+    int zero_velocity_updates = 0;    ///< frames held at zero velocity (the IMU at rest)
+    double travel_side_ratio = -1.0;  ///< InertialEstimator::Report's (-1: not measured)
     std::string last_failure;
     Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  ///< [rad/s]
     Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();   ///< [m/s^2]

@@ -3,10 +3,12 @@
 // buffer's intervals.
 #include "slslam/inertial/inertial_state.h"
 
+#include <cmath>
 #include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "slslam/core/time.h"
 
@@ -174,6 +176,75 @@ TEST(InertialState, ACameraPoseCorrectsTheVelocityThroughTheCrossCovariance) {
   const InertialState kept = state;
   EXPECT_FALSE(ConditionOnCameraPose(truth, Matrix6d::Zero(), body_from_cam, &state));
   EXPECT_EQ(state.nav.v_world_body, kept.nav.v_world_body);
+}
+
+// The non-holonomic constraint (no body velocity across the body's x axis): with only the velocity
+// uncertain the update takes the sideways velocity out; with only the heading uncertain it turns
+// the body into the velocity instead (the rotation Jacobian's sign), leaving the velocity as it is.
+TEST(InertialState, ABodyVelocityConstraintMovesWhatIsUncertain) {
+  InertialState state;
+  state.nav.R_world_body = Eigen::Quaterniond::Identity();
+  state.nav.v_world_body = {1.0, 0.05, -0.02};
+  state.g_world = test::TestGravity();
+  Eigen::Matrix<double, 2, 3> across;
+  across << 0, 1, 0, 0, 0, 1;
+  const double sigma = 1e-3;
+
+  InertialState velocity_only = state;
+  velocity_only.covariance = 1e-12 * Matrix18d::Identity();
+  velocity_only.covariance.block<3, 3>(6, 6) = 0.1 * Eigen::Matrix3d::Identity();
+  ASSERT_TRUE(ConditionOnBodyVelocity(across, sigma, &velocity_only));
+  EXPECT_NEAR(velocity_only.nav.v_world_body.x(), 1.0, 1e-9);
+  EXPECT_LT(velocity_only.nav.v_world_body.tail<2>().norm(), 1e-4);
+  EXPECT_LT(velocity_only.covariance(7, 7), 2.0 * sigma * sigma);
+  EXPECT_NEAR(velocity_only.covariance(6, 6), 0.1, 1e-9);  // along the axis: untouched
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix18d>(velocity_only.covariance).eigenvalues()(0),
+            -1e-15);
+
+  InertialState heading_only = state;
+  heading_only.covariance = 1e-12 * Matrix18d::Identity();
+  heading_only.covariance.block<3, 3>(0, 0) = 0.01 * Eigen::Matrix3d::Identity();
+  ASSERT_TRUE(ConditionOnBodyVelocity(across, sigma, &heading_only));
+  const Eigen::Vector3d v_body =
+      heading_only.nav.R_world_body.toRotationMatrix().transpose() * heading_only.nav.v_world_body;
+  EXPECT_LT(v_body.tail<2>().norm(), 2e-3) << v_body.transpose();  // (one linearised step)
+  EXPECT_LT((heading_only.nav.v_world_body - state.nav.v_world_body).norm(), 1e-6);
+
+  EXPECT_FALSE(ConditionOnBodyVelocity(across, 0.0, &heading_only));
+}
+
+// The rest statistic: about 1 for samples of white noise at the stated densities about gravity
+// (with a bias that is given), far above in motion; nullopt with too few samples.
+TEST(ImuBuffer, TheRestStatisticIsAboutOneAtRestAndLargeInMotion) {
+  const double gyro_density = 1.7e-4, acc_density = 2e-3, dt = 0.005;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  ImuBias bias;
+  bias.gyro = {0.01, -0.02, 0.005};
+  bias.acc = {0.1, 0.0, -0.05};
+  const Eigen::Vector3d f_rest(0.0, 0.0, 9.81);
+  ImuBuffer rest, moving;
+  for (int k = 0; k < 200; ++k) {
+    Eigen::Vector3d wn, an;
+    for (int i = 0; i < 3; ++i) {
+      wn(i) = unit(rng) * gyro_density / std::sqrt(dt);
+      an(i) = unit(rng) * acc_density / std::sqrt(dt);
+    }
+    const int64_t t = NsFromSeconds(k * dt);
+    rest.Add(t, bias.gyro + wn, f_rest + bias.acc + an);
+    // 3 Hz vibration of 3 mm (about 1 m/s^2) and a slow turn
+    const Eigen::Vector3d vib(0.0, 0.0, 1.07 * std::sin(2.0 * M_PI * 3.0 * k * dt));
+    moving.Add(t, bias.gyro + Eigen::Vector3d(0, 0, 0.05) + wn, f_rest + vib + bias.acc + an);
+  }
+  const int64_t t1 = NsFromSeconds(199 * dt);
+  const auto at_rest = rest.RestStatistic(0, t1, bias, 9.81, gyro_density, acc_density);
+  ASSERT_TRUE(at_rest.has_value());
+  EXPECT_NEAR(*at_rest, 1.0, 0.2);
+  const auto in_motion = moving.RestStatistic(0, t1, bias, 9.81, gyro_density, acc_density);
+  ASSERT_TRUE(in_motion.has_value());
+  EXPECT_GT(*in_motion, 20.0);
+  EXPECT_FALSE(rest.RestStatistic(0, NsFromSeconds(0.02), bias, 9.81, gyro_density, acc_density)
+                   .has_value());
 }
 
 TEST(ImuBuffer, PreintegratesPartialIntervalsAndRefusesGaps) {

@@ -24,7 +24,8 @@ const Rigid3d kBodyFromCam(ExpSO3(Eigen::Vector3d(-1.2, 0.1, 0.3)),
 // IMU samples at 1 kHz over [0, duration] with white noise at EuRoC's densities and a constant
 // bias (1 kHz: the synthetic motion accelerates to 6 m/s, and the first-order integration's own
 // error at 200 Hz, which no noise model covers, would dominate the 10 s checked here).
-void FeedImu(const SyntheticMotion& motion, double duration, const ImuBias& bias,
+template <typename Motion>
+void FeedImu(const Motion& motion, double duration, const ImuBias& bias,
              InertialEstimator* estimator) {
   const InertialOptions defaults;
   std::mt19937 rng(11);
@@ -42,9 +43,62 @@ void FeedImu(const SyntheticMotion& motion, double duration, const ImuBias& bias
   }
 }
 
-Rigid3d CameraPose(const SyntheticMotion& motion, double t) {
+template <typename Motion>
+Rigid3d CameraPose(const Motion& motion, double t) {
   return CamFromWorld(motion.Nav(t), kBodyFromCam);
 }
+
+// A ground vehicle: a circle of 10 m radius at 0.8 m/s, the body's x axis along the velocity,
+// over a gentle bump (0.2 m high, 30 m long) it pitches with; body z up.
+struct GroundMotion {
+  double radius_m = 10.0;
+  double speed_mps = 0.8;
+  double bump_m = 0.1;  // half the bump's height
+  Eigen::Vector3d g_world{0.0, 0.0, -9.81};
+
+  double Yaw(double t) const { return speed_mps / radius_m * t; }
+  double Z(double t) const { return bump_m * std::sin(2.0 * M_PI * speed_mps * t / 30.0); }
+  double Zdot(double t) const {
+    const double k = 2.0 * M_PI * speed_mps / 30.0;
+    return bump_m * k * std::cos(k * t);
+  }
+  double Zddot(double t) const {
+    const double k = 2.0 * M_PI * speed_mps / 30.0;
+    return -bump_m * k * k * std::sin(k * t);
+  }
+  Eigen::Vector3d Position(double t) const {
+    const double y = Yaw(t);
+    return {radius_m * std::sin(y), radius_m * (1.0 - std::cos(y)), Z(t)};
+  }
+  Eigen::Vector3d Velocity(double t) const {
+    const double y = Yaw(t);
+    return {speed_mps * std::cos(y), speed_mps * std::sin(y), Zdot(t)};
+  }
+  Eigen::Vector3d Acceleration(double t) const {
+    const double y = Yaw(t), w = speed_mps / radius_m;
+    return {-speed_mps * w * std::sin(y), speed_mps * w * std::cos(y), Zddot(t)};
+  }
+  Eigen::Matrix3d Attitude(double t) const {  // x along the velocity, no roll
+    const double pitch = -std::atan2(Zdot(t), speed_mps);
+    return (Eigen::AngleAxisd(Yaw(t), Eigen::Vector3d::UnitZ()) *
+            Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()))
+        .toRotationMatrix();
+  }
+  Eigen::Vector3d Gyro(double t) const {
+    const double h = 1e-5;
+    return LogSO3(Eigen::Quaterniond(Attitude(t - h).transpose() * Attitude(t + h))) / (2 * h);
+  }
+  Eigen::Vector3d Accelerometer(double t) const {
+    return Attitude(t).transpose() * (Acceleration(t) - g_world);
+  }
+  NavState Nav(double t) const {
+    NavState s;
+    s.R_world_body = Eigen::Quaterniond(Attitude(t));
+    s.p_world_body = Position(t);
+    s.v_world_body = Velocity(t);
+    return s;
+  }
+};
 
 TEST(InertialEstimator, InitialisesThenCarriesTenSecondsWithinItsUncertainty) {
   // 10 s of tracked frames (the gyroscope bias is what decides the drift in the dark: an error of
@@ -96,6 +150,55 @@ TEST(InertialEstimator, InitialisesThenCarriesTenSecondsWithinItsUncertainty) {
   EXPECT_GT(sigma, 0.01);
   EXPECT_LT(sigma, 1.0);
   EXPECT_NEAR(estimator.seconds_without_vision(), 10.0, 1e-9);
+  // The motion goes every way (a drone's): never a ground vehicle's non-holonomic constraint.
+  EXPECT_GT(estimator.report().travel_side_ratio, InertialOptions{}.nonholonomic_max_side_ratio);
+  EXPECT_EQ(estimator.report().nonholonomic_updates, 0);
+}
+
+// A ground vehicle tracked for 10 s, then 15 s without vision, with an accelerometer bias the
+// initialisation cannot separate from gravity's tilt in its window (0.05 m/s^2 each axis): the
+// axis of travel learned while tracked holds the velocity across it, and the position after the
+// blind stretch is much closer across the path than the IMU alone gets it, within the
+// uncertainty reported.
+TEST(InertialEstimator, AGroundVehicleHoldsItsVelocityToTheAxisOfTravelWithoutVision) {
+  GroundMotion motion;
+  ImuBias bias;
+  bias.acc = {0.05, -0.05, 0.05};
+  const auto run = [&](double max_side_ratio, InertialEstimator::Report* report) {
+    InertialOptions options;
+    options.body_from_cam = kBodyFromCam;
+    options.nonholonomic_max_side_ratio = max_side_ratio;
+    InertialEstimator estimator(options);
+    FeedImu(motion, 25.5, bias, &estimator);
+    Matrix6d information = 1e6 * Matrix6d::Identity();
+    std::mt19937 rng(5);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    for (int k = 0; k <= 200; ++k) {
+      const double t = 0.05 * k;
+      Vector6d noise;
+      for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
+      estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
+                              /*with_prior=*/false);
+    }
+    EXPECT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+    for (int k = 201; k <= 500; ++k) EXPECT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
+    const Eigen::Vector3d e = estimator.state().nav.p_world_body - motion.Position(25.0);
+    const double sigma = estimator.state().PositionSigma();
+    EXPECT_LT(e.norm(), 3.0 * sigma) << "error " << e.norm() << " sigma " << sigma;
+    *report = estimator.report();
+    // Across the path (sideways and up): what the constraint holds; along it the speed is free.
+    const Eigen::Vector3d along = motion.Velocity(25.0).normalized();
+    return (e - e.dot(along) * along).norm();
+  };
+  InertialEstimator::Report held_report, free_report;
+  const double held = run(InertialOptions{}.nonholonomic_max_side_ratio, &held_report);
+  const double free = run(0.0, &free_report);
+  EXPECT_GE(held_report.travel_side_ratio, 0.0);
+  EXPECT_LT(held_report.travel_side_ratio, 0.05);
+  EXPECT_EQ(held_report.nonholonomic_updates, 300);
+  EXPECT_EQ(free_report.nonholonomic_updates, 0);
+  // (measured: 0.13 m across against 0.93 m; along the path 0.52 m against 1.35 m)
+  EXPECT_LT(held, 0.3 * free) << "held " << held << " m across, IMU alone " << free << " m";
 }
 
 // Initialised on exact poses (no bias), then 8 s of poses from a map that turns slowly against the
@@ -137,6 +240,7 @@ TEST(InertialEstimator, AtRestItInitialisesAndAnUncertaintyPastTheFloorIsLost) {
   InertialOptions options;
   options.body_from_cam = kBodyFromCam;
   options.lost_sigma_min_m = 0.05;
+  options.zero_velocity_max_statistic = 0.0;  // (the next test: held at rest)
   InertialEstimator estimator(options);
   FeedImu(motion, 40.0, {}, &estimator);
   const Matrix6d information = 1e6 * Matrix6d::Identity();
@@ -156,6 +260,51 @@ TEST(InertialEstimator, AtRestItInitialisesAndAnUncertaintyPastTheFloorIsLost) {
   EXPECT_LT(lost_after, 38.0);
   estimator.Reset();
   EXPECT_FALSE(estimator.initialised());
+}
+
+// Without vision at rest the IMU's samples show it (the rest statistic about 1): every frame is
+// held at zero velocity and the position stays put for 30 s. Gliding at constant speed on a
+// straight line without vibration looks the same to the IMU, but the state's velocity disagrees:
+// no frame is held at zero.
+TEST(InertialEstimator, AtRestWithoutVisionTheVelocityIsHeldAtZeroButNotWhileGliding) {
+  const Matrix6d information = 1e6 * Matrix6d::Identity();
+  {
+    SyntheticMotion motion;
+    motion.amplitude = 0.0;
+    InertialOptions options;
+    options.body_from_cam = kBodyFromCam;
+    options.lost_sigma_min_m = 0.05;
+    InertialEstimator estimator(options);
+    FeedImu(motion, 32.5, {}, &estimator);
+    for (int k = 0; k <= 40; ++k) {
+      estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
+                              false);
+    }
+    ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+    for (int k = 41; k <= 640; ++k) {
+      ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
+      ASSERT_TRUE(estimator.Trustworthy()) << 0.05 * k << " s";
+    }
+    EXPECT_EQ(estimator.report().zero_velocity_updates, 600);
+    EXPECT_LT((estimator.state().nav.p_world_body - motion.Position(32.0)).norm(), 0.02);
+    EXPECT_LT(estimator.state().nav.v_world_body.norm(), 0.01);
+  }
+  GroundMotion glide;
+  glide.radius_m = 1e7;  // straight, 0.8 m/s
+  glide.bump_m = 0.0;
+  InertialOptions options;
+  options.body_from_cam = kBodyFromCam;
+  InertialEstimator estimator(options);
+  FeedImu(glide, 8.5, {}, &estimator);
+  for (int k = 0; k <= 100; ++k) {
+    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(glide, 0.05 * k), information,
+                            false);
+  }
+  ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+  // (the samples alone look at rest: the gyroscope still, the specific force gravity's)
+  for (int k = 101; k <= 160; ++k) ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
+  EXPECT_EQ(estimator.report().zero_velocity_updates, 0);
+  EXPECT_LT((estimator.state().nav.p_world_body - glide.Position(8.0)).norm(), 0.1);
 }
 
 TEST(InertialEstimator, APoseFromParallelLinesDoesNotMoveTheStateAlongThem) {
