@@ -40,6 +40,11 @@ constexpr double kTravelMaxFrameIntervalS = 0.2;
 constexpr double kRestWindowS = 0.5;
 constexpr double kRestGateChi2 = 16.27;
 
+// An update corrected gravity in the world: its magnitude is known, only the direction is kept.
+void KeepGravityMagnitude(double gravity_mps2, InertialState* state) {
+  state->g_world = state->g_world.normalized() * gravity_mps2;
+}
+
 // The initial covariance, gravity's uncertainty across its direction only (its magnitude is
 // known).
 Matrix18d InitialCovariance(const Eigen::Vector3d& g_world, double gyro_bias_sigma_radps,
@@ -174,8 +179,7 @@ void InertialEstimator::AddVisualPose(int64_t t_ns, const Rigid3d& cam_from_worl
       const Vector6d d_post = ldlt.solve(s * visual_times_d);
       conditioned = ConditionOnCameraPose(LeftPlus(d_post, predicted_cam), posterior,
                                           options_.body_from_cam, &predicted);
-      // (the magnitude is known: only the direction is corrected)
-      if (conditioned) predicted.g_world = predicted.g_world.normalized() * options_.gravity_mps2;
+      if (conditioned) KeepGravityMagnitude(options_.gravity_mps2, &predicted);
     }
   }
   if (!conditioned) {
@@ -216,30 +220,30 @@ void InertialEstimator::LearnTravel(const InertialState& state, int64_t t_ns) {
   ++travel_samples_;
   // (a gap between tracked frames counts as one frame interval at most)
   travel_s_ += std::min(SecondsBetween(*last, t_ns), kTravelMaxFrameIntervalS);
-  if (travel_s_ >= kTravelMinSeconds) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(travel_direction_scatter_);
-    report_.travel_side_ratio =
-        std::sqrt(std::max(0.0, 1.0 - eig.eigenvalues()(2) / travel_samples_));
-  }
-}
-
-bool InertialEstimator::Nonholonomic(Eigen::Matrix<double, 2, 3>* across_body,
-                                     double* sigma_mps) const {
-  if (!(options_.nonholonomic_max_side_ratio > 0.0) || travel_s_ < kTravelMinSeconds ||
-      !(report_.travel_side_ratio >= 0.0) ||
-      report_.travel_side_ratio > options_.nonholonomic_max_side_ratio) {
-    return false;
-  }
+  if (travel_s_ < kTravelMinSeconds) return;
   // The axis is the direction scatter's principal eigenvector (driving backwards keeps it); the
   // two others span the directions across it (eigenvalues in increasing order).
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(travel_direction_scatter_);
   const Eigen::Matrix3d& V = eig.eigenvectors();
-  across_body->row(0) = V.col(0).transpose();
-  across_body->row(1) = V.col(1).transpose();
+  report_.travel_side_ratio =
+      std::sqrt(std::max(0.0, 1.0 - eig.eigenvalues()(2) / travel_samples_));
+  travel_across_body_.row(0) = V.col(0).transpose();
+  travel_across_body_.row(1) = V.col(1).transpose();
   const Eigen::Vector3d f = V.col(2);
   const double side_ms2 =
       (travel_velocity_scatter_.trace() - f.dot(travel_velocity_scatter_ * f)) / travel_samples_;
-  *sigma_mps = std::max(options_.nonholonomic_sigma_mps, std::sqrt(std::max(0.0, side_ms2)));
+  travel_side_speed_mps_ = std::sqrt(std::max(0.0, side_ms2));
+}
+
+bool InertialEstimator::Nonholonomic(Eigen::Matrix<double, 2, 3>* across_body,
+                                     double* sigma_mps) const {
+  // (travel_side_ratio is measured once kTravelMinSeconds of driving were tracked)
+  if (!(options_.nonholonomic_max_side_ratio > 0.0) || !(report_.travel_side_ratio >= 0.0) ||
+      report_.travel_side_ratio > options_.nonholonomic_max_side_ratio) {
+    return false;
+  }
+  *across_body = travel_across_body_;
+  *sigma_mps = std::max(options_.nonholonomic_sigma_mps, travel_side_speed_mps_);
   return true;
 }
 
@@ -249,7 +253,7 @@ bool InertialEstimator::Propagate(int64_t t_ns) {
   Eigen::Matrix<double, 2, 3> across;
   double sigma = 0.0;
   if (Nonholonomic(&across, &sigma) && ConditionOnBodyVelocity(across, sigma, &next)) {
-    next.g_world = next.g_world.normalized() * options_.gravity_mps2;  // (the direction only)
+    KeepGravityMagnitude(options_.gravity_mps2, &next);
     ++report_.nonholonomic_updates;
   }
   if (options_.zero_velocity_max_statistic > 0.0) {
@@ -260,7 +264,7 @@ bool InertialEstimator::Propagate(int64_t t_ns) {
     if (rest && *rest <= options_.zero_velocity_max_statistic &&
         ConditionOnBodyVelocity(Eigen::Matrix3d::Identity(), options_.zero_velocity_sigma_mps,
                                 &next, kRestGateChi2)) {
-      next.g_world = next.g_world.normalized() * options_.gravity_mps2;
+      KeepGravityMagnitude(options_.gravity_mps2, &next);
       ++report_.zero_velocity_updates;
     }
   }

@@ -224,6 +224,10 @@ class InertialEstimator {
   int travel_samples_ = 0;
   double travel_s_ = 0.0;
   std::optional<int64_t> travel_last_t_ns_;
+  // What they give once measured (report_.travel_side_ratio >= 0): the two body directions
+  // across the axis, and the RMS speed along them [m/s].
+  Eigen::Matrix<double, 2, 3> travel_across_body_ = Eigen::Matrix<double, 2, 3>::Zero();
+  double travel_side_speed_mps_ = 0.0;
   Report report_;
 };
 

@@ -19,8 +19,34 @@ inline Eigen::Vector3d TestGravity(bool z_up = false) {
               : ExpSO3(Eigen::Vector3d(0.3, -0.2, 0.1)) * Eigen::Vector3d(0.0, 0.0, -9.81);
 }
 
+// What a body trajectory gives (Derived's Attitude, Position, Velocity, Acceleration and
+// g_world): its exact IMU readings and navigation state.
+template <typename Derived>
+struct TrajectoryReadings {
+  // Body angular velocity by a central difference of the attitude.
+  Eigen::Vector3d Gyro(double t) const {
+    const double h = 1e-5;
+    return LogSO3(Eigen::Quaterniond(self().Attitude(t - h).transpose() * self().Attitude(t + h))) /
+           (2 * h);
+  }
+  Eigen::Vector3d Accelerometer(double t) const {
+    return self().Attitude(t).transpose() * (self().Acceleration(t) - self().g_world);
+  }
+  Rigid3d WorldFromBody(double t) const { return Rigid3d(self().Attitude(t), self().Position(t)); }
+  NavState Nav(double t) const {
+    NavState s;
+    s.R_world_body = Eigen::Quaterniond(self().Attitude(t));
+    s.p_world_body = self().Position(t);
+    s.v_world_body = self().Velocity(t);
+    return s;
+  }
+
+ private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
+};
+
 // Body motion: `amplitude` scales every motion (0: at rest, at a fixed tilted attitude).
-struct SyntheticMotion {
+struct SyntheticMotion : TrajectoryReadings<SyntheticMotion> {
   double amplitude = 1.0;
   Eigen::Vector3d g_world = TestGravity();
 
@@ -37,22 +63,6 @@ struct SyntheticMotion {
   }
   Eigen::Vector3d Acceleration(double t) const {
     return amplitude * Eigen::Vector3d(-0.5 * std::sin(0.5 * t), -0.49 * std::cos(0.7 * t), 0.6);
-  }
-  // Body angular velocity by a central difference of the attitude.
-  Eigen::Vector3d Gyro(double t) const {
-    const double h = 1e-5;
-    return LogSO3(Eigen::Quaterniond(Attitude(t - h).transpose() * Attitude(t + h))) / (2 * h);
-  }
-  Eigen::Vector3d Accelerometer(double t) const {
-    return Attitude(t).transpose() * (Acceleration(t) - g_world);
-  }
-  Rigid3d WorldFromBody(double t) const { return Rigid3d(Attitude(t), Position(t)); }
-  NavState Nav(double t) const {
-    NavState s;
-    s.R_world_body = Eigen::Quaterniond(Attitude(t));
-    s.p_world_body = Position(t);
-    s.v_world_body = Velocity(t);
-    return s;
   }
   // The IMU over [t0, t1] at `rate_hz`, midpoint samples, with `bias` added to the readings.
   ImuPreintegration Preintegrate(double t0, double t1, double rate_hz, const ImuBias& bias,

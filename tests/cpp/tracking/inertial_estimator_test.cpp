@@ -22,26 +22,36 @@ using test::SyntheticMotion;
 const Rigid3d kBodyFromCam(ExpSO3(Eigen::Vector3d(-1.2, 0.1, 0.3)),
                            Eigen::Vector3d(0.05, 0.0, -0.03));
 
-// IMU samples at 1 kHz over [0, duration] with white noise at EuRoC's densities and a constant
-// bias (1 kHz: the synthetic motion accelerates to 6 m/s, and the first-order integration's own
-// error at 200 Hz, which no noise model covers, would dominate the 10 s checked here).
-template <typename Motion>
-void FeedImu(const Motion& motion, double duration, const ImuBias& bias,
-             InertialEstimator* estimator) {
+// IMU samples at 1 kHz over [t0, t1] with white noise at EuRoC's densities and a constant bias
+// (1 kHz: the synthetic motion accelerates to 6 m/s, and the first-order integration's own error
+// at 200 Hz, which no noise model covers, would dominate the 10 s checked here), each given to
+// `add(t_ns, gyro, acc)`.
+template <typename Motion, typename Add>
+void NoisyImu(const Motion& motion, double t0, double t1, const ImuBias& bias, unsigned seed,
+              Add add) {
   const InertialOptions defaults;
-  std::mt19937 rng(11);
+  std::mt19937 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
   const double dt = 0.001;
-  for (int k = 0; k * dt <= duration + 1e-9; ++k) {
+  for (int k = static_cast<int>(std::lround(t0 / dt)); k * dt <= t1 + 1e-9; ++k) {
     const double t = k * dt;
     Eigen::Vector3d wn, an;
     for (int i = 0; i < 3; ++i) {
       wn(i) = unit(rng) * defaults.gyro_noise_density / std::sqrt(dt);
       an(i) = unit(rng) * defaults.acc_noise_density / std::sqrt(dt);
     }
-    estimator->AddImu(NsFromSeconds(t), motion.Gyro(t) + bias.gyro + wn,
-                      motion.Accelerometer(t) + bias.acc + an);
+    add(NsFromSeconds(t), motion.Gyro(t) + bias.gyro + wn, motion.Accelerometer(t) + bias.acc + an);
   }
+}
+
+// ... over [0, duration] into the estimator.
+template <typename Motion>
+void FeedImu(const Motion& motion, double duration, const ImuBias& bias,
+             InertialEstimator* estimator) {
+  NoisyImu(motion, 0.0, duration, bias, 11,
+           [&](int64_t t_ns, const Eigen::Vector3d& gyro, const Eigen::Vector3d& acc) {
+             estimator->AddImu(t_ns, gyro, acc);
+           });
 }
 
 template <typename Motion>
@@ -49,9 +59,19 @@ Rigid3d CameraPose(const Motion& motion, double t) {
   return CamFromWorld(motion.Nav(t), kBodyFromCam);
 }
 
+// Exact camera poses of frames 0..last_frame at 20 Hz, each with `information`.
+template <typename Motion>
+void TrackExactly(const Motion& motion, int last_frame, const Matrix6d& information,
+                  InertialEstimator* estimator) {
+  for (int k = 0; k <= last_frame; ++k) {
+    estimator->AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
+                             /*with_prior=*/false);
+  }
+}
+
 // A ground vehicle: a circle of 10 m radius at 0.8 m/s, the body's x axis along the velocity,
 // over a gentle bump (0.2 m high, 30 m long) it pitches with; body z up.
-struct GroundMotion {
+struct GroundMotion : test::TrajectoryReadings<GroundMotion> {
   double radius_m = 10.0;
   double speed_mps = 0.8;
   double bump_m = 0.1;  // half the bump's height
@@ -84,20 +104,6 @@ struct GroundMotion {
     return (Eigen::AngleAxisd(Yaw(t), Eigen::Vector3d::UnitZ()) *
             Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()))
         .toRotationMatrix();
-  }
-  Eigen::Vector3d Gyro(double t) const {
-    const double h = 1e-5;
-    return LogSO3(Eigen::Quaterniond(Attitude(t - h).transpose() * Attitude(t + h))) / (2 * h);
-  }
-  Eigen::Vector3d Accelerometer(double t) const {
-    return Attitude(t).transpose() * (Acceleration(t) - g_world);
-  }
-  NavState Nav(double t) const {
-    NavState s;
-    s.R_world_body = Eigen::Quaterniond(Attitude(t));
-    s.p_world_body = Position(t);
-    s.v_world_body = Velocity(t);
-    return s;
   }
 };
 
@@ -245,10 +251,7 @@ TEST(InertialEstimator, AtRestItInitialisesAndAnUncertaintyPastTheFloorIsLost) {
   InertialEstimator estimator(options);
   FeedImu(motion, 40.0, {}, &estimator);
   const Matrix6d information = 1e6 * Matrix6d::Identity();
-  for (int k = 0; k <= 40; ++k) {
-    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
-                            false);
-  }
+  TrackExactly(motion, 40, information, &estimator);
   ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
   EXPECT_LT(estimator.state().nav.v_world_body.norm(), 0.02);
   // Standing still without vision: nothing is driven, so the floor decides.
@@ -277,10 +280,7 @@ TEST(InertialEstimator, AtRestWithoutVisionTheVelocityIsHeldAtZeroButNotWhileGli
     options.lost_sigma_min_m = 0.05;
     InertialEstimator estimator(options);
     FeedImu(motion, 32.5, {}, &estimator);
-    for (int k = 0; k <= 40; ++k) {
-      estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
-                              false);
-    }
+    TrackExactly(motion, 40, information, &estimator);
     ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
     for (int k = 41; k <= 640; ++k) {
       ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
@@ -297,24 +297,14 @@ TEST(InertialEstimator, AtRestWithoutVisionTheVelocityIsHeldAtZeroButNotWhileGli
   options.body_from_cam = kBodyFromCam;
   InertialEstimator estimator(options);
   FeedImu(glide, 8.5, {}, &estimator);
-  for (int k = 0; k <= 100; ++k) {
-    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(glide, 0.05 * k), information,
-                            false);
-  }
+  TrackExactly(glide, 100, information, &estimator);
   ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
   // The samples alone look at rest (the gyroscope still, the specific force gravity's) ...
   ImuBuffer samples;
-  std::mt19937 rng(2);
-  std::normal_distribution<double> unit(0.0, 1.0);
-  for (int k = 7500; k <= 8000; ++k) {
-    const double t = 0.001 * k;
-    Eigen::Vector3d wn, an;
-    for (int i = 0; i < 3; ++i) {
-      wn(i) = unit(rng) * options.gyro_noise_density / std::sqrt(0.001);
-      an(i) = unit(rng) * options.acc_noise_density / std::sqrt(0.001);
-    }
-    samples.Add(NsFromSeconds(t), glide.Gyro(t) + wn, glide.Accelerometer(t) + an);
-  }
+  NoisyImu(glide, 7.5, 8.0, {}, 2,
+           [&](int64_t t_ns, const Eigen::Vector3d& gyro, const Eigen::Vector3d& acc) {
+             samples.Add(t_ns, gyro, acc);
+           });
   const std::optional<double> rest =
       samples.RestStatistic(NsFromSeconds(7.5), NsFromSeconds(8.0), {}, 9.81,
                             options.gyro_noise_density, options.acc_noise_density);
@@ -341,10 +331,7 @@ TEST(InertialEstimator, APoseFromParallelLinesDoesNotMoveTheStateAlongThem) {
   for (int marginalised = 0; marginalised < 2; ++marginalised) {
     InertialEstimator estimator(options);
     FeedImu(motion, 6.0, {}, &estimator);
-    for (int k = 0; k <= 40; ++k) {
-      estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k), information,
-                              false);
-    }
+    TrackExactly(motion, 40, information, &estimator);
     ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
     for (int k = 41; k < 100; ++k) ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
     const double t = 5.0;
@@ -368,10 +355,7 @@ TEST(InertialEstimator, FollowsAWorldChangeAndRefusesBadOptions) {
   options.body_from_cam = kBodyFromCam;
   InertialEstimator estimator(options);
   FeedImu(motion, 4.0, {}, &estimator);
-  for (int k = 0; k <= 40; ++k) {
-    estimator.AddVisualPose(NsFromSeconds(0.05 * k), CameraPose(motion, 0.05 * k),
-                            1e6 * Matrix6d::Identity(), false);
-  }
+  TrackExactly(motion, 40, 1e6 * Matrix6d::Identity(), &estimator);
   ASSERT_TRUE(estimator.initialised());
   const Rigid3d new_from_old(ExpSO3(Eigen::Vector3d(0.0, 0.0, 0.5)), Eigen::Vector3d(1, 2, 3));
   const Eigen::Vector3d p = estimator.state().nav.p_world_body;
