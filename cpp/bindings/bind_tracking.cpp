@@ -75,6 +75,7 @@ py::dict MapDict(const SessionMap& session) {
   imu_out["rejected_refinements"] = imu.rejected_refinements;
   imu_out["nonholonomic_updates"] = imu.nonholonomic_updates;
   imu_out["zero_velocity_updates"] = imu.zero_velocity_updates;
+  imu_out["flow_updates"] = imu.flow_updates;
   imu_out["travel_side_ratio"] = imu.travel_side_ratio;  // (-1: not measured)
   imu_out["last_failure"] = imu.last_failure;
   imu_out["gyro_bias_radps"] = imu.gyro_bias;
@@ -273,6 +274,8 @@ void BindRecoveryOptions(py::module_& m) {
       .def_readwrite("nonholonomic_sigma_mps", &InertialOptions::nonholonomic_sigma_mps)
       .def_readwrite("zero_velocity_max_statistic", &InertialOptions::zero_velocity_max_statistic)
       .def_readwrite("zero_velocity_sigma_mps", &InertialOptions::zero_velocity_sigma_mps)
+      .def_readwrite("flow_min_inliers", &InertialOptions::flow_min_inliers)
+      .def_readwrite("flow_sigma_mps", &InertialOptions::flow_sigma_mps)
       .def_readwrite("weak_update_min_inliers", &InertialOptions::weak_update_min_inliers)
       .def_readwrite("weak_update_min_lines", &InertialOptions::weak_update_min_lines)
       .def_readwrite("keyframe_min_stereo_lines", &InertialOptions::keyframe_min_stereo_lines)

@@ -235,6 +235,8 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "nonholonomic_sigma_mps",
             "zero_velocity_max_statistic",
             "zero_velocity_sigma_mps",
+            "flow_min_inliers",
+            "flow_sigma_mps",
             "weak_update_min_inliers",
             "weak_update_min_lines",
             "keyframe_min_stereo_lines",
@@ -449,6 +451,12 @@ class ImuConfig:
     zero_velocity_max_statistic: float = _imu("zero_velocity_max_statistic", "[0, 1000000]")
     # ... within this sigma [m/s]
     zero_velocity_sigma_mps: float = _imu("zero_velocity_sigma_mps", "(0, 100]")
+    # a frame the camera does not track takes the body's velocity from optical flow (corners
+    # tracked from the frame before, PnP on their stereo depths) with this many inliers, unless
+    # the state disagrees beyond 99.9 % (0: never) [-]
+    flow_min_inliers: int = _imu("flow_min_inliers", "[0, 100000]")
+    # ... within at least this sigma per axis [m/s]
+    flow_sigma_mps: float = _imu("flow_sigma_mps", "(0, 100]")
     # a frame not tracked (fewer than min_inliers) still corrects the state with this many
     # inliers (0: never)
     weak_update_min_inliers: int = _imu("weak_update_min_inliers", "[0, 100000]")

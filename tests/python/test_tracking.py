@@ -1063,6 +1063,8 @@ def test_with_the_imu_a_featureless_stretch_longer_than_the_old_bridge_stays_one
     # blackout, every dark frame holds its velocity to the axis of travel.
     assert 0.0 <= m["imu"]["travel_side_ratio"] <= 0.1, m["imu"]
     assert m["imu"]["nonholonomic_updates"] >= 55, m["imu"]
+    # In the dark the optical flow has nothing to follow: it measures nothing rather than noise.
+    assert m["imu"]["flow_updates"] == 0, m["imu"]
     assert m["posed_ratio_after_init"] == 1.0 and m["lost_frames"] == 0
     assert m["maps"] == 1
     t0 = results[0].timestamp  # (the simulator's clock starts at 1000 s)

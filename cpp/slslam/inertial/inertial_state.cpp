@@ -140,21 +140,24 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
   return true;
 }
 
-bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& directions_body,
-                             double sigma_mps, InertialState* state, double max_mahalanobis_sq) {
-  const Eigen::Index m = directions_body.rows();
-  if (!(sigma_mps > 0.0) || m == 0 || m > 3 || !directions_body.allFinite()) return false;
+namespace {
+
+// rows * R^T v = measured within noise (m x m): the extended Kalman update of the error state.
+bool ConditionOnBodyVelocityRows(const Eigen::Matrix<double, Eigen::Dynamic, 3>& rows,
+                                 const Eigen::VectorXd& measured, const Eigen::MatrixXd& noise,
+                                 InertialState* state, double max_mahalanobis_sq) {
   const Eigen::Matrix3d R = state->nav.R_world_body.toRotationMatrix();
   const Eigen::Vector3d u = R.transpose() * state->nav.v_world_body;  // the body's velocity
+  const Eigen::Index m = rows.rows();
   // With R -> R Exp(dtheta) and v -> v + dv: R^T v -> u + [u]x dtheta + R^T dv.
   Eigen::Matrix<double, Eigen::Dynamic, 18> H =
       Eigen::Matrix<double, Eigen::Dynamic, 18>::Zero(m, 18);
-  H.middleCols<3>(0) = directions_body * Skew(u);
-  H.middleCols<3>(6) = directions_body * R.transpose();
-  const Eigen::VectorXd residual = -(directions_body * u);
+  H.middleCols<3>(0) = rows * Skew(u);
+  H.middleCols<3>(6) = rows * R.transpose();
+  const Eigen::VectorXd residual = measured - rows * u;
   const Matrix18d& P = state->covariance;
   const Eigen::MatrixXd PHt = P * H.transpose();
-  const Eigen::MatrixXd S = H * PHt + sigma_mps * sigma_mps * Eigen::MatrixXd::Identity(m, m);
+  const Eigen::MatrixXd S = H * PHt + noise;
   const Eigen::LDLT<Eigen::MatrixXd> S_ldlt(S);
   if (S_ldlt.info() != Eigen::Success || !(S_ldlt.vectorD().minCoeff() > 0.0)) return false;
   if (!(residual.dot(S_ldlt.solve(residual)) <= max_mahalanobis_sq)) return false;
@@ -163,7 +166,7 @@ bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& dir
   if (!dx.allFinite()) return false;
   // Joseph form: stays symmetric positive semi-definite with a gain computed in floating point.
   const Matrix18d I_KH = Matrix18d::Identity() - K * H;
-  Matrix18d updated = I_KH * P * I_KH.transpose() + sigma_mps * sigma_mps * K * K.transpose();
+  Matrix18d updated = I_KH * P * I_KH.transpose() + K * noise * K.transpose();
   state->covariance = 0.5 * (updated + updated.transpose());
   state->nav.R_world_body =
       (state->nav.R_world_body * Eigen::Quaterniond(ExpSO3(dx.segment<3>(0)))).normalized();
@@ -173,6 +176,31 @@ bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& dir
   state->bias.acc += dx.segment<3>(12);
   state->g_world += dx.segment<3>(15);
   return true;
+}
+
+}  // namespace
+
+bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& directions_body,
+                             double sigma_mps, InertialState* state, double max_mahalanobis_sq) {
+  const Eigen::Index m = directions_body.rows();
+  if (!(sigma_mps > 0.0) || m == 0 || m > 3 || !directions_body.allFinite()) return false;
+  return ConditionOnBodyVelocityRows(directions_body, Eigen::VectorXd::Zero(m),
+                                     sigma_mps * sigma_mps * Eigen::MatrixXd::Identity(m, m), state,
+                                     max_mahalanobis_sq);
+}
+
+bool ConditionOnMeasuredBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& rows,
+                                     const Eigen::VectorXd& measured,
+                                     const Eigen::MatrixXd& covariance, InertialState* state,
+                                     double max_mahalanobis_sq) {
+  const Eigen::Index m = rows.rows();
+  if (m == 0 || m > 3 || measured.size() != m || covariance.rows() != m || covariance.cols() != m ||
+      !rows.allFinite() || !measured.allFinite() || !covariance.allFinite()) {
+    return false;
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  return ConditionOnBodyVelocityRows(rows, measured, covariance, state, max_mahalanobis_sq);
 }
 
 void ImuBuffer::Add(int64_t t_ns, const Eigen::Vector3d& gyro_radps,

@@ -84,6 +84,13 @@ bool ConditionOnCameraPose(const Rigid3d& cam_from_world, const Matrix6d& inform
 bool ConditionOnBodyVelocity(const Eigen::Matrix<double, Eigen::Dynamic, 3>& directions_body,
                              double sigma_mps, InertialState* state,
                              double max_mahalanobis_sq = std::numeric_limits<double>::infinity());
+// Conditions the state on measured components of the body's velocity: rows * R_world_body^T * v
+// = measured within `covariance` [m^2/s^2] (m x m, m at most 3; an odometry of the body's
+// motion, the camera's optical flow), the same update and gate as ConditionOnBodyVelocity.
+bool ConditionOnMeasuredBodyVelocity(
+    const Eigen::Matrix<double, Eigen::Dynamic, 3>& rows, const Eigen::VectorXd& measured,
+    const Eigen::MatrixXd& covariance, InertialState* state,
+    double max_mahalanobis_sq = std::numeric_limits<double>::infinity());
 
 // The marginal of the state's rotation and position as a prior on the camera pose: its
 // information in the left tangent (for the pose optimiser).

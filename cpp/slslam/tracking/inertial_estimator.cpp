@@ -39,6 +39,10 @@ constexpr double kTravelMaxFrameIntervalS = 0.2;
 // chi-square value (3 degrees of freedom, 99.9 %) past which the state's velocity disagrees.
 constexpr double kRestWindowS = 0.5;
 constexpr double kRestGateChi2 = 16.27;
+// The flow's velocity taken unless the state disagrees beyond 99.9 % (chi-square, 3 degrees of
+// freedom; 1 for the speed along the axis of travel alone)
+constexpr double kFlowGateChi2 = 16.27;
+constexpr double kFlowGateChi2Along = 10.83;
 
 // An update corrected gravity in the world: its magnitude is known, only the direction is kept.
 void KeepGravityMagnitude(double gravity_mps2, InertialState* state) {
@@ -274,6 +278,50 @@ bool InertialEstimator::Propagate(int64_t t_ns) {
   return true;
 }
 
+bool InertialEstimator::AddCameraMotion(int64_t prev_t_ns, int64_t t_ns,
+                                        const Rigid3d& cur_from_prev,
+                                        const Eigen::Matrix3d& translation_covariance) {
+  if (!initialised_ || options_.flow_min_inliers <= 0 || t_ns != state_t_ns_) return false;
+  const double dt = SecondsBetween(prev_t_ns, t_ns);
+  if (!(dt > 0.0)) return false;
+  // The body's displacement over the interval in its current frame: -t of body_from_body'
+  // (T_bc T_cc' T_cb), the lever arm of the camera turning about the body included.
+  const Rigid3d& body_from_cam = options_.body_from_cam;
+  const Rigid3d body_from_prev_body = body_from_cam * cur_from_prev * body_from_cam.Inverse();
+  const Eigen::Vector3d v_body = -body_from_prev_body.translation / dt;
+  const Eigen::Matrix3d& R_bc = body_from_cam.rotation;
+  const double floor_sq = options_.flow_sigma_mps * options_.flow_sigma_mps;
+  Eigen::Matrix3d covariance = R_bc * translation_covariance * R_bc.transpose() / (dt * dt);
+  covariance = 0.5 * (covariance + covariance.transpose());
+  // each axis at least the floor (the eigenvalues raised to it)
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+  if (eig.info() != Eigen::Success) return false;
+  covariance = eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor_sq).asDiagonal() *
+               eig.eigenvectors().transpose();
+  InertialState next = state_;
+  // A ground vehicle: the flow's speed along its axis of travel only, the directions across it
+  // are the non-holonomic constraint's (the flow's errors across the path correlate with its
+  // rotation and with the headlamp's shading moving over the relief).
+  Eigen::Matrix<double, 2, 3> across;
+  double across_sigma = 0.0;
+  bool taken = false;
+  if (Nonholonomic(&across, &across_sigma)) {
+    const Eigen::Matrix<double, 1, 3> along = across.row(0).cross(across.row(1)).normalized();
+    taken = ConditionOnMeasuredBodyVelocity(
+        along, Eigen::VectorXd::Constant(1, along.dot(v_body)),
+        Eigen::MatrixXd::Constant(1, 1, along.dot(covariance * along.transpose())), &next,
+        kFlowGateChi2Along);
+  } else {
+    taken = ConditionOnMeasuredBodyVelocity(Eigen::Matrix3d::Identity(), v_body, covariance, &next,
+                                            kFlowGateChi2);
+  }
+  if (!taken) return false;
+  KeepGravityMagnitude(options_.gravity_mps2, &next);
+  state_ = next;
+  ++report_.flow_updates;
+  return true;
+}
+
 bool InertialEstimator::Trustworthy() const {
   if (!initialised_) return false;
   // The distance driven is the propagated state's, which a drifting estimate inflates itself
@@ -459,6 +507,8 @@ void InertialOptions::Check() const {
   CheckAboveInRange("tracking.imu.nonholonomic_sigma_mps", nonholonomic_sigma_mps, 0.0, 100.0);
   CheckInRange("tracking.imu.zero_velocity_max_statistic", zero_velocity_max_statistic, 0.0, 1e6);
   CheckAboveInRange("tracking.imu.zero_velocity_sigma_mps", zero_velocity_sigma_mps, 0.0, 100.0);
+  CheckInRange("tracking.imu.flow_min_inliers", flow_min_inliers, 0, 100000);
+  CheckAboveInRange("tracking.imu.flow_sigma_mps", flow_sigma_mps, 0.0, 100.0);
   CheckInRange("tracking.imu.lost_sigma_min_m", lost_sigma_min_m, 0.0, 1e6);
   CheckInRange("tracking.imu.max_gap_s", max_gap_s, 0.0, 1e6);
   CheckInRange("tracking.imu.weak_update_min_inliers", weak_update_min_inliers, 0, 100000);

@@ -86,6 +86,16 @@ struct InertialOptions {
   /// (0: never) [-]
   double zero_velocity_max_statistic = 3.0;
   double zero_velocity_sigma_mps = 0.01;  ///< ... within this standard deviation [m/s]
+  /// A frame the camera does not track is conditioned on the body's velocity measured by optical
+  /// flow from the frame before (tracking/stereo_flow.h) when the flow keeps this many PnP
+  /// inliers (0: never), unless the state disagrees beyond 99.9 %: descriptor matching finds
+  /// next to nothing on the faint relief of a smooth lining where tracked corners still follow
+  /// its shading, and that velocity holds the position along the path, which the axis of travel
+  /// and the stops do not [-]
+  int flow_min_inliers = 30;
+  /// ... within at least this standard deviation per axis [m/s] (the flow's own covariance, from
+  /// its reprojection residuals, when larger; its depths from stereo add error it does not see)
+  double flow_sigma_mps = 0.05;
   /// A frame the camera does not track (fewer than the tracker's min_inliers) still corrects the
   /// state with its pose optimisation when it keeps this many inliers (0: never). Off: on smooth
   /// shotcrete the few matches are sensor noise and pull the state away from the truth faster
@@ -143,6 +153,12 @@ class InertialEstimator {
   // The frame at t_ns keeps the propagated state (the camera contributed nothing). False when it
   // cannot be propagated (not initialised, samples missing): the caller then forgets the state.
   bool Propagate(int64_t t_ns);
+  // The frame at t_ns (after Propagate or AddVisualPose at t_ns) with the camera's motion from
+  // its frame at prev_t_ns measured apart from the map (optical flow): `cur_from_prev` of the
+  // camera and its translation's covariance, taken as the body's velocity (flow_sigma_mps,
+  // the 99.9 % gate). False, state unchanged, when not taken.
+  bool AddCameraMotion(int64_t prev_t_ns, int64_t t_ns, const Rigid3d& cur_from_prev,
+                       const Eigen::Matrix3d& translation_covariance);
   // Whether the propagated state is still worth a pose (the lost rule above).
   bool Trustworthy() const;
 
@@ -179,6 +195,8 @@ class InertialEstimator {
     int nonholonomic_updates = 0;
     /// Frames without vision conditioned on zero velocity (the IMU at rest)
     int zero_velocity_updates = 0;
+    /// Frames without vision conditioned on the velocity the optical flow measured
+    int flow_updates = 0;
     /// RMS of the velocity across the axis of travel over speed, tracked driving so far (-1:
     /// not measured yet, less than 2 s of it)
     double travel_side_ratio = -1.0;

@@ -9,6 +9,7 @@
 #include "slslam/core/check.h"
 #include "slslam/core/time.h"
 #include "slslam/tracking/keyframe_decision.h"
+#include "slslam/tracking/stereo_flow.h"
 #include "slslam/tracking/tracker_internal.h"
 
 namespace slslam {
@@ -264,12 +265,38 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
     inertial_->Reset();
     return false;
   }
+  InertialFlow(frame);
   if (!inertial_->Trustworthy()) {
     inertial_->Reset();
     return false;
   }
   *cam_from_world = inertial_->cam_from_world();
   return true;
+}
+
+void Tracker::KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, const cv::Mat& right) {
+  if (!options_.use_imu || options_.imu.flow_min_inliers <= 0 || left.empty() || right.empty()) {
+    flow_prev_t_ns_.reset();
+    return;
+  }
+  // (copies: the caller's buffers may be reused for the next frame)
+  left.copyTo(flow_prev_left_);
+  right.copyTo(flow_prev_right_);
+  flow_prev_t_ns_ = frame.t_ns;
+}
+
+void Tracker::InertialFlow(const StereoFrame& frame) {
+  if (options_.imu.flow_min_inliers <= 0 || !flow_prev_t_ns_ || current_left_ == nullptr ||
+      !(*flow_prev_t_ns_ < frame.t_ns)) {
+    return;
+  }
+  const std::optional<StereoFlowMotion> motion =
+      MeasureStereoFlow(flow_prev_left_, flow_prev_right_, *current_left_, options_.rig,
+                        options_.imu.flow_min_inliers);
+  if (motion) {
+    inertial_->AddCameraMotion(*flow_prev_t_ns_, frame.t_ns, motion->cur_from_prev,
+                               motion->translation_covariance);
+  }
 }
 
 void Tracker::AttachImu(int64_t t_ns, bool camera_tracked, bool same_world, Map* map,
@@ -382,6 +409,7 @@ Tracker::InertialReport Tracker::inertial_report() const {
   r.rejected_refinements = e.rejected_refinements;
   r.nonholonomic_updates = e.nonholonomic_updates;
   r.zero_velocity_updates = e.zero_velocity_updates;
+  r.flow_updates = e.flow_updates;
   r.travel_side_ratio = e.travel_side_ratio;
   r.last_failure = e.last_failure;
   r.gyro_bias = inertial_->state().bias.gyro;
@@ -666,6 +694,7 @@ TrackResult Tracker::Track(std::shared_ptr<const StereoFrame> frame,
   TrackResult result = TrackFrame(frame);
   if (result.needs_keypoints) return result;  // (handed back: it comes again, counted then)
   last_state_ = result.state;
+  KeepFlowImages(*frame, left_image, right_image);
   FillInertial(&result);
   // (the frame as it ended up: its left lines completed on demand or not)
   if (options_.use_lines && !frame->left_lines_pending) ++stats_.line_frames;

@@ -418,6 +418,7 @@ class Tracker {
     int rejected_refinements = 0;     ///< refinements not taken (InertialEstimator::Report)
     int nonholonomic_updates = 0;     ///< frames held by the non-holonomic constraint
     int zero_velocity_updates = 0;    ///< frames held at zero velocity (the IMU at rest)
+    int flow_updates = 0;             ///< frames given the optical flow's velocity
     double travel_side_ratio = -1.0;  ///< InertialEstimator::Report's (-1: not measured)
     std::string last_failure;
     Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  ///< [rad/s]
@@ -651,6 +652,10 @@ class Tracker {
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
   // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone
   // gave it.
+  // The camera's motion from the frame before by optical flow into the carried state
+  // (InertialOptions::flow_min_inliers), and the images it needs kept for the next frame.
+  void InertialFlow(const StereoFrame& frame);
+  void KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, const cv::Mat& right);
   bool InertialCarry(const StereoFrame& frame, const WeakVision& weak, Rigid3d* cam_from_world,
                      bool* by_lines);
   void FillInertial(TrackResult* result) const;
@@ -664,9 +669,11 @@ class Tracker {
   // observations in the local BA).
   std::shared_ptr<const StereoFrame> WithRefinedKeypoints(std::shared_ptr<const StereoFrame> frame,
                                                           const LocalTracking& tracking) const;
-  const cv::Mat* current_left_ = nullptr;   ///< the image handed to Track, during the call
-                                            ///< (tracking's thread only)
-  const cv::Mat* current_right_ = nullptr;  ///< (as current_left_)
+  const cv::Mat* current_left_ = nullptr;     ///< the image handed to Track, during the call
+                                              ///< (tracking's thread only)
+  const cv::Mat* current_right_ = nullptr;    ///< (as current_left_)
+  cv::Mat flow_prev_left_, flow_prev_right_;  ///< the previous frame's images (InertialFlow)
+  std::optional<int64_t> flow_prev_t_ns_;     ///< ... and its time; none: not kept
   int projected_run_ = 0;  ///< frames tracked on projected keypoints since the last detected one
   // Whether a frame given without keypoints is tracked on projected ones (projected_max_frames):
   // tracking strong, fewer than projected_max_frames in a row, not the frame after a keyframe.

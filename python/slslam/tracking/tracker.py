@@ -301,7 +301,8 @@ class MapStats:
     #: the IMU: has_imu, initialised, first_pose_t_ns and first_init_t_ns (camera time [ns], None:
     #: never), initialisations, refinements, rejected_refinements, last_failure,
     #: nonholonomic_updates (blind frames held to the axis of travel), zero_velocity_updates
-    #: (blind frames held at rest), travel_side_ratio (RMS
+    #: (blind frames held at rest), flow_updates (blind frames given the optical flow's
+    #: velocity), travel_side_ratio (RMS
     #: side speed over speed while tracked; -1: not measured), gyro_bias_radps, acc_bias_mps2,
     #: g_world_mps2
     imu: dict = field(default_factory=dict)

@@ -213,6 +213,41 @@ TEST(InertialState, ABodyVelocityConstraintMovesWhatIsUncertain) {
   EXPECT_FALSE(ConditionOnBodyVelocity(across, 0.0, &heading_only));
 }
 
+// A measured body velocity: with the velocity uncertain the state takes it (the body turned, so
+// the measurement is in the body frame), an outlier beyond the gate changes nothing, and a
+// covariance that is not positive definite is refused.
+TEST(InertialState, AMeasuredBodyVelocityIsTakenInTheBodyFrameWithinItsGate) {
+  InertialState state;
+  state.nav.R_world_body =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()));
+  state.nav.v_world_body = {0.0, 0.9, 0.0};
+  state.g_world = test::TestGravity();
+  state.covariance = 1e-12 * Matrix18d::Identity();
+  state.covariance.block<3, 3>(6, 6) = 0.01 * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d covariance = 1e-6 * Eigen::Matrix3d::Identity();
+  InertialState taken = state;
+  const Eigen::Matrix3d all = Eigen::Matrix3d::Identity();
+  ASSERT_TRUE(ConditionOnMeasuredBodyVelocity(all, Eigen::Vector3d(1.0, 0.0, 0.0), covariance,
+                                              &taken, 16.27));
+  // body x is world y after the quarter turn
+  EXPECT_LT((taken.nav.v_world_body - Eigen::Vector3d(0.0, 1.0, 0.0)).norm(), 1e-3)
+      << taken.nav.v_world_body.transpose();
+  EXPECT_LT(taken.covariance(7, 7), 2e-6);
+  InertialState refused = state;
+  EXPECT_FALSE(ConditionOnMeasuredBodyVelocity(all, Eigen::Vector3d(3.0, 0.0, 0.0), covariance,
+                                               &refused, 16.27));
+  EXPECT_EQ(refused.nav.v_world_body, state.nav.v_world_body);
+  EXPECT_FALSE(ConditionOnMeasuredBodyVelocity(all, Eigen::Vector3d(1.0, 0.0, 0.0),
+                                               Eigen::Matrix3d::Zero(), &refused));
+  // One component: along body y (world -x) measured 0.2 m/s, the others left as they were.
+  InertialState one = state;
+  Eigen::Matrix<double, 1, 3> along_y(0.0, 1.0, 0.0);
+  ASSERT_TRUE(ConditionOnMeasuredBodyVelocity(along_y, Eigen::VectorXd::Constant(1, 0.2),
+                                              Eigen::MatrixXd::Constant(1, 1, 1e-6), &one));
+  EXPECT_NEAR(one.nav.v_world_body.x(), -0.2, 1e-3);
+  EXPECT_NEAR(one.nav.v_world_body.y(), 0.9, 1e-9);
+}
+
 // The rest statistic: about 1 for samples of white noise at the stated densities about gravity
 // (with a bias that is given), far above in motion; nullopt with too few samples.
 TEST(ImuBuffer, TheRestStatisticIsAboutOneAtRestAndLargeInMotion) {

@@ -208,6 +208,59 @@ TEST(InertialEstimator, AGroundVehicleHoldsItsVelocityToTheAxisOfTravelWithoutVi
   EXPECT_LT(held, 0.3 * free) << "held " << held << " m across, IMU alone " << free << " m";
 }
 
+// The same glide of 15 s without vision, given the camera's motion between consecutive frames
+// (from the truth, 1 mm noise per axis, every 20th frame an outlier 0.5 m ahead): the velocity it
+// measures holds the position along the path that the axis of travel leaves to the IMU, and the
+// outliers are refused.
+TEST(InertialEstimator, TheCameraMotionOfFramesWithoutAPoseHoldsThePositionAlongThePath) {
+  GroundMotion motion;
+  ImuBias bias;
+  bias.acc = {0.05, -0.05, 0.05};
+  const auto run = [&](bool flow, InertialEstimator::Report* report) {
+    InertialOptions options;
+    options.body_from_cam = kBodyFromCam;
+    options.flow_min_inliers = flow ? 30 : 0;
+    InertialEstimator estimator(options);
+    FeedImu(motion, 25.5, bias, &estimator);
+    Matrix6d information = 1e6 * Matrix6d::Identity();
+    std::mt19937 rng(5);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    for (int k = 0; k <= 200; ++k) {
+      const double t = 0.05 * k;
+      Vector6d noise;
+      for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
+      estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
+                              /*with_prior=*/false);
+    }
+    EXPECT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+    const Eigen::Matrix3d covariance = 1e-6 * Eigen::Matrix3d::Identity();
+    for (int k = 201; k <= 500; ++k) {
+      const int64_t t_ns = NsFromSeconds(0.05 * k);
+      EXPECT_TRUE(estimator.Propagate(t_ns));
+      Rigid3d cur_from_prev =
+          CameraPose(motion, 0.05 * k) * CameraPose(motion, 0.05 * (k - 1)).Inverse();
+      for (int i = 0; i < 3; ++i) cur_from_prev.translation(i) += 1e-3 * unit(rng);
+      if (k % 20 == 0) cur_from_prev.translation.z() += 0.5;  // (the camera looks ahead)
+      const bool taken =
+          estimator.AddCameraMotion(NsFromSeconds(0.05 * (k - 1)), t_ns, cur_from_prev, covariance);
+      EXPECT_EQ(taken, flow && k % 20 != 0) << "frame " << k;
+    }
+    *report = estimator.report();
+    const Eigen::Vector3d e = estimator.state().nav.p_world_body - motion.Position(25.0);
+    const Eigen::Vector3d along = motion.Velocity(25.0).normalized();
+    return std::abs(e.dot(along));
+  };
+  InertialEstimator::Report flow_report, imu_report;
+  const double with_flow = run(true, &flow_report);
+  const double imu_only = run(false, &imu_report);
+  EXPECT_EQ(flow_report.flow_updates, 300 - 15);
+  EXPECT_EQ(imu_report.flow_updates, 0);
+  // A velocity within 0.05 m/s (flow_sigma_mps) a frame, 300 frames: its random walk's position
+  // sigma 0.05 * 0.05 * sqrt(300) = 0.043 m, the IMU's own the accelerometer bias left
+  EXPECT_LT(with_flow, 0.1) << "IMU alone " << imu_only << " m along the path";
+  EXPECT_LT(with_flow, 0.5 * imu_only) << "with the flow " << with_flow << " m";
+}
+
 // Initialised on exact poses (no bias), then 8 s of poses from a map that turns slowly against the
 // truth (2e-3 rad/s, what tracking through weak texture does): with the default
 // gyro_bias_sigma_radps the bias estimate stays near the truth, so the state's rotation is the

@@ -404,6 +404,8 @@ TEST(OptionsCheck, TrackingOptions) {
        FIELD(imu.zero_velocity_max_statistic, "tracking.imu.zero_velocity_max_statistic", 0, 1e6,
              "[]"),
        FIELD(imu.zero_velocity_sigma_mps, "tracking.imu.zero_velocity_sigma_mps", 0, 100, "(]"),
+       FIELD(imu.flow_min_inliers, "tracking.imu.flow_min_inliers", 0, 100000, "[]"),
+       FIELD(imu.flow_sigma_mps, "tracking.imu.flow_sigma_mps", 0, 100, "(]"),
        FIELD(imu.weak_update_min_inliers, "tracking.imu.weak_update_min_inliers", 0, 100000, "[]"),
        FIELD(imu.weak_update_min_lines, "tracking.imu.weak_update_min_lines", 0, 100000, "[]"),
        FIELD(imu.keyframe_min_stereo_lines, "tracking.imu.keyframe_min_stereo_lines", 0, 100000,
