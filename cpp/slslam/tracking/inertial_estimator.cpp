@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "slslam/core/check.h"
+#include "slslam/geometry/rotation.h"
 
 namespace slslam {
 
@@ -39,9 +40,8 @@ constexpr double kTravelMaxFrameIntervalS = 0.2;
 // chi-square value (3 degrees of freedom, 99.9 %) past which the state's velocity disagrees.
 constexpr double kRestWindowS = 0.5;
 constexpr double kRestGateChi2 = 16.27;
-// The flow's velocity taken unless the state disagrees beyond 99.9 % (chi-square, 3 degrees of
-// freedom; 1 for the speed along the axis of travel alone)
-constexpr double kFlowGateChi2 = 16.27;
+// The flow's velocity taken unless the state disagrees beyond 99.9 % (as kRestGateChi2; 1 degree
+// of freedom for the speed along the axis of travel alone)
 constexpr double kFlowGateChi2Along = 10.83;
 
 // An update corrected gravity in the world: its magnitude is known, only the direction is kept.
@@ -280,19 +280,27 @@ bool InertialEstimator::Propagate(int64_t t_ns) {
 
 bool InertialEstimator::AddCameraMotion(int64_t prev_t_ns, int64_t t_ns,
                                         const Rigid3d& cur_from_prev,
-                                        const Eigen::Matrix3d& translation_covariance) {
+                                        const Eigen::Matrix<double, 6, 6>& covariance_6) {
   if (!initialised_ || options_.flow_min_inliers <= 0 || t_ns != state_t_ns_) return false;
   const double dt = SecondsBetween(prev_t_ns, t_ns);
-  if (!(dt > 0.0)) return false;
-  // The body's displacement over the interval in its current frame: -t of body_from_body'
-  // (T_bc T_cc' T_cb), the lever arm of the camera turning about the body included.
+  if (!(dt > 0.0) || dt > kTravelMaxFrameIntervalS) return false;
+  // The body's displacement over the interval in its current frame: minus the translation of
+  // cur_body_from_prev_body = body_from_cam * cur_from_prev * cam_from_body, the lever arm of
+  // the camera turning about the body included. That translation is
+  // R_body_cam (R_cur_prev t_cam_body + t_cur_prev) + t_body_cam: its Jacobian is
+  // -R_body_cam [R_cur_prev t_cam_body]x in the rotation (Exp(dtheta) R_cur_prev) and
+  // R_body_cam in the translation.
   const Rigid3d& body_from_cam = options_.body_from_cam;
-  const Rigid3d body_from_prev_body = body_from_cam * cur_from_prev * body_from_cam.Inverse();
-  const Eigen::Vector3d v_body = -body_from_prev_body.translation / dt;
-  const Eigen::Matrix3d& R_bc = body_from_cam.rotation;
-  const double floor_sq = options_.flow_sigma_mps * options_.flow_sigma_mps;
-  Eigen::Matrix3d covariance = R_bc * translation_covariance * R_bc.transpose() / (dt * dt);
+  const Rigid3d cam_from_body = body_from_cam.Inverse();
+  const Rigid3d cur_body_from_prev_body = body_from_cam * cur_from_prev * cam_from_body;
+  const Eigen::Vector3d v_body = -cur_body_from_prev_body.translation / dt;
+  Eigen::Matrix<double, 3, 6> J;
+  J.leftCols<3>() =
+      -body_from_cam.rotation * Skew(cur_from_prev.rotation * cam_from_body.translation);
+  J.rightCols<3>() = body_from_cam.rotation;
+  Eigen::Matrix3d covariance = J * covariance_6 * J.transpose() / (dt * dt);
   covariance = 0.5 * (covariance + covariance.transpose());
+  const double floor_sq = options_.flow_sigma_mps * options_.flow_sigma_mps;
   // each axis at least the floor (the eigenvalues raised to it)
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
   if (eig.info() != Eigen::Success) return false;
@@ -313,7 +321,7 @@ bool InertialEstimator::AddCameraMotion(int64_t prev_t_ns, int64_t t_ns,
         kFlowGateChi2Along);
   } else {
     taken = ConditionOnMeasuredBodyVelocity(Eigen::Matrix3d::Identity(), v_body, covariance, &next,
-                                            kFlowGateChi2);
+                                            kRestGateChi2);
   }
   if (!taken) return false;
   KeepGravityMagnitude(options_.gravity_mps2, &next);

@@ -155,10 +155,11 @@ class InertialEstimator {
   bool Propagate(int64_t t_ns);
   // The frame at t_ns (after Propagate or AddVisualPose at t_ns) with the camera's motion from
   // its frame at prev_t_ns measured apart from the map (optical flow): `cur_from_prev` of the
-  // camera and its translation's covariance, taken as the body's velocity (flow_sigma_mps,
-  // the 99.9 % gate). False, state unchanged, when not taken.
+  // camera and its covariance (rotation R -> Exp(dtheta) R, then translation), taken as the
+  // body's velocity (flow_sigma_mps, the 99.9 % gate); frames further apart than 0.2 s are not
+  // (the measurement is the interval's mean velocity). False, state unchanged, when not taken.
   bool AddCameraMotion(int64_t prev_t_ns, int64_t t_ns, const Rigid3d& cur_from_prev,
-                       const Eigen::Matrix3d& translation_covariance);
+                       const Eigen::Matrix<double, 6, 6>& covariance);
   // Whether the propagated state is still worth a pose (the lost rule above).
   bool Trustworthy() const;
 

@@ -15,64 +15,57 @@ namespace {
 
 constexpr int kMaxCorners = 300;         // corners tracked per frame [-]
 constexpr double kCornerQuality = 1e-3;  // of the strongest corner's response [-]
-// Corners are detected on the image at half size (a quarter of the cost): smooth relief has its
-// corners at that scale anyway, and Lucas-Kanade places them on the full image.
+// Corners are detected on the pyramid's half-size level (a quarter of the cost) over large
+// blocks: smooth relief has its corners at that scale, and Lucas-Kanade places them on the full
+// image.
 constexpr double kCornerSpacingPx = 4.0;     // at half size [px]
 constexpr int kCornerBlockPx = 15;           // at half size [px]
 constexpr int kFlowWindowPx = 21;            // Lucas-Kanade window [px]
 constexpr int kFlowLevels = 3;               // pyramid levels above the image [-]
+constexpr int kFlowIterations = 10;          // on smooth shading more rarely converge further
 constexpr float kMaxBackwardErrorPx = 0.5f;  // forward then backward track must return [px]
 constexpr float kMaxRowOffsetPx = 1.0f;      // rectified stereo: same row [px]
-// Depths beyond this many baselines are not used: their stereo depth's error moves the motion
-// more than their flow constrains it (the lit end of a flat lining 10-20 m ahead: the forward
-// motion came out 10 % short with them, 2 % without) [-]
+// Depths beyond this many baselines are not used: their stereo depth's error biases the motion
+// more than their flow constrains it (the lit end of a flat lining far ahead shortens the
+// forward motion) [-]
 constexpr double kMaxDepthBaselines = 60.0;
-constexpr double kDisparitySigmaPx = 0.2;  // a Lucas-Kanade disparity's error [px]
-constexpr float kRansacReprojectionPx = 1.0f;
+constexpr double kDisparitySigmaPx = 0.2;      // a Lucas-Kanade disparity's error [px]
+constexpr float kRansacReprojectionPx = 1.0f;  // an inlier's reprojection error at most [px]
 constexpr int kRansacIterations = 100;
+constexpr double kRansacConfidence = 0.99;
 constexpr double kMinReprojectionSigmaPx = 0.3;  // the covariance's floor on the residual [px]
-constexpr double kMeanGrey = 80.0;  // each image scaled to this mean: a flicker is a gain [-]
-
-cv::Mat Normalised(const cv::Mat& grey) {
-  const double mean = cv::mean(grey)[0];
-  cv::Mat out;
-  grey.convertTo(out, CV_8U, mean > 1.0 ? kMeanGrey / mean : 1.0);
-  return out;
-}
+constexpr double kMinDepthM = 1e-6;              // a point must stay in front of the camera [m]
 
 const cv::Size kWindow(kFlowWindowPx, kFlowWindowPx);
-// (10 iterations: on smooth shading the rest rarely converge further)
-const cv::TermCriteria kStop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01);
+const cv::TermCriteria kStop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, kFlowIterations,
+                             0.01);
 
-std::vector<cv::Mat> Pyramid(const cv::Mat& image) {
+// The image scaled to `mean` grey (a flickering lamp is a gain), as a Lucas-Kanade pyramid.
+std::vector<cv::Mat> Pyramid(const cv::Mat& grey, double mean) {
+  const double own = cv::mean(grey)[0];
+  cv::Mat scaled;
+  grey.convertTo(scaled, CV_8U, own > 1.0 ? mean / own : 1.0);
   std::vector<cv::Mat> pyramid;
-  cv::buildOpticalFlowPyramid(image, pyramid, kWindow, kFlowLevels);
+  cv::buildOpticalFlowPyramid(scaled, pyramid, kWindow, kFlowLevels);
   return pyramid;
 }
 
-}  // namespace
+struct Tracks {
+  std::vector<cv::Point3f> points_prev;  ///< from stereo, in the previous left camera [m]
+  std::vector<cv::Point2f> observed;     ///< in the current left image [px]
+};
 
-std::optional<StereoFlowMotion> MeasureStereoFlow(const cv::Mat& left_prev,
-                                                  const cv::Mat& right_prev,
-                                                  const cv::Mat& left_cur, const StereoRig& rig,
-                                                  int min_inliers) {
-  const auto usable = [&](const cv::Mat& m) {
-    return !m.empty() && m.type() == CV_8UC1 && m.size() == left_prev.size();
-  };
-  if (!usable(left_prev) || !usable(right_prev) || !usable(left_cur)) return std::nullopt;
-  const std::vector<cv::Mat> lp = Pyramid(Normalised(left_prev));
-  const std::vector<cv::Mat> rp = Pyramid(Normalised(right_prev));
-  const std::vector<cv::Mat> lc = Pyramid(Normalised(left_cur));
-  cv::Mat half;
-  cv::pyrDown(lp[0], half);
+// Corners of the previous left pyramid into its right image (the same row, a depth within
+// range), those into the current image and back.
+Tracks TrackCorners(const std::vector<cv::Mat>& lp, const std::vector<cv::Mat>& rp,
+                    const std::vector<cv::Mat>& lc, const StereoRig& rig) {
+  Tracks out;
   std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(half, corners, kMaxCorners, kCornerQuality, kCornerSpacingPx,
+  // (index 2: the half-size image; 1 holds the full image's derivatives)
+  cv::goodFeaturesToTrack(lp[2], corners, kMaxCorners, kCornerQuality, kCornerSpacingPx,
                           cv::noArray(), kCornerBlockPx);
-  if (static_cast<int>(corners.size()) < std::max(min_inliers, 6)) return std::nullopt;
-  // (a half-size pixel's centre at (2 u + 0.5, 2 v + 0.5) of the full image)
-  for (cv::Point2f& c : corners) c = c * 2.0f + cv::Point2f(0.5f, 0.5f);
-  // Into the right image (the same rectified row, a depth within range); those into the current
-  // image and back.
+  if (corners.empty()) return out;
+  for (cv::Point2f& c : corners) c *= 2.0f;  // (the pyramid's half-size pixel u is at 2 u)
   const PinholeCamera& cam = rig.camera;
   std::vector<cv::Point2f> in_right;
   std::vector<unsigned char> ok;
@@ -88,65 +81,54 @@ std::optional<StereoFlowMotion> MeasureStereoFlow(const cv::Mat& left_prev,
       disparities.push_back(disparity);
     }
   }
-  if (static_cast<int>(stereo.size()) < std::max(min_inliers, 6)) return std::nullopt;
+  if (stereo.empty()) return out;
   std::vector<cv::Point2f> in_cur, back;
   std::vector<unsigned char> back_ok;
   cv::calcOpticalFlowPyrLK(lp, lc, stereo, in_cur, ok, error, kWindow, kFlowLevels, kStop);
   cv::calcOpticalFlowPyrLK(lc, lp, in_cur, back, back_ok, error, kWindow, kFlowLevels, kStop);
-  std::vector<cv::Point3f> points;
-  std::vector<cv::Point2f> observed;
   for (size_t i = 0; i < stereo.size(); ++i) {
     const cv::Point2f d = back[i] - stereo[i];
     if (!ok[i] || !back_ok[i] || !(d.dot(d) < kMaxBackwardErrorPx * kMaxBackwardErrorPx)) continue;
     const double z = cam.fx * rig.baseline_m / disparities[i];
-    points.emplace_back(static_cast<float>((stereo[i].x - cam.cx) * z / cam.fx),
-                        static_cast<float>((stereo[i].y - cam.cy) * z / cam.fy),
-                        static_cast<float>(z));
-    observed.push_back(in_cur[i]);
+    out.points_prev.emplace_back(static_cast<float>((stereo[i].x - cam.cx) * z / cam.fx),
+                                 static_cast<float>((stereo[i].y - cam.cy) * z / cam.fy),
+                                 static_cast<float>(z));
+    out.observed.push_back(in_cur[i]);
   }
-  if (static_cast<int>(points.size()) < std::max(min_inliers, 6)) return std::nullopt;
-  cv::Mat K;
-  cv::eigen2cv(cam.K(), K);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  if (!cv::solvePnPRansac(points, observed, K, cv::noArray(), rvec, tvec, false, kRansacIterations,
-                          kRansacReprojectionPx, 0.99, inliers, cv::SOLVEPNP_ITERATIVE) ||
-      static_cast<int>(inliers.size()) < std::max(min_inliers, 6)) {
-    return std::nullopt;
-  }
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
-  StereoFlowMotion out;
-  cv::cv2eigen(R_cv, out.cur_from_prev.rotation);
-  cv::cv2eigen(tvec, out.cur_from_prev.translation);
-  if (!out.cur_from_prev.rotation.allFinite() || !out.cur_from_prev.translation.allFinite()) {
-    return std::nullopt;
-  }
-  // Gauss-Newton information of the pose on the inliers (x_cur = Exp(dtheta) R x + t + dt),
-  // each point weighted by its reprojection's variance: the residuals' (at least
-  // kMinReprojectionSigmaPx) and its stereo depth's error moved into the current image.
+  return out;
+}
+
+// The covariance of cur_from_prev (left rotation perturbation, translation) from the inliers'
+// Gauss-Newton information, each weighted by its reprojection's variance: the residuals' (at
+// least kMinReprojectionSigmaPx) and its stereo depth's error moved into the current image.
+// False when a point is behind the camera or the information is singular.
+bool PoseCovariance(const Tracks& tracks, const std::vector<int>& inliers, const StereoRig& rig,
+                    StereoFlowMotion* motion) {
+  const PinholeCamera& cam = rig.camera;
+  const Rigid3d& T = motion->cur_from_prev;
   double squared_sum = 0.0;
   for (const int i : inliers) {
-    const Eigen::Vector3d p(points[i].x, points[i].y, points[i].z);
-    const Eigen::Vector3d x = out.cur_from_prev.rotation * p + out.cur_from_prev.translation;
-    if (!(x.z() > 1e-6)) return std::nullopt;
-    const Eigen::Vector2d r(cam.fx * x.x() / x.z() + cam.cx - observed[i].x,
-                            cam.fy * x.y() / x.z() + cam.cy - observed[i].y);
-    squared_sum += r.squaredNorm();
+    const cv::Point3f& q = tracks.points_prev[i];
+    const Eigen::Vector3d x = T * Eigen::Vector3d(q.x, q.y, q.z);
+    if (!(x.z() > kMinDepthM)) return false;
+    squared_sum += Eigen::Vector2d(cam.fx * x.x() / x.z() + cam.cx - tracks.observed[i].x,
+                                   cam.fy * x.y() / x.z() + cam.cy - tracks.observed[i].y)
+                       .squaredNorm();
   }
-  const double pixel_sq = std::max(kMinReprojectionSigmaPx * kMinReprojectionSigmaPx,
-                                   squared_sum / (2.0 * static_cast<double>(inliers.size())));
+  const int dof = std::max(1, 2 * static_cast<int>(inliers.size()) - 6);
+  const double pixel_sq =
+      std::max(kMinReprojectionSigmaPx * kMinReprojectionSigmaPx, squared_sum / dof);
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   for (const int i : inliers) {
-    const Eigen::Vector3d p(points[i].x, points[i].y, points[i].z);
-    const Eigen::Vector3d rotated = out.cur_from_prev.rotation * p;
-    const Eigen::Vector3d x = rotated + out.cur_from_prev.translation;
-    if (!(x.z() > 1e-6)) return std::nullopt;
+    const cv::Point3f& q = tracks.points_prev[i];
+    const Eigen::Vector3d p(q.x, q.y, q.z);
+    const Eigen::Vector3d rotated = T.rotation * p;
+    const Eigen::Vector3d x = rotated + T.translation;
     const double iz = 1.0 / x.z();
     Eigen::Matrix<double, 2, 3> d_proj;
     d_proj << cam.fx * iz, 0.0, -cam.fx * x.x() * iz * iz, 0.0, cam.fy * iz,
         -cam.fy * x.y() * iz * iz;
-    Eigen::Matrix3d minus_skew;
+    Eigen::Matrix3d minus_skew;  // d(Exp(dtheta) R p) / d dtheta = -[R p]x
     minus_skew << 0.0, rotated.z(), -rotated.y(), -rotated.z(), 0.0, rotated.x(), rotated.y(),
         -rotated.x(), 0.0;
     Eigen::Matrix<double, 2, 6> J;
@@ -154,15 +136,52 @@ std::optional<StereoFlowMotion> MeasureStereoFlow(const cv::Mat& left_prev,
     J.rightCols<3>() = d_proj;
     // depth z = fx b / disparity: sigma_z = z^2 / (fx b) sigma_disparity, along the point's ray
     const double depth_sigma = p.z() * p.z() / (cam.fx * rig.baseline_m) * kDisparitySigmaPx;
-    const Eigen::Vector2d moved = d_proj * (out.cur_from_prev.rotation * (p / p.z())) * depth_sigma;
+    const Eigen::Vector2d moved = d_proj * (T.rotation * (p / p.z())) * depth_sigma;
     information += J.transpose() * J / (pixel_sq + moved.squaredNorm());
   }
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(information);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
-  const Eigen::Matrix<double, 6, 6> covariance =
-      ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
-  out.translation_covariance = covariance.bottomRightCorner<3, 3>();
-  if (!out.translation_covariance.allFinite()) return std::nullopt;
+  // (isPositive accepts a singular matrix, whose solve zeroes the unobserved directions)
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  motion->covariance = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  motion->covariance = 0.5 * (motion->covariance + motion->covariance.transpose());
+  return motion->covariance.allFinite();
+}
+
+}  // namespace
+
+std::optional<StereoFlowMotion> MeasureStereoFlow(const cv::Mat& left_prev,
+                                                  const cv::Mat& right_prev,
+                                                  const cv::Mat& left_cur, const StereoRig& rig,
+                                                  int min_inliers) {
+  const auto usable = [&](const cv::Mat& m) {
+    return !m.empty() && m.type() == CV_8UC1 && m.size() == left_prev.size();
+  };
+  if (!usable(left_prev) || !usable(right_prev) || !usable(left_cur)) return std::nullopt;
+  // The other two at the previous left image's gain (none saturates more than it does).
+  const double mean = cv::mean(left_prev)[0];
+  const Tracks tracks = TrackCorners(Pyramid(left_prev, mean), Pyramid(right_prev, mean),
+                                     Pyramid(left_cur, mean), rig);
+  const int needed = std::max(min_inliers, 6);
+  if (static_cast<int>(tracks.points_prev.size()) < needed) return std::nullopt;
+  cv::Mat K;
+  cv::eigen2cv(rig.camera.K(), K);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  if (!cv::solvePnPRansac(tracks.points_prev, tracks.observed, K, cv::noArray(), rvec, tvec, false,
+                          kRansacIterations, kRansacReprojectionPx, kRansacConfidence, inliers,
+                          cv::SOLVEPNP_ITERATIVE) ||
+      static_cast<int>(inliers.size()) < needed) {
+    return std::nullopt;
+  }
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  StereoFlowMotion out;
+  cv::cv2eigen(R_cv, out.cur_from_prev.rotation);
+  cv::cv2eigen(tvec, out.cur_from_prev.translation);
+  if (!out.cur_from_prev.rotation.allFinite() || !out.cur_from_prev.translation.allFinite() ||
+      !PoseCovariance(tracks, inliers, rig, &out)) {
+    return std::nullopt;
+  }
   out.inliers = static_cast<int>(inliers.size());
   return out;
 }

@@ -18,9 +18,10 @@
 namespace slslam {
 
 struct StereoFlowMotion {
-  Rigid3d cur_from_prev;                   ///< the current camera from the previous one
-  Eigen::Matrix3d translation_covariance;  ///< of cur_from_prev.translation [m^2]
-  int inliers = 0;                         ///< PnP inliers [-]
+  Rigid3d cur_from_prev;  ///< the current camera from the previous one
+  /// of cur_from_prev: rotation (R -> Exp(dtheta) R) [rad^2], then translation [m^2]
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  int inliers = 0;  ///< PnP inliers [-]
 };
 
 // The motion of the left camera from (left_prev, right_prev) to left_cur (8-bit grey, rectified,

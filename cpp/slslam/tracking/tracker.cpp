@@ -295,7 +295,7 @@ void Tracker::InertialFlow(const StereoFrame& frame) {
                         options_.imu.flow_min_inliers);
   if (motion) {
     inertial_->AddCameraMotion(*flow_prev_t_ns_, frame.t_ns, motion->cur_from_prev,
-                               motion->translation_covariance);
+                               motion->covariance);
   }
 }
 

@@ -652,12 +652,12 @@ class Tracker {
   // A frame the camera did not track: true (and the frame's pose) when the inertial state
   // carries it, after the weak visual correction `weak` may give; *by_lines when its lines alone
   // gave it.
+  bool InertialCarry(const StereoFrame& frame, const WeakVision& weak, Rigid3d* cam_from_world,
+                     bool* by_lines);
   // The camera's motion from the frame before by optical flow into the carried state
   // (InertialOptions::flow_min_inliers), and the images it needs kept for the next frame.
   void InertialFlow(const StereoFrame& frame);
   void KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, const cv::Mat& right);
-  bool InertialCarry(const StereoFrame& frame, const WeakVision& weak, Rigid3d* cam_from_world,
-                     bool* by_lines);
   void FillInertial(TrackResult* result) const;
   // Aligns matched keypoints to their map points' patches in `image` (track_refine_window_px;
   // null or empty: none): fills tracking->refined_uv (rows of the snapshot: called before they

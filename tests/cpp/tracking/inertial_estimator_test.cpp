@@ -233,7 +233,8 @@ TEST(InertialEstimator, TheCameraMotionOfFramesWithoutAPoseHoldsThePositionAlong
                               /*with_prior=*/false);
     }
     EXPECT_TRUE(estimator.initialised()) << estimator.report().last_failure;
-    const Eigen::Matrix3d covariance = 1e-6 * Eigen::Matrix3d::Identity();
+    Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+    covariance.diagonal() << 1e-8, 1e-8, 1e-8, 1e-6, 1e-6, 1e-6;  // 0.1 mrad, 1 mm
     for (int k = 201; k <= 500; ++k) {
       const int64_t t_ns = NsFromSeconds(0.05 * k);
       EXPECT_TRUE(estimator.Propagate(t_ns));
