@@ -40,13 +40,14 @@ const cv::Size kWindow(kFlowWindowPx, kFlowWindowPx);
 const cv::TermCriteria kStop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, kFlowIterations,
                              0.01);
 
-// The image scaled to `mean` grey (a flickering lamp is a gain), as a Lucas-Kanade pyramid.
-std::vector<cv::Mat> Pyramid(const cv::Mat& grey, double mean) {
+// The image scaled to `mean` grey (a flickering lamp is a gain), as a Lucas-Kanade pyramid;
+// with its derivatives when it is a track's source image (only its levels otherwise).
+std::vector<cv::Mat> Pyramid(const cv::Mat& grey, double mean, bool with_derivatives) {
   const double own = cv::mean(grey)[0];
   cv::Mat scaled;
   grey.convertTo(scaled, CV_8U, own > 1.0 ? mean / own : 1.0);
   std::vector<cv::Mat> pyramid;
-  cv::buildOpticalFlowPyramid(scaled, pyramid, kWindow, kFlowLevels);
+  cv::buildOpticalFlowPyramid(scaled, pyramid, kWindow, kFlowLevels, with_derivatives);
   return pyramid;
 }
 
@@ -159,8 +160,10 @@ std::optional<StereoFlowMotion> MeasureStereoFlow(const cv::Mat& left_prev,
   if (!usable(left_prev) || !usable(right_prev) || !usable(left_cur)) return std::nullopt;
   // The other two at the previous left image's gain (none saturates more than it does).
   const double mean = cv::mean(left_prev)[0];
-  const Tracks tracks = TrackCorners(Pyramid(left_prev, mean), Pyramid(right_prev, mean),
-                                     Pyramid(left_cur, mean), rig);
+  // (the right image is only tracked into; the current one is tracked back from)
+  const Tracks tracks =
+      TrackCorners(Pyramid(left_prev, mean, true), Pyramid(right_prev, mean, false),
+                   Pyramid(left_cur, mean, true), rig);
   const int needed = std::max(min_inliers, 6);
   if (static_cast<int>(tracks.points_prev.size()) < needed) return std::nullopt;
   cv::Mat K;

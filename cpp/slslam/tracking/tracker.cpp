@@ -286,8 +286,8 @@ void Tracker::KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, cons
 }
 
 void Tracker::InertialFlow(const StereoFrame& frame) {
-  if (options_.imu.flow_min_inliers <= 0 || !flow_prev_t_ns_ || current_left_ == nullptr ||
-      !(*flow_prev_t_ns_ < frame.t_ns)) {
+  // (no previous images: the flow is off, or the frame before had none)
+  if (!flow_prev_t_ns_ || current_left_ == nullptr || !(*flow_prev_t_ns_ < frame.t_ns)) {
     return;
   }
   const std::optional<StereoFlowMotion> motion =

@@ -69,6 +69,26 @@ void TrackExactly(const Motion& motion, int last_frame, const Matrix6d& informat
   }
 }
 
+// Camera poses of frames 0..last_frame at 20 Hz, each off the truth by 1e-3 per component of its
+// tangent (drawn from `unit` with `rng`), with `information`; fused with the prediction
+// (with_prior false). Returns the first frame's time at which the estimator is initialised (-1:
+// never).
+template <typename Motion>
+double TrackNoisily(const Motion& motion, int last_frame, const Matrix6d& information,
+                    std::mt19937* rng, std::normal_distribution<double>* unit,
+                    InertialEstimator* estimator) {
+  double init_at = -1.0;
+  for (int k = 0; k <= last_frame; ++k) {
+    const double t = 0.05 * k;
+    Vector6d noise;
+    for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * (*unit)(*rng);
+    estimator->AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
+                             /*with_prior=*/false);
+    if (init_at < 0.0 && estimator->initialised()) init_at = t;
+  }
+  return init_at;
+}
+
 // A ground vehicle: a circle of 10 m radius at 0.8 m/s, the body's x axis along the velocity,
 // over a gentle bump (0.2 m high, 30 m long) it pitches with; body z up.
 struct GroundMotion : test::TrajectoryReadings<GroundMotion> {
@@ -128,16 +148,8 @@ TEST(InertialEstimator, InitialisesThenCarriesTenSecondsWithinItsUncertainty) {
   information.diagonal() << Eigen::Vector3d::Constant(1e6), Eigen::Vector3d::Constant(1e6);
   std::mt19937 rng(5);
   std::normal_distribution<double> unit(0.0, 1.0);
-  double init_at = -1.0;
-  for (int k = 0; k <= 200; ++k) {
-    const double t = 0.05 * k;
-    Vector6d noise;
-    for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
-    // The camera's pose alone: the estimator fuses it with its prediction.
-    estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
-                            /*with_prior=*/false);
-    if (init_at < 0.0 && estimator.initialised()) init_at = t;
-  }
+  // The camera's pose alone: the estimator fuses it with its prediction.
+  const double init_at = TrackNoisily(motion, 200, information, &rng, &unit, &estimator);
   ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
   EXPECT_NEAR(init_at, options.min_window_s, 0.3);
   EXPECT_LT(estimator.g_world().normalized().dot(motion.g_world.normalized()), 1.0 + 1e-12);
@@ -177,16 +189,9 @@ TEST(InertialEstimator, AGroundVehicleHoldsItsVelocityToTheAxisOfTravelWithoutVi
     options.nonholonomic_max_side_ratio = max_side_ratio;
     InertialEstimator estimator(options);
     FeedImu(motion, 25.5, bias, &estimator);
-    Matrix6d information = 1e6 * Matrix6d::Identity();
     std::mt19937 rng(5);
     std::normal_distribution<double> unit(0.0, 1.0);
-    for (int k = 0; k <= 200; ++k) {
-      const double t = 0.05 * k;
-      Vector6d noise;
-      for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
-      estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
-                              /*with_prior=*/false);
-    }
+    TrackNoisily(motion, 200, 1e6 * Matrix6d::Identity(), &rng, &unit, &estimator);
     EXPECT_TRUE(estimator.initialised()) << estimator.report().last_failure;
     for (int k = 201; k <= 500; ++k) EXPECT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
     const Eigen::Vector3d e = estimator.state().nav.p_world_body - motion.Position(25.0);
@@ -222,16 +227,9 @@ TEST(InertialEstimator, TheCameraMotionOfFramesWithoutAPoseHoldsThePositionAlong
     options.flow_min_inliers = flow ? 30 : 0;
     InertialEstimator estimator(options);
     FeedImu(motion, 25.5, bias, &estimator);
-    Matrix6d information = 1e6 * Matrix6d::Identity();
     std::mt19937 rng(5);
     std::normal_distribution<double> unit(0.0, 1.0);
-    for (int k = 0; k <= 200; ++k) {
-      const double t = 0.05 * k;
-      Vector6d noise;
-      for (int i = 0; i < 6; ++i) noise(i) = 1e-3 * unit(rng);
-      estimator.AddVisualPose(NsFromSeconds(t), LeftPlus(noise, CameraPose(motion, t)), information,
-                              /*with_prior=*/false);
-    }
+    TrackNoisily(motion, 200, 1e6 * Matrix6d::Identity(), &rng, &unit, &estimator);
     EXPECT_TRUE(estimator.initialised()) << estimator.report().last_failure;
     Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
     covariance.diagonal() << 1e-8, 1e-8, 1e-8, 1e-6, 1e-6, 1e-6;  // 0.1 mrad, 1 mm

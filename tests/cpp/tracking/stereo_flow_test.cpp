@@ -9,19 +9,10 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "../test_support.h"
+
 namespace slslam {
 namespace {
-
-StereoRig TestRig() {
-  StereoRig rig;
-  rig.camera.fx = rig.camera.fy = 458.0;
-  rig.camera.cx = 375.5;
-  rig.camera.cy = 239.5;
-  rig.camera.width = 752;
-  rig.camera.height = 480;
-  rig.baseline_m = 0.11;
-  return rig;
-}
 
 // The image of a camera X_cam = R X + t looking at the plane Z = depth_m of the reference
 // camera, whose own image is `plane`: the homography K (R + t n^T / d) K^-1.
@@ -48,7 +39,7 @@ cv::Mat View(const cv::Mat& plane, const StereoRig& rig, const Rigid3d& cam_from
 // ahead; the camera moves 4 cm forward, 5 mm sideways and turns 1 degree: the flow recovers the
 // motion to a few millimetres and a fraction of a milliradian, also when the lamp flickers.
 TEST(StereoFlow, RecoversTheMotionOverAFaintSmoothTexture) {
-  const StereoRig rig = TestRig();
+  const StereoRig rig = test::EurocLikeRig();
   cv::Mat coarse(480 / 4, 752 / 4, CV_32F);
   cv::theRNG().state = 11;
   cv::randn(coarse, 0.0, 1.0);
