@@ -85,6 +85,7 @@ py::dict MapDict(const SessionMap& session) {
   out["relocalisations"] = t.relocalisations;
   out["relocalisation_attempts"] = t.relocalisation_attempts;
   out["maps_started"] = t.maps_started;
+  out["maps_resumed"] = t.maps_resumed;
   out["line_frames"] = t.line_frames;
   out["loop_keyframes_checked"] = loops.keyframes_checked;
   out["loop_candidates_verified"] = loops.candidates_verified;
@@ -280,6 +281,7 @@ void BindRecoveryOptions(py::module_& m) {
       .def_readwrite("weak_update_min_lines", &InertialOptions::weak_update_min_lines)
       .def_readwrite("keyframe_min_stereo_lines", &InertialOptions::keyframe_min_stereo_lines)
       .def_readwrite("keyframe_interval_s", &InertialOptions::keyframe_interval_s)
+      .def_readwrite("resume_map_after_lost", &InertialOptions::resume_map_after_lost)
       .def_readwrite("visual_information_scale", &InertialOptions::visual_information_scale)
       .def_readwrite("local_ba_keyframes", &InertialOptions::local_ba_keyframes)
       .def_property(
@@ -426,6 +428,12 @@ void BindFrameOutputAndHelpers(py::module_& m) {
                     "the inertial state existed after this frame")
       .def_readonly("position_sigma_m", &FrameOutput::position_sigma_m,
                     "its position standard deviation then [m] (0: no IMU)")
+      .def_readonly("v_world_body", &FrameOutput::v_world_body,
+                    "the body's velocity in the world after this frame [m/s] (0: no IMU)")
+      .def_readonly("gyro_bias", &FrameOutput::gyro_bias,
+                    "the gyroscope bias estimated then, body frame [rad/s] (0: no IMU)")
+      .def_readonly("acc_bias", &FrameOutput::acc_bias,
+                    "the accelerometer bias estimated then, body frame [m/s^2] (0: no IMU)")
       .def_readonly("projected_keypoints", &FrameOutput::projected_keypoints,
                     "tracked on this many projected keypoints (0: on detected ones)");
 

@@ -1062,6 +1062,7 @@ class InertialOptions:
     """
     The IMU tightly coupled in tracking: initialisation, prediction, the pose prior, the propagated pose while the camera cannot track.
     """
+    resume_map_after_lost: bool
     def __init__(self) -> None:
         ...
     def check(self) -> None:
@@ -1667,9 +1668,19 @@ class FrameOutput:
     One frame's result from TrackerCore.track (slslam.Tracker wraps it into a TrackResult).
     """
     @property
+    def acc_bias(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        """
+        the accelerometer bias estimated then, body frame [m/s^2] (0: no IMU)
+        """
+    @property
     def cam_from_world(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
         """
         4x4 pose: x_cam = T x_world.
+        """
+    @property
+    def gyro_bias(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        """
+        the gyroscope bias estimated then, body frame [rad/s] (0: no IMU)
         """
     @property
     def imu_initialised(self) -> bool:
@@ -1738,6 +1749,11 @@ class FrameOutput:
     @property
     def stereo_matching_ms(self) -> float:
         ...
+    @property
+    def v_world_body(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        """
+        the body's velocity in the world after this frame [m/s] (0: no IMU)
+        """
     @property
     def weighted_inliers(self) -> float:
         ...

@@ -231,6 +231,7 @@ IMU_TO_CORE: dict[str, tuple[str, ...]] = {
             "lost_sigma_fraction",
             "lost_sigma_min_m",
             "max_gap_s",
+            "resume_map_after_lost",
             "nonholonomic_max_side_ratio",
             "nonholonomic_sigma_mps",
             "zero_velocity_max_statistic",
@@ -439,6 +440,9 @@ class ImuConfig:
     lost_sigma_fraction: float = _imu("lost_sigma_fraction", "[0, 10]")
     lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1000000]")  # ... or this floor [m]
     max_gap_s: float = _imu("max_gap_s", "[0, 1000000]")  # and after this long without vision [s]
+    # past the lost bound the IMU dead-reckons on (until max_gap_s) and the first frame that could
+    # start a map resumes the one it left, a keyframe at the IMU's pose (false: a new map)
+    resume_map_after_lost: bool = _imu("resume_map_after_lost")
     # a frame without vision holds the body's velocity to the axis of travel when, over 2 s of
     # tracked driving, the velocity across it was at most this fraction of the speed (RMS): a
     # ground vehicle's non-holonomic constraint (0: never) [-]

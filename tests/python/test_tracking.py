@@ -1080,4 +1080,23 @@ def test_with_the_imu_a_featureless_stretch_longer_than_the_old_bridge_stays_one
     # Dead reckoning: the position's uncertainty grows through the dark and shrinks after it.
     dark_idx = [i for i, r in enumerate(results) if 4.05 <= r.timestamp - t0 < 6.95]
     assert sigma[dark_idx[-1]] > 5 * sigma[dark_idx[0]] and sigma[-1] < sigma[dark_idx[-1]]
+
+    # The inertial state's columns: the speed the robot drives at (the world is the map's, so
+    # the speed, not the vector, compares with the simulator's), biases of an EuRoC-grade IMU.
+    def column(name: str) -> np.ndarray:
+        return np.array([float(row.split(",")[header.index(name)]) for row in rows[1:]])
+
+    speed = np.linalg.norm(np.stack([column(f"v_world_{a}_mps") for a in "xyz"], 1), axis=1)
+    acc_bias = np.stack([column(f"acc_bias_{a}_mps2") for a in "xyz"], 1)
+    gyro_bias = np.stack([column(f"gyro_bias_{a}_radps") for a in "xyz"], 1)
+    assert speed[0] == 0.0 and not acc_bias[0].any()  # before initialisation: zero
+    truth = np.linalg.norm(
+        Simulator(SimOptions(preset="junction", frames=200, lidar=False)).trajectory.velocity(
+            np.array([r.timestamp - t0 for r in results])
+        ),
+        axis=1,
+    )
+    after = [i for i, r in enumerate(results) if imu[i] and r.timestamp - t0 >= 7.5]
+    assert np.max(np.abs(speed[after] - truth[after])) < 0.1, np.abs(speed - truth).max()
+    assert np.all(np.abs(acc_bias[after]) < 0.1) and np.all(np.abs(gyro_bias[after]) < 5e-3)
     assert m["ape"]["rmse"] < 0.15

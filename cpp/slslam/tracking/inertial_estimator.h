@@ -67,6 +67,12 @@ struct InertialOptions {
   double lost_sigma_fraction = 0.1;
   double lost_sigma_min_m = 0.3;  ///< ... or this, whichever is larger [m]
   double max_gap_s = 60.0;        ///< and at the latest after this long without vision [s]
+  /// Past the lost bound the IMU goes on dead reckoning (until max_gap_s), and the first frame
+  /// that could start a map (after the tracker's new_map_after_lost_frames) resumes the map it
+  /// left instead: a keyframe at the IMU's pose, the state's pose uncertainty restarted there.
+  /// The map stays one, its part after the stretch placed by dead reckoning, where a loop
+  /// closure corrects it as any drift (false: a new map, as ORB-SLAM3's) [-]
+  bool resume_map_after_lost = true;
   /// A frame without vision holds the body's velocity to the axis it kept while the camera
   /// tracked (a ground vehicle's non-holonomic constraint: it neither slides sideways nor lifts
   /// off; at rest and in a turn on the spot the axis turns with it) when, over at least 2 s

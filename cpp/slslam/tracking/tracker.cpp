@@ -223,6 +223,7 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
   if (options_.imu.local_ba_keyframes > 0 && imu_chain_keyframe_ < 0) {
     keyframe_imu_.DropBefore(frame.t_ns - options_.imu.time_offset_ns());
   }
+  dead_reckoning_ = false;
   if (inertial_map_ != active_) {  // another map's world: the state before does not fit
     inertial_->Reset();
     inertial_map_ = active_;
@@ -267,10 +268,39 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   }
   InertialFlow(frame);
   if (!inertial_->Trustworthy()) {
-    inertial_->Reset();
+    // (the frame is LOST; the state may still place the map's part after the stretch)
+    dead_reckoning_ = options_.imu.resume_map_after_lost &&
+                      inertial_->seconds_without_vision() <= options_.imu.max_gap_s;
+    if (!dead_reckoning_) inertial_->Reset();
     return false;
   }
   *cam_from_world = inertial_->cam_from_world();
+  return true;
+}
+
+bool Tracker::InertialDeadReckon(const StereoFrame& frame) {
+  if (!dead_reckoning_) return false;
+  if (inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
+      (frame.t_ns <= inertial_->state_t_ns() || inertial_->Propagate(frame.t_ns))) {
+    InertialFlow(frame);
+    if (inertial_->seconds_without_vision() <= options_.imu.max_gap_s) return true;
+  }
+  dead_reckoning_ = false;
+  if (inertial_) inertial_->Reset();
+  return false;
+}
+
+bool Tracker::ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* result) {
+  // (the last pose first: InsertKeyFrame moves it with the keyframe's through a correction of
+  // the map written meanwhile)
+  SetPose(inertial_->cam_from_world(), /*update_velocity=*/false);
+  InertialKeyFrame(frame, last_cam_from_world_, /*line_match=*/{}, result);
+  if (!result->keyframe) return false;
+  dead_reckoning_ = false;
+  ++stats_.maps_resumed;
+  // A pose without an uncertainty: the state's pose covariance restarts here, its velocity,
+  // biases and gravity go on.
+  InertialPose(*frame, last_cam_from_world_, Matrix6d::Zero(), /*with_prior=*/false);
   return true;
 }
 
@@ -420,7 +450,16 @@ Tracker::InertialReport Tracker::inertial_report() const {
 
 void Tracker::FillInertial(TrackResult* result) const {
   result->imu_initialised = inertial_ && inertial_->initialised() && inertial_map_ == active_;
-  result->position_sigma_m = result->imu_initialised ? inertial_->state().PositionSigma() : 0.0;
+  result->position_sigma_m = 0.0;
+  result->v_world_body.setZero();
+  result->gyro_bias.setZero();
+  result->acc_bias.setZero();
+  if (!result->imu_initialised) return;
+  const InertialState& state = inertial_->state();
+  result->position_sigma_m = state.PositionSigma();
+  result->v_world_body = state.nav.v_world_body;
+  result->gyro_bias = state.bias.gyro;
+  result->acc_bias = state.bias.acc;
 }
 
 void Tracker::Predict(Rigid3d* pred_cam_from_world) const {
@@ -1145,13 +1184,22 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
   velocity_ = Rigid3d();
   result.cam_from_world = last_cam_from_world_;
   const auto start = Clock::now();
+  const bool reckoning = InertialDeadReckon(*frame);
   // A new map only after new_map_after_lost_frames lit frames failed to come back into the old
-  // maps (a black frame does not count, and StartMap refuses it).
+  // maps (a black frame does not count, and StartMap refuses it); while the IMU dead-reckons,
+  // the map it left resumed instead.
   const bool lit = CouldStartMap(*frame);
   if (lit) ++lost_map_candidates_;
   const bool may_start =
       !options_.localise_only && lit && lost_map_candidates_ > options_.new_map_after_lost_frames;
-  if (may_start && StartMap(frame, last_cam_from_world_)) {
+  if (may_start && reckoning && ResumeMap(frame, &result)) {
+    result.state = TrackingState::kInertial;
+    result.cam_from_world = last_cam_from_world_;
+    mode_ = Mode::kTracking;
+    lost_count_ = 0;
+    lost_map_candidates_ = 0;
+    RecordFrame(*frame, /*keyframe=*/true);
+  } else if (may_start && StartMap(frame, last_cam_from_world_)) {
     result.state = TrackingState::kNewMap;
     result.keyframe = true;
     mode_ = Mode::kTracking;

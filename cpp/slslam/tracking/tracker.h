@@ -81,6 +81,9 @@ struct TrackingStats {
   int relocalisations = 0;
   int relocalisation_attempts = 0;
   int maps_started = 0;
+  /// Maps resumed at the IMU's pose after a loss instead of a new one started
+  /// (InertialOptions::resume_map_after_lost)
+  int maps_resumed = 0;
   int line_frames = 0;  ///< frames whose left lines were extracted (all with use_lines, unless
                         ///< lines_on_demand)
 };
@@ -359,6 +362,11 @@ struct TrackResult {
   int projected_keypoints = 0;    ///< tracked on this many projected keypoints (0: detected ones)
   bool imu_initialised = false;   ///< the inertial state existed after this frame
   double position_sigma_m = 0.0;  ///< its position standard deviation then (0: no IMU) [m]
+  /// The inertial state after this frame (zero without it): the body's velocity in the world
+  /// [m/s] and the IMU biases (body frame; gyroscope [rad/s], accelerometer [m/s^2])
+  Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();
 };
 
 struct MapExport {
@@ -657,6 +665,13 @@ class Tracker {
   // The camera's motion from the frame before by optical flow into the carried state
   // (InertialOptions::flow_min_inliers), and the images it needs kept for the next frame.
   void InertialFlow(const StereoFrame& frame);
+  // Past the lost bound (InertialOptions::resume_map_after_lost) a LOST frame propagates the
+  // state on; false, and the state forgotten, once it cannot (samples missing, max_gap_s).
+  bool InertialDeadReckon(const StereoFrame& frame);
+  // A LOST frame that could start a map while the state dead-reckons: instead a keyframe of the
+  // active map at the IMU's pose, where the state's pose uncertainty restarts; false when the
+  // frame makes no keyframe.
+  bool ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* result);
   void KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, const cv::Mat& right);
   void FillInertial(TrackResult* result) const;
   // Aligns matched keypoints to their map points' patches in `image` (track_refine_window_px;
@@ -690,6 +705,7 @@ class Tracker {
   Mode mode_ = Mode::kLost;
   int lost_count_ = 0;           ///< frames since tracking failed
   int lost_map_candidates_ = 0;  ///< lit lost frames since tracking failed (CouldStartMap)
+  bool dead_reckoning_ = false;  ///< the state went on past the lost bound (ResumeMap)
   bool dynamic_masks_ = false;   ///< the dynamic-cell mask applies (last frame tracked strongly)
   Rigid3d loss_cam_from_world_;  ///< last estimated pose before a loss
   Rigid3d loss_velocity_;        ///< motion before the loss (as velocity_)

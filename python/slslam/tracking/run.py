@@ -11,7 +11,8 @@ Outputs in ``out_dir``:
                      replacement above)
     lost_predictions.tum  the other frames (RECENTLY_LOST: decaying-velocity prediction; LOST:
                      frozen pose): not estimates, kept apart so no tool scores them by accident
-    frames.csv       per frame: state, counts and stage times [ms], also written as it goes
+    frames.csv       per frame: state, counts, the inertial state (position sigma, velocity,
+                     biases; zero without the IMU) and stage times [ms], also written as it goes
     map.ply          map points (vertices) and map lines (edges between endpoint vertices)
     metrics.json     frames, tracked ratio, median stage times, and ATE/RPE (evo, SE3 alignment,
                      over tracked frames) when the dataset has ground truth; ``completed`` says
@@ -84,6 +85,9 @@ COUNTS = (
     "masked_keypoints",
     "imu",
     "position_sigma_m",
+    *(f"v_world_{a}_mps" for a in "xyz"),
+    *(f"acc_bias_{a}_mps2" for a in "xyz"),
+    *(f"gyro_bias_{a}_radps" for a in "xyz"),
 )
 
 

@@ -149,6 +149,17 @@ class FrameCounts(_FieldsAsMapping):
     projected: int = 0
     imu: int = 0  #: 1 when the inertial state existed after the frame (IMU initialised), else 0
     position_sigma_m: float = 0.0  #: its position standard deviation then [m] (0: no IMU)
+    #: the inertial state after the frame (0 without it): the body's velocity in the world
+    #: [m/s] and the IMU biases in the body frame (accelerometer [m/s^2], gyroscope [rad/s])
+    v_world_x_mps: float = 0.0
+    v_world_y_mps: float = 0.0
+    v_world_z_mps: float = 0.0
+    acc_bias_x_mps2: float = 0.0
+    acc_bias_y_mps2: float = 0.0
+    acc_bias_z_mps2: float = 0.0
+    gyro_bias_x_radps: float = 0.0
+    gyro_bias_y_radps: float = 0.0
+    gyro_bias_z_radps: float = 0.0
 
 
 @dataclass
@@ -188,6 +199,19 @@ class TrackResult:
             "TrackResult.T_wc is deprecated: use T_world_cam", DeprecationWarning, stacklevel=2
         )
         return self.T_world_cam
+
+
+def _inertial_columns(out: _core.FrameOutput) -> dict[str, float]:
+    """FrameCounts' inertial fields from the core's velocity and bias vectors."""
+    columns: dict[str, float] = {}
+    for name, vector, unit, digits in (
+        ("v_world", out.v_world_body, "mps", 5),
+        ("acc_bias", out.acc_bias, "mps2", 6),
+        ("gyro_bias", out.gyro_bias, "radps", 8),
+    ):
+        for axis, value in zip("xyz", np.asarray(vector, dtype=float).reshape(3), strict=True):
+            columns[f"{name}_{axis}_{unit}"] = round(float(value), digits)
+    return columns
 
 
 class SupportsStereoFrame(Protocol):
@@ -279,6 +303,9 @@ class MapStats:
     relocalisations: int = 0
     relocalisation_attempts: int = 0
     maps_started: int = 0
+    #: maps resumed at the IMU's pose after a loss, no new one started
+    #: (tracking.imu.resume_map_after_lost)
+    maps_resumed: int = 0
     inertial_frames: int = 0  #: frames whose pose the IMU carried (state INERTIAL)
     inertial_weak_updates: int = 0  #: ... of them corrected by a weak visual pose
     inertial_keyframes: int = 0  #: ... of them made keyframes (tracking.imu.keyframe_interval_s)
@@ -909,6 +936,7 @@ class Tracker:
             projected=int(out.projected_keypoints > 0),
             imu=int(out.imu_initialised),
             position_sigma_m=round(float(out.position_sigma_m), 6),
+            **_inertial_columns(out),
         )
         result = TrackResult(index, frame.t_ns, out.state, T_world_cam, timings, counts)
         self.last_image, self.last_keypoints_uv = frame.left, kl.uv

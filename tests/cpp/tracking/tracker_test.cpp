@@ -435,6 +435,54 @@ TEST(TrackerTest, WithTheImuInLocalBaTenSecondsWithoutAnyFeatureStayInOneMap) {
   TenSecondsWithoutAnyFeature(10);
 }
 
+// The ten dark seconds above under a lost bound they pass (5 cm, 1 % of the distance): LOST part
+// way through. With resume_map_after_lost the IMU dead-reckons on, and after
+// new_map_after_lost_frames lit frames the map resumes at its pose (INERTIAL, a keyframe); no
+// further off than the dead reckoning's own sigma allows. Without it a second map starts.
+void LostInTheDarkThenLit(bool resume) {
+  const Scene scene;
+  TrackerOptions options = Options(true, /*lines=*/false);
+  options.imu.lost_sigma_min_m = 0.05;
+  options.imu.lost_sigma_fraction = 0.01;
+  options.imu.resume_map_after_lost = resume;
+  Tracker tracker(options);
+  FeedTrueImu(22.0, &tracker);
+  std::vector<TrackResult> results;
+  for (int k = 0; k < 440; ++k) {
+    results.push_back(tracker.Track(Render(scene, k, 0.5, /*blind=*/k >= 200 && k < 400)));
+  }
+  EXPECT_EQ(results[200].state, TrackingState::kInertial);
+  EXPECT_EQ(results[399].state, TrackingState::kLost);
+  const int wait = options.new_map_after_lost_frames;
+  for (int k = 400; k < 400 + wait; ++k) EXPECT_EQ(results[k].state, TrackingState::kLost) << k;
+  const TrackResult& back = results[400 + wait];
+  EXPECT_TRUE(back.keyframe);
+  for (int k = 402 + wait; k < 440; ++k) EXPECT_EQ(results[k].state, TrackingState::kOk) << k;
+  if (!resume) {
+    EXPECT_EQ(back.state, TrackingState::kNewMap);
+    EXPECT_EQ(tracker.num_maps(), 2);
+    EXPECT_EQ(tracker.stats().maps_resumed, 0);
+    return;
+  }
+  EXPECT_EQ(back.state, TrackingState::kInertial);
+  // (the LOST frames report the dead-reckoned state's sigma, grown past the bound)
+  const double sigma = results[399 + wait].position_sigma_m;
+  EXPECT_GT(sigma, 0.05);
+  EXPECT_LT(CenterError(back, 400 + wait), 3.0 * sigma) << "sigma " << sigma;
+  for (int k = 402 + wait; k < 440; ++k) {
+    EXPECT_LT(CenterError(results[k], k), CenterError(back, 400 + wait) + 0.05) << k;
+  }
+  EXPECT_EQ(tracker.num_maps(), 1);
+  EXPECT_EQ(tracker.stats().maps_resumed, 1);
+  EXPECT_EQ(tracker.stats().maps_started, 1);
+}
+
+TEST(TrackerTest, WithTheImuAMapLostInTheDarkResumesAtTheImuPose) { LostInTheDarkThenLit(true); }
+
+TEST(TrackerTest, WithTheImuAndNoResumeAMapLostInTheDarkEndsAndANewOneStarts) {
+  LostInTheDarkThenLit(false);
+}
+
 TEST(TrackerTest, ALongBlackoutFreezesThePoseThenANewMapStarts) {
   // After the blackout the camera sees another place (other landmarks): nothing to recover.
   const Scene scene, elsewhere(99);
