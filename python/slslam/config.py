@@ -441,7 +441,8 @@ class ImuConfig:
     lost_sigma_min_m: float = _imu("lost_sigma_min_m", "[0, 1000000]")  # ... or this floor [m]
     max_gap_s: float = _imu("max_gap_s", "[0, 1000000]")  # and after this long without vision [s]
     # past the lost bound the IMU dead-reckons on (until max_gap_s) and the first frame that could
-    # start a map resumes the one it left, a keyframe at the IMU's pose (false: a new map)
+    # start a map resumes the one it left, a keyframe at the IMU's pose, unless the state's speed
+    # ran away (false: a new map)
     resume_map_after_lost: bool = _imu("resume_map_after_lost")
     # a frame without vision holds the body's velocity to the axis of travel when, over 2 s of
     # tracked driving, the velocity across it was at most this fraction of the speed (RMS): a

@@ -28,6 +28,9 @@ constexpr double kInitPoseSpacingS = 0.05;
 // The lost rule's distance driven without vision is at most what this many times the speed at
 // the last visual fix covers.
 constexpr double kMaxSpeedRatio = 2.0;
+// A state slower than this is plausible whatever the speed at the last visual fix (a start from
+// rest in the dark) [m/s].
+constexpr double kPlausibleSpeedFloorMps = 1.0;
 // An initialisation that failed is tried again after this much more camera time [s].
 constexpr double kInitRetryS = 0.25;
 // The axis of travel (nonholonomic_max_side_ratio): learned from tracked frames at least this
@@ -339,6 +342,12 @@ bool InertialEstimator::Trustworthy() const {
       std::min(driven_m_, kMaxSpeedRatio * last_visual_speed_mps_ * seconds_without_vision());
   const double bound = std::max(options_.lost_sigma_min_m, options_.lost_sigma_fraction * driven);
   return state_.PositionSigma() <= bound && seconds_without_vision() <= options_.max_gap_s;
+}
+
+bool InertialEstimator::SpeedPlausible() const {
+  return initialised_ &&
+         state_.nav.v_world_body.norm() <=
+             std::max(kMaxSpeedRatio * last_visual_speed_mps_, kPlausibleSpeedFloorMps);
 }
 
 bool InertialEstimator::Rebase(int64_t t_ns, const Rigid3d& cam_from_world,

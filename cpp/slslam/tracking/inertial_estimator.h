@@ -69,9 +69,10 @@ struct InertialOptions {
   double max_gap_s = 60.0;        ///< and at the latest after this long without vision [s]
   /// Past the lost bound the IMU goes on dead reckoning (until max_gap_s), and the first frame
   /// that could start a map (after the tracker's new_map_after_lost_frames) resumes the map it
-  /// left instead: a keyframe at the IMU's pose, the state's pose uncertainty restarted there.
-  /// The map stays one, its part after the stretch placed by dead reckoning, where a loop
-  /// closure corrects it as any drift (false: a new map, as ORB-SLAM3's) [-]
+  /// left instead: a keyframe at the IMU's pose, the state's pose uncertainty restarted there,
+  /// unless the state's speed ran away (SpeedPlausible). The map stays one, its part after the
+  /// stretch placed by dead reckoning, where a loop closure corrects it as any drift (false: a
+  /// new map, as ORB-SLAM3's) [-]
   bool resume_map_after_lost = true;
   /// A frame without vision holds the body's velocity to the axis it kept while the camera
   /// tracked (a ground vehicle's non-holonomic constraint: it neither slides sideways nor lifts
@@ -168,6 +169,10 @@ class InertialEstimator {
                        const Eigen::Matrix<double, 6, 6>& covariance);
   // Whether the propagated state is still worth a pose (the lost rule above).
   bool Trustworthy() const;
+  // Whether the state's speed is at most twice the body's at the last visual fix (or 1 m/s): a
+  // carried state faster than that has diverged (a gyroscope bias the weak frames before the
+  // stretch pulled off tilts it, and the velocity runs away), so no map resumes from it.
+  bool SpeedPlausible() const;
 
   // Local BA estimated the state of a keyframe at camera time t_ns (its pose, the body's velocity
   // and the biases, with gravity in the world): the state is that one propagated to the state's

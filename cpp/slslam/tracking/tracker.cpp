@@ -291,6 +291,7 @@ bool Tracker::InertialDeadReckon(const StereoFrame& frame) {
 }
 
 bool Tracker::ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* result) {
+  if (!inertial_->SpeedPlausible()) return false;  // (a new map starts instead)
   // (the last pose first: InsertKeyFrame moves it with the keyframe's through a correction of
   // the map written meanwhile)
   SetPose(inertial_->cam_from_world(), /*update_velocity=*/false);

@@ -213,6 +213,36 @@ TEST(InertialEstimator, AGroundVehicleHoldsItsVelocityToTheAxisOfTravelWithoutVi
   EXPECT_LT(held, 0.3 * free) << "held " << held << " m across, IMU alone " << free << " m";
 }
 
+// A state carried without vision stays a plausible one to resume a map from while its speed does
+// (at most twice the last visual fix's); an accelerometer bias that turns 1 m/s^2 off after the
+// tracked part runs the velocity away, and it is not.
+TEST(InertialEstimator, AStateWhoseVelocityRanAwayIsNoPlaceToResumeAMap) {
+  GroundMotion motion;
+  ImuBias bias;
+  bias.acc = {0.05, -0.05, 0.05};
+  for (const double extra : {0.0, 1.0}) {
+    InertialOptions options;
+    options.body_from_cam = kBodyFromCam;
+    InertialEstimator estimator(options);
+    ImuBias later = bias;
+    later.acc += extra * Eigen::Vector3d::Ones().normalized();  // (along travel: 0.58 m/s^2)
+    const auto add = [&](int64_t t_ns, const Eigen::Vector3d& gyro, const Eigen::Vector3d& acc) {
+      estimator.AddImu(t_ns, gyro, acc);
+    };
+    NoisyImu(motion, 0.0, 10.0, bias, 11, add);
+    NoisyImu(motion, 10.001, 25.5, later, 12, add);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    TrackNoisily(motion, 200, 1e6 * Matrix6d::Identity(), &rng, &unit, &estimator);
+    ASSERT_TRUE(estimator.initialised()) << estimator.report().last_failure;
+    EXPECT_TRUE(estimator.SpeedPlausible());
+    for (int k = 201; k <= 500; ++k) ASSERT_TRUE(estimator.Propagate(NsFromSeconds(0.05 * k)));
+    const double speed = estimator.state().nav.v_world_body.norm();
+    EXPECT_EQ(estimator.SpeedPlausible(), extra == 0.0)
+        << "speed " << speed << " m/s, truth " << motion.Velocity(25.0).norm();
+  }
+}
+
 // The same glide of 15 s without vision, given the camera's motion between consecutive frames
 // (from the truth, 1 mm noise per axis, every 20th frame an outlier 0.5 m ahead): the velocity it
 // measures holds the position along the path that the axis of travel leaves to the IMU, and the
