@@ -223,6 +223,11 @@ void Tracker::InertialPose(const StereoFrame& frame, const Rigid3d& cam_from_wor
   if (options_.imu.local_ba_keyframes > 0 && imu_chain_keyframe_ < 0) {
     keyframe_imu_.DropBefore(frame.t_ns - options_.imu.time_offset_ns());
   }
+  // A relocalised or re-entered frame after the bound: not from a state whose speed ran away
+  // (as ResumeMap).
+  if (dead_reckoning_ && inertial_->initialised() && !inertial_->SpeedPlausible()) {
+    inertial_->Reset();
+  }
   dead_reckoning_ = false;
   if (inertial_map_ != active_) {  // another map's world: the state before does not fit
     inertial_->Reset();
@@ -269,7 +274,7 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
   InertialFlow(frame);
   if (!inertial_->Trustworthy()) {
     // (the frame is LOST; the state may still place the map's part after the stretch)
-    dead_reckoning_ = options_.imu.resume_map_after_lost &&
+    dead_reckoning_ = options_.imu.resume_map_after_lost && !options_.localise_only &&
                       inertial_->seconds_without_vision() <= options_.imu.max_gap_s;
     if (!dead_reckoning_) inertial_->Reset();
     return false;
@@ -280,10 +285,13 @@ bool Tracker::InertialCarry(const StereoFrame& frame, const WeakVision& weak,
 
 bool Tracker::InertialDeadReckon(const StereoFrame& frame) {
   if (!dead_reckoning_) return false;
-  if (inertial_ && inertial_->initialised() && inertial_map_ == active_ &&
-      (frame.t_ns <= inertial_->state_t_ns() || inertial_->Propagate(frame.t_ns))) {
-    InertialFlow(frame);
-    if (inertial_->seconds_without_vision() <= options_.imu.max_gap_s) return true;
+  if (inertial_ && inertial_->initialised() && inertial_map_ == active_) {
+    // (the frame the bound was passed on: InertialCarry propagated it, its flow included)
+    if (frame.t_ns == inertial_->state_t_ns()) return true;
+    if (frame.t_ns > inertial_->state_t_ns() && inertial_->Propagate(frame.t_ns)) {
+      InertialFlow(frame);
+      if (inertial_->seconds_without_vision() <= options_.imu.max_gap_s) return true;
+    }
   }
   dead_reckoning_ = false;
   if (inertial_) inertial_->Reset();
@@ -299,6 +307,7 @@ bool Tracker::ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* 
   if (!result->keyframe) return false;
   dead_reckoning_ = false;
   ++stats_.maps_resumed;
+  ++stats_.inertial_frames;  // (its state is INERTIAL)
   // A pose without an uncertainty: the state's pose covariance restarts here, its velocity,
   // biases and gravity go on.
   InertialPose(*frame, last_cam_from_world_, Matrix6d::Zero(), /*with_prior=*/false);

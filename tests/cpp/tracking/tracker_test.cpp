@@ -465,9 +465,13 @@ void LostInTheDarkThenLit(bool resume) {
     return;
   }
   EXPECT_EQ(back.state, TrackingState::kInertial);
-  // (the LOST frames report the dead-reckoned state's sigma, grown past the bound)
+  // (the LOST frames report the dead-reckoned state's sigma, grown past the bound; the resumed
+  // state restarts it, and goes on without initialising again)
   const double sigma = results[399 + wait].position_sigma_m;
   EXPECT_GT(sigma, 0.05);
+  EXPECT_LT(back.position_sigma_m, 0.5 * sigma);
+  for (int k = 400 + wait; k < 440; ++k) EXPECT_TRUE(results[k].imu_initialised) << k;
+  EXPECT_EQ(tracker.inertial_report().initialisations, 1);
   EXPECT_LT(CenterError(back, 400 + wait), 3.0 * sigma) << "sigma " << sigma;
   for (int k = 402 + wait; k < 440; ++k) {
     EXPECT_LT(CenterError(results[k], k), CenterError(back, 400 + wait) + 0.05) << k;
