@@ -305,12 +305,8 @@ bool Tracker::ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* 
   SetPose(inertial_->cam_from_world(), /*update_velocity=*/false);
   InertialKeyFrame(frame, last_cam_from_world_, /*line_match=*/{}, result);
   if (!result->keyframe) return false;
-  dead_reckoning_ = false;
   ++stats_.maps_resumed;
   ++stats_.inertial_frames;  // (its state is INERTIAL)
-  // A pose without an uncertainty: the state's pose covariance restarts here, its velocity,
-  // biases and gravity go on.
-  InertialPose(*frame, last_cam_from_world_, Matrix6d::Zero(), /*with_prior=*/false);
   return true;
 }
 
@@ -1202,20 +1198,17 @@ TrackResult Tracker::NotTracked(std::shared_ptr<const StereoFrame>& frame, Track
   if (lit) ++lost_map_candidates_;
   const bool may_start =
       !options_.localise_only && lit && lost_map_candidates_ > options_.new_map_after_lost_frames;
-  if (may_start && reckoning && ResumeMap(frame, &result)) {
-    result.state = TrackingState::kInertial;
-    result.cam_from_world = last_cam_from_world_;
-    mode_ = Mode::kTracking;
-    lost_count_ = 0;
-    lost_map_candidates_ = 0;
-    RecordFrame(*frame, /*keyframe=*/true);
-  } else if (may_start && StartMap(frame, last_cam_from_world_)) {
-    result.state = TrackingState::kNewMap;
+  const bool resumed = may_start && reckoning && ResumeMap(frame, &result);
+  if (resumed || (may_start && StartMap(frame, last_cam_from_world_))) {
+    result.state = resumed ? TrackingState::kInertial : TrackingState::kNewMap;
     result.keyframe = true;
+    result.cam_from_world = last_cam_from_world_;  // (ResumeMap's: the IMU's)
     mode_ = Mode::kTracking;
     lost_count_ = 0;
     lost_map_candidates_ = 0;
     RecordFrame(*frame, /*keyframe=*/true);
+    // A pose without an uncertainty: a new map's initialisation starts from it; a resumed map's
+    // state restarts its pose covariance there, its velocity, biases and gravity go on.
     InertialPose(*frame, last_cam_from_world_, Matrix6d::Zero(), /*with_prior=*/false);
   } else {
     result.state = TrackingState::kLost;

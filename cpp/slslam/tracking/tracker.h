@@ -669,8 +669,8 @@ class Tracker {
   // state on; false, and the state forgotten, once it cannot (samples missing, max_gap_s).
   bool InertialDeadReckon(const StereoFrame& frame);
   // A LOST frame that could start a map while the state dead-reckons: instead a keyframe of the
-  // active map at the IMU's pose, where the state's pose uncertainty restarts; false when the
-  // frame makes no keyframe.
+  // active map at the IMU's pose (the last pose; the caller restarts the state's pose uncertainty
+  // there); false when the state's speed ran away or the frame makes no keyframe.
   bool ResumeMap(std::shared_ptr<const StereoFrame>& frame, TrackResult* result);
   void KeepFlowImages(const StereoFrame& frame, const cv::Mat& left, const cv::Mat& right);
   void FillInertial(TrackResult* result) const;

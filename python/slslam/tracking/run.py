@@ -58,7 +58,13 @@ from slslam.errors import DatasetError, InputError
 from slslam.eval.plots import plot_ape
 from slslam.eval.report import evaluate, load_groundtruth, write_json
 from slslam.progress import progress_bar
-from slslam.tracking.tracker import TRACKED_STATES, MapData, Tracker, TrackResult
+from slslam.tracking.tracker import (
+    INERTIAL_COUNTS,
+    TRACKED_STATES,
+    MapData,
+    Tracker,
+    TrackResult,
+)
 
 log = logging.getLogger(__name__)
 
@@ -85,9 +91,7 @@ COUNTS = (
     "masked_keypoints",
     "imu",
     "position_sigma_m",
-    *(f"v_world_{a}_mps" for a in "xyz"),
-    *(f"acc_bias_{a}_mps2" for a in "xyz"),
-    *(f"gyro_bias_{a}_radps" for a in "xyz"),
+    *INERTIAL_COUNTS,
 )
 
 

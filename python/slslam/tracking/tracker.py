@@ -201,16 +201,24 @@ class TrackResult:
         return self.T_world_cam
 
 
+#: FrameCounts' inertial fields, per vector of the core's FrameOutput: the fields' prefix, the
+#: FrameOutput attribute, the unit suffix and the digits kept
+_INERTIAL_VECTORS = (
+    ("v_world", "v_world_body", "mps", 5),
+    ("acc_bias", "acc_bias", "mps2", 6),
+    ("gyro_bias", "gyro_bias", "radps", 8),
+)
+#: their names, x y z of each vector (frames.csv's columns)
+INERTIAL_COUNTS = tuple(f"{p}_{a}_{unit}" for p, _, unit, _ in _INERTIAL_VECTORS for a in "xyz")
+
+
 def _inertial_columns(out: _core.FrameOutput) -> dict[str, float]:
     """FrameCounts' inertial fields from the core's velocity and bias vectors."""
     columns: dict[str, float] = {}
-    for name, vector, unit, digits in (
-        ("v_world", out.v_world_body, "mps", 5),
-        ("acc_bias", out.acc_bias, "mps2", 6),
-        ("gyro_bias", out.gyro_bias, "radps", 8),
-    ):
-        for axis, value in zip("xyz", np.asarray(vector, dtype=float).reshape(3), strict=True):
-            columns[f"{name}_{axis}_{unit}"] = round(float(value), digits)
+    for prefix, attribute, unit, digits in _INERTIAL_VECTORS:
+        vector = np.asarray(getattr(out, attribute), dtype=float).reshape(3)
+        for axis, value in zip("xyz", vector, strict=True):
+            columns[f"{prefix}_{axis}_{unit}"] = round(float(value), digits)
     return columns
 
 
